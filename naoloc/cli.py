@@ -1,0 +1,132 @@
+"""The ``naoloc`` command line: survey, build-map, localize, go-home, evaluate, serve, demo.
+
+Each verb lives in ``naoloc.commands.<verb>`` and returns a JSON-able dict that is
+printed as the single last line of stdout. Errors are one line on stderr and a
+non-zero exit: 1 for a naoloc error, 2 for bad usage, 130 for Ctrl-C.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import math
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from naoloc import __version__
+from naoloc.config import Config, load_config
+from naoloc.errors import NaolocError, NotBuiltError
+
+VERBS: dict[str, str] = {
+    "survey": "Algorithm 3: walk closed laps, record images and odometry poses (MCAP)",
+    "build-map": "Algorithm 4: features -> histograms -> GCS -> neuron poses (map .npz)",
+    "localize": "Algorithm 5: the robot's pose in the map from 1-2 images",
+    "go-home": "walk back to the map origin using the map",
+    "evaluate": "measure localization error with the paper or random protocol",
+    "serve": "serve a simulated robot as a virtual NAOqi",
+    "demo": "survey -> build map -> localize in the default simulated room",
+}
+
+
+def _pose(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argparse parser for every verb."""
+    parser = argparse.ArgumentParser(
+        prog="naoloc",
+        description="A NAO learns a room and finds itself in it from what its camera sees.",
+    )
+    parser.add_argument("--version", action="version", version=f"naoloc {__version__}")
+    sub = parser.add_subparsers(dest="verb", metavar="VERB", required=True)
+
+    def add(verb: str, config: bool = True) -> argparse.ArgumentParser:
+        p = sub.add_parser(verb, help=VERBS[verb], description=VERBS[verb])
+        if config:
+            p.add_argument("-c", "--config", required=True, metavar="CFG", help="YAML config")
+        return p
+
+    p = add("survey")
+    p.add_argument("-o", "--output", required=True, metavar="DATASET.mcap", type=Path)
+    p = add("build-map")
+    p.add_argument("-d", "--dataset", required=True, metavar="DATASET.mcap", type=Path)
+    p.add_argument("-o", "--output", required=True, metavar="MAP.npz", type=Path)
+    for verb in ("localize", "go-home"):
+        p = add(verb)
+        p.add_argument("-m", "--map", required=True, metavar="MAP.npz", type=Path)
+        p.add_argument(
+            "--at", nargs=3, type=_pose, metavar=("X", "Y", "THETA"),
+            help="teleport there first (room frame, m and rad; simulator only)",
+        )  # fmt: skip
+        p.add_argument("--png", type=Path, default=None, help="write a picture of the result")
+    p = add("evaluate")
+    p.add_argument("--protocol", choices=("paper", "random"), default="random")
+    p.add_argument("-n", type=int, default=40, help="test poses (random protocol)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
+    p.add_argument("-o", "--output", required=True, metavar="OUTDIR", type=Path)
+    p = add("serve")
+    p.add_argument("--listen", default="tcp://127.0.0.1:9559", metavar="URL")
+    p.add_argument("--transport", choices=("libqi", "zmq"), default=None)
+    p.add_argument(
+        "--allow-remote", action="store_true",
+        help="allow binding to a non-loopback address (zmq needs CURVE keys then)",
+    )  # fmt: skip
+    p = add("demo", config=False)
+    p.add_argument("-c", "--config", default=None, metavar="CFG", help="default: paper room")
+    p.add_argument("-o", "--output", type=Path, default=Path("runs/demo"), metavar="OUTDIR")
+    return parser
+
+
+def _run_verb(verb: str, args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
+    module_name = f"naoloc.commands.{verb.replace('-', '_')}"
+    try:
+        module = importlib.import_module(module_name)
+    except ModuleNotFoundError as err:
+        if err.name == module_name:
+            raise NotBuiltError(f"'naoloc {verb}' is not built yet") from None
+        raise
+    result: dict[str, Any] = module.run(args, cfg)
+    return result
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``naoloc`` console script. Returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    verb: str = args.verb
+    try:
+        config_src = getattr(args, "config", None)
+        if verb == "demo" and config_src is None:
+            config_src = Path(__file__).resolve().parent.parent / "configs" / "sim_paper_room.yaml"
+            if not Path(config_src).is_file():
+                config_src = None
+        cfg = load_config(config_src)
+        result = _run_verb(verb, args, cfg)
+    except KeyboardInterrupt:
+        print(f"naoloc {verb}: interrupted", file=sys.stderr)
+        return 130
+    except NaolocError as err:
+        print(f"naoloc {verb}: error: {err}", file=sys.stderr)
+        return 1
+    sys.stdout.write(json.dumps(result, separators=(", ", ": ")) + "\n")
+    sys.stdout.flush()
+    return 0
+
+
+def write_resolved_config(cfg: Config, path: Path) -> Path:
+    """Write the resolved config as YAML at ``path`` (creating its folder); returns the path."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(cfg.to_yaml(), encoding="utf-8")
+    return path
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

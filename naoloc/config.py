@@ -1,0 +1,298 @@
+"""Typed configuration: every key of CONTRACT.md with a default, unknown keys rejected.
+
+A config comes from a YAML file (read with ``yaml.safe_load`` only), a dict, or a
+:class:`Config`. Errors are one line naming the file and the key path, e.g.
+``configs/x.yaml: world.room.sise_m: unknown key``.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any, Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+
+from naoloc.constants import CAMERA_FPS, COLORSPACE_LAYERS, RESOLUTIONS
+from naoloc.errors import ConfigError
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, validate_default=True)
+
+
+class RobotConfig(_Model):
+    """Which robot to talk to."""
+
+    backend: Literal["mujoco", "naoqi", "fake"] = Field(
+        "mujoco", description="mujoco (simulator), naoqi (network) or fake (unit tests)"
+    )
+    url: str = Field("tcp://127.0.0.1:9559", description="NAOqi address; naoqi backend only")
+    transport: Literal["auto", "libqi", "zmq"] = Field(
+        "auto", description="naoqi only: libqi (real qi package), zmq (our shim), auto"
+    )
+    user: str | None = Field(None, description="NAOqi 2.9+ (tcps://) user, usually 'nao'")
+    password: str | None = Field(None, description="NAOqi 2.9+ (tcps://) password")
+    timeout_s: float = Field(5.0, gt=0, description="timeout of one remote call, seconds")
+
+
+class RoomConfig(_Model):
+    """A procedurally generated room (simulated backends)."""
+
+    size_m: tuple[float, float] = Field((6.0, 6.0), description="inner size along x, y (m)")
+    wall_height_m: float = Field(2.5, gt=0.5, le=10.0, description="wall height (m)")
+    seed: int = Field(0, ge=0, description="seed of posters, textures and furniture")
+    posters_per_wall: int = Field(5, ge=0, le=50, description="posters on each wall")
+    furniture: bool = Field(True, description="tables, chairs, shelves from primitives")
+    poster_dir: str | None = Field(
+        None, description="folder of photographs to use as posters instead of procedural ones"
+    )
+
+    @field_validator("size_m")
+    @classmethod
+    def _size_ok(cls, v: tuple[float, float]) -> tuple[float, float]:
+        if not all(1.5 <= s <= 50.0 for s in v):
+            raise ValueError("each side must be between 1.5 and 50 m")
+        return v
+
+
+class OdometryConfig(_Model):
+    """Sensor odometry drift of simulated backends (``getRobotPosition(True)``)."""
+
+    scale_error: float = Field(0.01, ge=-0.5, le=0.5, description="relative distance error")
+    heading_bias_rad_per_m: float = Field(0.005, description="heading error per metre walked")
+    random_walk_m_per_sqrt_m: float = Field(
+        0.005, ge=0, description="position noise std per sqrt(metre) walked"
+    )
+    heading_random_walk_rad_per_sqrt_rad: float = Field(
+        0.01, ge=0, description="heading noise std per sqrt(radian) turned"
+    )
+    seed: int = Field(0, ge=0, description="seed of the noise")
+
+
+class CameraRealismConfig(_Model):
+    """Image degradations of simulated cameras; all off by default."""
+
+    noise_std: float = Field(0.0, ge=0, le=64, description="Gaussian pixel noise, 0-255 units")
+    blur_px: float = Field(0.0, ge=0, le=10, description="Gaussian blur sigma in pixels")
+    exposure: float = Field(1.0, gt=0, le=4, description="brightness gain")
+    jpeg_quality: int | None = Field(None, ge=5, le=100, description="JPEG round trip quality")
+    seed: int = Field(0, ge=0, description="seed of the noise")
+
+
+class SimConfig(_Model):
+    """Simulator settings."""
+
+    timestep_s: float = Field(0.005, gt=0, le=0.05, description="physics step (s)")
+    realtime: bool = Field(False, description="pace simulated time to the wall clock")
+    light: float = Field(1.0, gt=0, le=4, description="scale of the room lights' intensity")
+    seed: int = Field(0, ge=0, description="seed of the simulator's own randomness")
+
+
+class WorldConfig(_Model):
+    """The simulated world: room, robot model, start pose, realism."""
+
+    room: RoomConfig = RoomConfig()
+    start_pose: tuple[float, float, float] | None = Field(
+        None,
+        description="room frame x, y (m), theta (rad); default: survey.wall_offset_m from "
+        "the two walls at the room-frame origin, facing +x",
+    )
+    model: Literal["v5", "v6"] = Field("v5", description="NAO head: field of view of V5 or V6")
+    odometry: OdometryConfig = OdometryConfig()
+    camera_realism: CameraRealismConfig = CameraRealismConfig()
+    sim: SimConfig = SimConfig()
+
+
+class CameraConfig(_Model):
+    """Which camera and image format behaviours subscribe to."""
+
+    index: int = Field(0, ge=0, le=1, description="0 top, 1 bottom")
+    resolution: int = Field(1, description="NAOqi resolution id (1 = kQVGA 320x240)")
+    colorspace: int = Field(11, description="NAOqi colorspace id (11 = kRGB)")
+    fps: int = Field(30, description="5, 10, 15 or 30")
+
+    @field_validator("resolution")
+    @classmethod
+    def _res_ok(cls, v: int) -> int:
+        if v not in RESOLUTIONS:
+            raise ValueError(f"unknown resolution id {v}; valid: {sorted(RESOLUTIONS)}")
+        return v
+
+    @field_validator("colorspace")
+    @classmethod
+    def _cs_ok(cls, v: int) -> int:
+        if v not in COLORSPACE_LAYERS:
+            raise ValueError(f"unknown colorspace id {v}; valid: {sorted(COLORSPACE_LAYERS)}")
+        return v
+
+    @field_validator("fps")
+    @classmethod
+    def _fps_ok(cls, v: int) -> int:
+        if v not in CAMERA_FPS:
+            raise ValueError(f"fps must be one of {list(CAMERA_FPS)}")
+        return v
+
+
+class SurveyConfig(_Model):
+    """Algorithm 3: closed laps of a rectangle along the walls."""
+
+    laps: int = Field(2, ge=1, le=20, description="closed laps")
+    step_m: float = Field(0.2, gt=0.01, le=2.0, description="distance between pictures (m)")
+    wall_offset_m: float = Field(1.0, gt=0.2, description="circuit's distance from the walls (m)")
+    side_m: tuple[float, float] | None = Field(
+        None,
+        description="[along x, along y] sides of the circuit (m); null = room size - 2 * offset",
+    )
+    head_yaw_rad: float | None = Field(
+        None, description="head yaw while walking; null = from the nearest-wall detector"
+    )
+
+
+class MapConfig(_Model):
+    """Algorithm 4: features -> bag of words -> Growing Cell Structures."""
+
+    features: Literal["akaze", "orb", "sift"] = Field("akaze", description="local features")
+    neurons: int = Field(300, ge=3, le=5000, description="GCS target size")
+    epochs: int = Field(300, ge=1, le=10000, description="passes over the training images")
+    seed: int = Field(0, ge=0, description="seed of vocabulary and GCS")
+    vocabulary_size: int = Field(256, ge=8, le=4096, description="visual words")
+
+
+class LocalizeConfig(_Model):
+    """Algorithm 5 and beyond."""
+
+    mode: Literal["verified", "paper"] = Field(
+        "verified", description="paper: GCS winners' mean pose; verified: RANSAC-checked retrieval"
+    )
+    images: int = Field(2, ge=1, le=8, description="images taken per estimate")
+
+
+class GoHomeConfig(_Model):
+    """Walk back to the map origin."""
+
+    tolerance_m: float = Field(0.15, gt=0, description="stop when this close to the origin (m)")
+    max_tries: int = Field(5, ge=1, le=50, description="localize-and-walk rounds")
+
+
+class Config(_Model):
+    """The whole naoloc configuration (CONTRACT.md). Every key has a default."""
+
+    robot: RobotConfig = RobotConfig()
+    world: WorldConfig = WorldConfig()
+    camera: CameraConfig = CameraConfig()
+    survey: SurveyConfig = SurveyConfig()
+    map: MapConfig = MapConfig()
+    localize: LocalizeConfig = LocalizeConfig()
+    go_home: GoHomeConfig = GoHomeConfig()
+
+    def start_pose(self) -> tuple[float, float, float]:
+        """The robot's start pose in the room frame (x, y m; theta rad)."""
+        if self.world.start_pose is not None:
+            return self.world.start_pose
+        off = self.survey.wall_offset_m
+        return (off, off, 0.0)
+
+    def survey_sides(self) -> tuple[float, float]:
+        """Sides ``(along x, along y)`` of the survey rectangle in metres."""
+        if self.survey.side_m is not None:
+            return self.survey.side_m
+        sx, sy = self.world.room.size_m
+        off = self.survey.wall_offset_m
+        return (sx - 2 * off, sy - 2 * off)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-able dict of the resolved config."""
+        return self.model_dump(mode="json")
+
+    def to_yaml(self) -> str:
+        """The resolved config as YAML text."""
+        return yaml.safe_dump(self.to_dict(), sort_keys=False)
+
+    def with_overrides(self, overrides: dict[str, Any]) -> Config:
+        """A new config with a nested dict of keys replaced (validated again)."""
+        return _validate(_deep_merge(self.to_dict(), overrides), "<overrides>")
+
+
+def _deep_merge(base: dict[str, Any], extra: dict[str, Any]) -> dict[str, Any]:
+    out = dict(base)
+    for key, value in extra.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = _deep_merge(out[key], value)
+        else:
+            out[key] = value
+    return out
+
+
+def _format_error(source: str, err: ValidationError) -> str:
+    first = err.errors()[0]
+    path = ".".join(str(p) for p in first.get("loc", ())) or "<root>"
+    kind = first.get("type", "")
+    if kind == "extra_forbidden":
+        msg = "unknown key"
+    else:
+        msg = str(first.get("msg", "invalid value"))
+        if "input" in first and kind != "missing":
+            msg += f" (got {first['input']!r})"
+    more = len(err.errors()) - 1
+    suffix = f" (+{more} more)" if more > 0 else ""
+    return f"{source}: {path}: {msg}{suffix}"
+
+
+def _validate(data: Any, source: str) -> Config:
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise ConfigError(f"{source}: the top level must be a mapping, got {type(data).__name__}")
+    try:
+        cfg = Config.model_validate(data)
+    except ValidationError as err:
+        raise ConfigError(_format_error(source, err)) from None
+    sides = cfg.survey_sides()
+    if min(sides) <= 0:
+        raise ConfigError(
+            f"{source}: survey.wall_offset_m: {cfg.survey.wall_offset_m} m leaves no circuit "
+            f"in a room of {list(cfg.world.room.size_m)} m"
+        )
+    x, y, theta = cfg.start_pose()
+    if cfg.robot.backend != "naoqi":
+        sx, sy = cfg.world.room.size_m
+        if not (0 < x < sx and 0 < y < sy) or not math.isfinite(theta):
+            raise ConfigError(f"{source}: world.start_pose: {[x, y, theta]} is outside the room")
+    return cfg
+
+
+def load_config(source: str | Path | dict[str, Any] | Config | None) -> Config:
+    """Load and validate a config.
+
+    Args:
+        source: A YAML file path, a nested dict, a :class:`Config`, or None for defaults.
+
+    Returns:
+        The validated, immutable config.
+
+    Raises:
+        ConfigError: One line naming the file and key path of the first problem.
+    """
+    if isinstance(source, Config):
+        return source
+    if source is None:
+        return _validate({}, "<defaults>")
+    if isinstance(source, dict):
+        return _validate(source, "<dict>")
+    path = Path(source)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such config file") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise ConfigError(f"{path}: cannot read: {err}") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        where = f" line {mark.line + 1}" if mark is not None else ""
+        problem = getattr(err, "problem", None) or "invalid YAML"
+        raise ConfigError(f"{path}:{where}: {problem}") from None
+    return _validate(data, str(path))
