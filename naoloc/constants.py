@@ -74,7 +74,8 @@ CAMERA_FPS: Final = (5, 10, 15, 30)
 FOV_V5: Final = (math.radians(60.9), math.radians(47.6))
 FOV_V6: Final = (math.radians(56.3), math.radians(43.7))
 
-# Camera poses in the head frame (HeadPitch joint), NAO V4/V5 head: (x, y, z) m, pitch rad (down > 0).
+# Camera poses in the head frame (HeadPitch joint), NAO V4/V5 head:
+# (x, y, z) in m, pitch in rad (down is positive).
 TOP_CAMERA_IN_HEAD: Final = ((0.05871, 0.0, 0.06364), math.radians(1.2))
 BOTTOM_CAMERA_IN_HEAD: Final = ((0.05071, 0.0, 0.01774), math.radians(39.7))
 NECK_OFFSET_Z: Final = 0.1265  # m, torso to HeadYaw

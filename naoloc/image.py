@@ -99,7 +99,7 @@ def frame_from_naoqi(value: Sequence[Any]) -> Frame:
 def frame_to_naoqi(frame: Frame) -> list[Any]:
     """Encode a :class:`Frame` as the NAOqi image array (bytes in slot 6)."""
     sec = int(frame.stamp)
-    usec = int(round((frame.stamp - sec) * 1e6))
+    usec = round((frame.stamp - sec) * 1e6)
     height, width, layers = frame.pixels.shape
     return [
         width, height, layers, frame.colorspace, sec, usec,
@@ -128,7 +128,7 @@ def from_rgb(rgb: np.ndarray, colorspace: int) -> np.ndarray:
         return cv2.cvtColor(rgb, cv2.COLOR_RGB2YUV)
     if colorspace == kYUV422ColorSpace:
         yuv = cv2.cvtColor(rgb, cv2.COLOR_RGB2YUV)
-        out = np.empty(rgb.shape[:2] + (2,), np.uint8)
+        out = np.empty((*rgb.shape[:2], 2), np.uint8)
         out[..., 0] = yuv[..., 0]
         # YUYV: even pixels carry U, odd pixels carry V (averaged over the pair).
         u = yuv[..., 1].astype(np.uint16)

@@ -12,6 +12,7 @@ loop polling ``moveIsActive()`` makes progress exactly as it would on a robot.
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
@@ -231,10 +232,8 @@ class Robot:
         if self._closed:
             return
         self._closed = True
-        try:
+        with contextlib.suppress(Exception):
             self.motion.stopMove()
-        except Exception:
-            pass
         if self._closer is not None:
             self._closer()
 
