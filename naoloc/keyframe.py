@@ -1,0 +1,137 @@
+"""Value types shared by behaviours, datasets and the map: cameras and keyframes.
+
+Frames: a keyframe's ``pose`` is the robot's FRAME_ROBOT origin in the map frame (the
+odometry frame at the start of the survey: x forward, y left, theta counter-clockwise,
+metres and radians). The camera sits on the head; its pose in FRAME_ROBOT follows
+from HeadYaw and HeadPitch with the nominal NAO geometry below.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from naoloc.constants import BOTTOM_CAMERA_IN_HEAD, FOV_V5, NECK_OFFSET_Z, TOP_CAMERA_IN_HEAD
+from naoloc.geometry import Pose2D
+
+# Height of the torso frame above the floor in StandInit (knees bent), metres. With straight
+# legs it is 0.333 m (HipOffsetZ + Thigh + Tibia + FootHeight); StandInit sits lower.
+TORSO_HEIGHT_STANDINIT = 0.3195
+
+
+@dataclass(frozen=True, slots=True)
+class CameraInfo:
+    """Pinhole model of one NAO camera image.
+
+    Attributes:
+        width: Image width in pixels.
+        height: Image height in pixels.
+        hfov: Horizontal field of view in radians.
+        vfov: Vertical field of view in radians.
+        index: NAOqi camera index (0 top, 1 bottom).
+    """
+
+    width: int = 320
+    height: int = 240
+    hfov: float = FOV_V5[0]
+    vfov: float = FOV_V5[1]
+    index: int = 0
+
+    @property
+    def fx(self) -> float:
+        """Focal length along x in pixels."""
+        return (self.width / 2.0) / math.tan(self.hfov / 2.0)
+
+    @property
+    def fy(self) -> float:
+        """Focal length along y in pixels."""
+        return (self.height / 2.0) / math.tan(self.vfov / 2.0)
+
+    def matrix(self) -> np.ndarray:
+        """The 3x3 intrinsic matrix K (principal point at the image centre)."""
+        return np.array(
+            [[self.fx, 0.0, self.width / 2.0], [0.0, self.fy, self.height / 2.0], [0, 0, 1.0]]
+        )
+
+    def scaled(self, width: int, height: int) -> CameraInfo:
+        """The same camera at another resolution."""
+        return CameraInfo(width, height, self.hfov, self.vfov, self.index)
+
+
+def camera_in_robot(
+    head_yaw: float, head_pitch: float, index: int = 0, torso_height: float = TORSO_HEIGHT_STANDINIT
+) -> np.ndarray:
+    """Pose of a camera's optical frame in FRAME_ROBOT as a 4x4 matrix.
+
+    The optical frame is OpenCV's: z along the view, x to the image right, y down.
+
+    Args:
+        head_yaw: HeadYaw in radians (positive turns left).
+        head_pitch: HeadPitch in radians (positive looks down).
+        index: 0 top camera, 1 bottom camera.
+        torso_height: Torso height above the floor in metres.
+
+    Returns:
+        ``T`` such that ``p_robot = T @ [p_cam, 1]``.
+    """
+    (cx, cy, cz), cam_pitch = TOP_CAMERA_IN_HEAD if index == 0 else BOTTOM_CAMERA_IN_HEAD
+    cyaw, syaw = math.cos(head_yaw), math.sin(head_yaw)
+    rz = np.array([[cyaw, -syaw, 0.0], [syaw, cyaw, 0.0], [0.0, 0.0, 1.0]])
+    pitch = head_pitch + cam_pitch
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])  # positive pitch looks down
+    # Optical axes in the head frame (x fwd, y left, z up): z_opt = x, x_opt = -y, y_opt = -z.
+    opt = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+    head_origin = np.array([0.0, 0.0, torso_height + NECK_OFFSET_Z])
+    # The camera offset turns with yaw and pitch (HeadPitch axis is at the head origin).
+    offset_head = np.array([cx, cy, cz])
+    rot_head = rz @ np.array(
+        [
+            [math.cos(head_pitch), 0.0, math.sin(head_pitch)],
+            [0.0, 1.0, 0.0],
+            [-math.sin(head_pitch), 0.0, math.cos(head_pitch)],
+        ]
+    )
+    t = np.eye(4)
+    t[:3, :3] = rz @ ry @ opt
+    t[:3, 3] = head_origin + rot_head @ offset_head
+    return t
+
+
+@dataclass(frozen=True, slots=True)
+class Keyframe:
+    """One survey or query image with what is known about where it was taken.
+
+    Attributes:
+        image: ``(h, w)`` uint8 grey or ``(h, w, 3)`` uint8 BGR pixels.
+        pose: Robot pose in the map frame from odometry (getRobotPosition(True)).
+        head_yaw: HeadYaw in radians when the image was taken.
+        head_pitch: HeadPitch in radians when the image was taken.
+        camera: The camera model of the image.
+        stamp: Capture time in seconds.
+        command_pose: Robot pose in the map frame from commands (getRobotPosition(False)).
+        true_pose: Ground-truth pose in the room frame, when a simulator knows it.
+    """
+
+    image: np.ndarray
+    pose: Pose2D
+    head_yaw: float = 0.0
+    head_pitch: float = 0.0
+    camera: CameraInfo = CameraInfo()
+    stamp: float = 0.0
+    command_pose: Pose2D | None = None
+    true_pose: Pose2D | None = None
+
+    def gray(self) -> np.ndarray:
+        """The image as ``(h, w)`` uint8 grey."""
+        if self.image.ndim == 2:
+            return self.image
+        import cv2
+
+        return cv2.cvtColor(self.image, cv2.COLOR_BGR2GRAY)
+
+    def camera_heading(self) -> float:
+        """Heading of the camera's view in the map frame, radians."""
+        return self.pose.theta + self.head_yaw
