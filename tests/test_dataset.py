@@ -1,0 +1,199 @@
+"""Survey datasets: MCAP round trip, Foxglove schemas, partial and corrupt files."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from naoloc.dataset import DatasetWriter, read_dataset
+from naoloc.errors import DatasetError
+from naoloc.geometry import Pose2D
+from naoloc.keyframe import CameraInfo, Keyframe
+
+
+def _keyframe(i: int, rng: np.random.Generator) -> Keyframe:
+    # Smooth random image: survives JPEG well enough to compare.
+    small = rng.integers(0, 255, (12, 16, 3), dtype=np.uint8)
+    image = np.kron(small, np.ones((20, 20, 1), dtype=np.uint8))
+    return Keyframe(
+        image=image,
+        pose=Pose2D(0.2 * i, 0.01 * i, 0.05 * i),
+        head_yaw=-1.57,
+        head_pitch=-0.2,
+        camera=CameraInfo(320, 240, 1.06, 0.83, 0),
+        stamp=1.5 * i,
+        command_pose=Pose2D(0.2 * i, 0.0, 0.0),
+        true_pose=Pose2D(1.0 + 0.2 * i, 1.0, 0.0),
+    )
+
+
+def _write(path: Path, n: int, finish: bool = True) -> list[Keyframe]:
+    rng = np.random.default_rng(0)
+    frames = [_keyframe(i, rng) for i in range(n)]
+    writer = DatasetWriter(path, config={"survey": {"laps": 1}}, meta={"room_size_m": [6, 6]})
+    for i, kf in enumerate(frames):
+        writer.write(kf, lap=i // 3, odometry=Pose2D(5.0, 5.0, 1.0))
+    if finish:
+        writer.close()
+    else:
+        writer._file.flush()  # the process "dies" here: no summary, no footer
+    return frames
+
+
+def test_round_trip_keeps_every_field(tmp_path: Path) -> None:
+    path = tmp_path / "s.mcap"
+    frames = _write(path, 5)
+    data = read_dataset(path)
+    assert data.complete
+    assert data.config == {"survey": {"laps": 1}}
+    assert data.meta == {"room_size_m": [6, 6]}
+    assert data.laps == [0, 0, 0, 1, 1]
+    assert len(data.keyframes) == 5
+    for want, got in zip(frames, data.keyframes, strict=True):
+        assert got.pose == want.pose
+        assert got.command_pose == want.command_pose
+        assert got.true_pose == want.true_pose
+        assert got.head_yaw == want.head_yaw and got.head_pitch == want.head_pitch
+        assert got.camera == want.camera
+        assert got.stamp == want.stamp
+        assert got.image.shape == want.image.shape
+        diff = np.abs(got.image.astype(int) - want.image.astype(int)).mean()
+        assert diff < 8.0  # JPEG; a wrong image differs by about 85
+
+
+def test_png_is_lossless(tmp_path: Path) -> None:
+    path = tmp_path / "s.mcap"
+    rng = np.random.default_rng(1)
+    kf = _keyframe(0, rng)
+    with DatasetWriter(path, config={}, meta={}, image_format="png") as w:
+        w.write(kf)
+    assert np.array_equal(read_dataset(path).keyframes[0].image, kf.image)
+
+
+def test_foxglove_schemas_are_inside(tmp_path: Path) -> None:
+    from mcap.reader import make_reader
+
+    path = tmp_path / "s.mcap"
+    _write(path, 2)
+    with open(path, "rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None
+    names = {s.name: s.encoding for s in summary.schemas.values()}
+    assert names["foxglove.CompressedImage"] == "protobuf"
+    assert names["foxglove.PoseInFrame"] == "protobuf"
+    assert names["foxglove.CameraCalibration"] == "protobuf"
+    assert names["foxglove.FrameTransform"] == "protobuf"
+    topics = {c.topic for c in summary.channels.values()}
+    assert {"/camera/image", "/pose/odometry", "/pose/truth", "/tf"} <= topics
+    # The schema bytes are Foxglove's own descriptor set, not a placeholder.
+    image_schema = next(s for s in summary.schemas.values() if s.name.endswith("CompressedImage"))
+    assert b"CompressedImage" in image_schema.data and len(image_schema.data) > 100
+
+
+def test_writer_that_died_leaves_every_frame(tmp_path: Path) -> None:
+    path = tmp_path / "s.mcap"
+    _write(path, 4, finish=False)
+    data = read_dataset(path)
+    assert not data.complete
+    assert len(data.keyframes) == 4
+
+
+def test_truncated_tail_keeps_the_whole_frames(tmp_path: Path) -> None:
+    path = tmp_path / "s.mcap"
+    _write(path, 4, finish=False)
+    raw = path.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(raw[: len(raw) - 300])  # inside the last frame's records
+    data = read_dataset(cut)
+    assert len(data.keyframes) == 3
+    assert [kf.pose.x for kf in data.keyframes] == pytest.approx([0.0, 0.2, 0.4])
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (b"", "not an MCAP file"),
+        (b"hello, this is text" * 5, "not an MCAP file"),
+    ],
+)
+def test_foreign_files_fail_in_one_line(tmp_path: Path, content: bytes, message: str) -> None:
+    path = tmp_path / "x.mcap"
+    path.write_bytes(content)
+    with pytest.raises(DatasetError, match=message) as info:
+        read_dataset(path)
+    assert "\n" not in str(info.value)
+
+
+def test_missing_file(tmp_path: Path) -> None:
+    with pytest.raises(DatasetError, match="no such dataset"):
+        read_dataset(tmp_path / "nope.mcap")
+
+
+def test_foreign_mcap_is_refused(tmp_path: Path) -> None:
+    from mcap.writer import Writer
+
+    path = tmp_path / "other.mcap"
+    with open(path, "wb") as f:
+        w = Writer(f)
+        w.start()
+        sid = w.register_schema("x", "jsonschema", b"{}")
+        cid = w.register_channel("/x", "json", sid)
+        w.add_message(cid, 0, b"{}", 0)
+        w.finish()
+    with pytest.raises(DatasetError, match="not a naoloc survey dataset"):
+        read_dataset(path)
+
+
+def test_empty_survey_says_no_frames(tmp_path: Path) -> None:
+    path = tmp_path / "empty.mcap"
+    DatasetWriter(path, config={}, meta={}).close()
+    with pytest.raises(DatasetError, match="no frames"):
+        read_dataset(path)
+
+
+def test_garbled_record_is_a_dataset_error(tmp_path: Path) -> None:
+    path = tmp_path / "s.mcap"
+    _write(path, 2)
+    raw = path.read_bytes()
+    needle = json.dumps(-1.57).encode()
+    assert needle in raw
+    path.write_bytes(raw.replace(b'"head_yaw": ' + needle, b'"head_yaw": "abc"', 1))
+    with pytest.raises(DatasetError, match="garbles"):
+        read_dataset(path)
+
+
+def test_newer_version_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "s.mcap"
+    _write(path, 1)
+    raw = path.read_bytes()
+    assert raw.count(b"\x01\x00\x00\x001") >= 1  # the version string "1" with its length
+    path.write_bytes(
+        raw.replace(
+            b"\x07\x00\x00\x00version\x01\x00\x00\x001", b"\x07\x00\x00\x00version\x01\x00\x00\x009"
+        )
+    )
+    with pytest.raises(DatasetError, match="newer"):
+        read_dataset(path)
+
+
+def test_closed_writer_refuses_frames(tmp_path: Path) -> None:
+    w = DatasetWriter(tmp_path / "s.mcap", config={}, meta={})
+    w.close()
+    w.close()  # idempotent
+    with pytest.raises(DatasetError, match="closed"):
+        w.write(_keyframe(0, np.random.default_rng(0)))
+
+
+def test_nonfinite_pose_is_refused_on_read(tmp_path: Path) -> None:
+    path = tmp_path / "s.mcap"
+    rng = np.random.default_rng(0)
+    kf = _keyframe(0, rng)
+    bad = Keyframe(kf.image, Pose2D(math.inf, 0.0, 0.0), camera=kf.camera)
+    with DatasetWriter(path, config={}, meta={}) as w:
+        w.write(bad)
+    with pytest.raises(DatasetError):
+        read_dataset(path)
