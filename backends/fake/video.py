@@ -1,0 +1,205 @@
+"""ALVideoDevice of the fake robot: ray-cast frames of the textured room.
+
+A frame is rendered on demand from the TRUE robot pose, the measured head angles and
+the head camera geometry of :func:`naoloc.keyframe.camera_in_robot` (torso height of the
+current posture). Its timestamp is the simulated time; its view angles are
+``(+hfov/2, +vfov/2, -hfov/2, -vfov/2)`` (left, top, right, bottom).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from naoloc.backends.fake.render import RoomRenderer, apply_realism
+from naoloc.backends.fake.world import FakeWorld
+
+from naoloc.constants import (
+    CAMERA_FPS,
+    COLORSPACE_LAYERS,
+    FOV_V5,
+    FOV_V6,
+    RESOLUTIONS,
+    kBottomCamera,
+    kTopCamera,
+)
+from naoloc.errors import HandleError, RobotError
+from naoloc.image import Frame, frame_to_naoqi, from_rgb
+from naoloc.keyframe import camera_in_robot
+
+MAX_SUBSCRIBERS = 64
+
+
+@dataclass
+class Subscription:
+    """One camera subscriber.
+
+    Attributes:
+        camera: Camera index (0 top, 1 bottom).
+        resolution: NAOqi resolution id.
+        colorspace: NAOqi colorspace id.
+        fps: Frame rate asked for (5, 10, 15 or 30).
+    """
+
+    camera: int
+    resolution: int
+    colorspace: int
+    fps: int
+
+
+def _check_camera(index: int) -> int:
+    if int(index) not in (kTopCamera, kBottomCamera):
+        raise RobotError(f"camera index {index} does not exist on NAO (0 top, 1 bottom)")
+    return int(index)
+
+
+class FakeVideo:
+    """ALVideoDevice of the fake robot.
+
+    Args:
+        world: The shared robot state and clock.
+        renderer: The room renderer.
+    """
+
+    def __init__(self, world: FakeWorld, renderer: RoomRenderer) -> None:
+        self._world = world
+        self._renderer = renderer
+        realism = world.cfg.world.camera_realism
+        self._realism = realism
+        self._rng = np.random.default_rng(realism.seed)
+        self._fov = FOV_V6 if world.cfg.world.model == "v6" else FOV_V5
+        self._subs: dict[str, Subscription] = {}
+        self._active = kTopCamera
+
+    def _sub(self, nameId: str) -> Subscription:
+        self._world.check_open()
+        sub = self._subs.get(str(nameId))
+        if sub is None:
+            raise HandleError(f"unknown or unsubscribed camera handle {nameId!r}")
+        return sub
+
+    def subscribeCamera(
+        self, name: str, cameraIndex: int, resolution: int, colorSpace: int, fps: int
+    ) -> str:
+        """Subscribe; returns ``name``, or ``name_<n>`` when ``name`` is already taken.
+
+        Raises:
+            RobotError: Unknown camera, resolution, colorspace or fps.
+        """
+        w = self._world
+        w.check_open()
+        camera = _check_camera(cameraIndex)
+        if int(resolution) not in RESOLUTIONS:
+            raise RobotError(f"unknown resolution id {resolution}; valid: {sorted(RESOLUTIONS)}")
+        if int(colorSpace) not in COLORSPACE_LAYERS:
+            raise RobotError(
+                f"unknown colorspace id {colorSpace}; valid: {sorted(COLORSPACE_LAYERS)}"
+            )
+        if int(fps) not in CAMERA_FPS:
+            raise RobotError(f"fps must be one of {list(CAMERA_FPS)}, got {fps}")
+        if len(self._subs) >= MAX_SUBSCRIBERS:
+            raise RobotError(f"too many camera subscribers ({MAX_SUBSCRIBERS}); unsubscribe some")
+        handle, n = str(name), 0
+        while handle in self._subs:
+            n += 1
+            handle = f"{name}_{n}"
+        self._subs[handle] = Subscription(camera, int(resolution), int(colorSpace), int(fps))
+        w.tick()
+        return handle
+
+    def unsubscribe(self, nameId: str) -> bool:
+        """Drop a subscription; True when it existed."""
+        w = self._world
+        w.check_open()
+        existed = self._subs.pop(str(nameId), None) is not None
+        w.tick()
+        return existed
+
+    def getImageRemote(self, nameId: str) -> list[Any]:
+        """Render the current view: the 12-item NAOqi image array (bytes in slot 6).
+
+        Raises:
+            HandleError: Unknown or unsubscribed handle.
+        """
+        sub = self._sub(nameId)
+        self._world.tick()
+        return frame_to_naoqi(self.capture(sub.camera, sub.resolution, sub.colorspace))
+
+    def capture(self, camera: int, resolution: int, colorspace: int) -> Frame:
+        """Render a frame of the current view without a subscription (no time advance).
+
+        Args:
+            camera: Camera index (0 top, 1 bottom).
+            resolution: NAOqi resolution id.
+            colorspace: NAOqi colorspace id.
+        """
+        w = self._world
+        width, height = RESOLUTIONS[resolution]
+        yaw, pitch = w.head_angles()
+        robot = w.true_pose
+        c, s = np.cos(robot.theta), np.sin(robot.theta)
+        room_robot = np.array(
+            [[c, -s, 0.0, robot.x], [s, c, 0.0, robot.y], [0.0, 0.0, 1.0, 0.0], [0, 0, 0, 1.0]]
+        )
+        cam = room_robot @ camera_in_robot(yaw, pitch, camera, w.torso_height())
+        hfov, vfov = self._fov
+        rgb = self._renderer.render(cam, width, height, hfov, vfov)
+        r = self._realism
+        rgb = apply_realism(rgb, self._rng, r.noise_std, r.blur_px, r.exposure, r.jpeg_quality)
+        pixels = from_rgb(rgb, colorspace)
+        angles = (hfov / 2, vfov / 2, -hfov / 2, -vfov / 2)
+        return Frame(pixels, colorspace, w.time_s, camera, angles)
+
+    def releaseImage(self, nameId: str) -> None:
+        """No-op for remote images (checks the handle)."""
+        self._sub(nameId)
+        self._world.tick()
+
+    def setActiveCamera(self, cameraIndex: int) -> bool:
+        """Select the active camera; True on success."""
+        self._world.check_open()
+        self._active = _check_camera(cameraIndex)
+        self._world.tick()
+        return True
+
+    def getActiveCamera(self) -> int:
+        """Index of the active camera."""
+        self._world.tick()
+        return self._active
+
+    def getHorizontalFOV(self, cameraIndex: int) -> float:
+        """Horizontal field of view in radians (V5 or V6 head by ``world.model``)."""
+        self._world.tick()
+        _check_camera(cameraIndex)
+        return float(self._fov[0])
+
+    def getVerticalFOV(self, cameraIndex: int) -> float:
+        """Vertical field of view in radians."""
+        self._world.tick()
+        _check_camera(cameraIndex)
+        return float(self._fov[1])
+
+    def getResolution(self, nameId: str) -> int:
+        """Resolution id of a subscription."""
+        sub = self._sub(nameId)
+        self._world.tick()
+        return sub.resolution
+
+    def getColorSpace(self, nameId: str) -> int:
+        """Colorspace id of a subscription."""
+        sub = self._sub(nameId)
+        self._world.tick()
+        return sub.colorspace
+
+    def getFrameRate(self, nameId: str) -> int:
+        """Frame rate of a subscription (frames per second)."""
+        sub = self._sub(nameId)
+        self._world.tick()
+        return sub.fps
+
+    def getCameraIndex(self, nameId: str) -> int:
+        """Camera index of a subscription."""
+        sub = self._sub(nameId)
+        self._world.tick()
+        return sub.camera
