@@ -1,0 +1,204 @@
+"""Localize the robot in a map: look around (head, maybe a turn in place), ask the map.
+
+Two ways to take the query pictures:
+
+- ``paper`` (the seed's Algorithm 5): find the nearest wall from one forward picture,
+  turn the head to it and take one or two pictures of that wall.
+- ``scan`` (default for mode ``verified``): pictures at several head yaws across the
+  head's range, optionally repeated after turning in place, so the map sees most of
+  the room around the robot. The robot never translates.
+
+Every query keeps its odometry pose, so :meth:`VisualMap.localize` can combine them; the
+estimate is the robot pose (FRAME_ROBOT origin) in the map frame when the last picture was
+taken, which is where the robot still stands.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from naoloc.behaviours.camera import DEFAULT_HEAD_PITCH, Camera, look, stand
+from naoloc.behaviours.nearest_wall import detect_nearest_wall
+from naoloc.config import Config
+from naoloc.errors import MotionError
+from naoloc.geometry import Pose2D, modulo2PI, relative_pose
+from naoloc.keyframe import Keyframe
+from naoloc.robot import Robot
+
+if TYPE_CHECKING:
+    from naoloc.mapping import Estimate, VisualMap
+
+# Head yaws of a scan, rad: the head turns +-2.09 rad, the camera sees +-0.53 rad more.
+SCAN_YAWS: tuple[float, ...] = (-2.0, -1.0, 0.0, 1.0, 2.0)
+# Offset of the paper's second picture from the first, rad (toward the robot's front).
+PAPER_SECOND_OFFSET = 0.5
+
+
+@dataclass(frozen=True)
+class Localization:
+    """One localization and what it was made from.
+
+    Attributes:
+        estimate: The map's estimate (map frame) for the pose the robot stands at.
+        queries: The pictures used (poses: raw FRAME_WORLD odometry).
+        strategy: "scan" or "paper".
+        truth: The true pose in the map frame, when a simulator and the map's
+            origin_room_pose know it; else None.
+        error_m: Distance from estimate to truth, m (None without truth).
+        heading_error_deg: Wrapped heading difference, degrees (None without truth).
+        wall_s: Wall-clock seconds spent (pictures and the map's work).
+    """
+
+    estimate: Estimate
+    queries: list[Keyframe]
+    strategy: str
+    truth: Pose2D | None
+    error_m: float | None
+    heading_error_deg: float | None
+    wall_s: float
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-able fields of CONTRACT.md's ``localize`` line."""
+        est = self.estimate
+        out: dict[str, Any] = {
+            "x": round(est.x, 4),
+            "y": round(est.y, 4),
+            "theta": round(est.theta, 4),
+            "confidence": round(float(est.confidence), 4),
+            "mode": est.mode,
+            "strategy": self.strategy,
+            "images": len(self.queries),
+        }
+        if self.truth is not None and self.error_m is not None:
+            out["error_m"] = round(self.error_m, 4)
+            out["heading_error_deg"] = round(float(self.heading_error_deg or 0.0), 3)
+            out["truth"] = [round(v, 4) for v in self.truth]
+        return out
+
+
+def truth_in_map(robot: Robot, meta: dict[str, Any]) -> Pose2D | None:
+    """The robot's true pose in the map frame, or None when unknown.
+
+    Args:
+        robot: The robot; needs ``robot.sim``.
+        meta: The map's meta; needs ``origin_room_pose`` (room frame pose at the map origin).
+    """
+    origin = meta.get("origin_room_pose")
+    if robot.sim is None or origin is None:
+        return None
+    return relative_pose(Pose2D.from_list(origin), Pose2D.from_list(robot.sim.true_pose()))
+
+
+def scan_queries(
+    camera: Camera,
+    yaws: Sequence[float] = SCAN_YAWS,
+    *,
+    turns: int = 1,
+    pitch: float = DEFAULT_HEAD_PITCH,
+) -> list[Keyframe]:
+    """Pictures at several head yaws; with ``turns`` > 1, repeated after turns in place.
+
+    Args:
+        camera: The camera subscription (its robot is moved: head, and body rotation only).
+        yaws: Head yaws of one sweep, rad.
+        turns: Body headings to sweep from, evenly spread over a full turn.
+        pitch: Head pitch, rad.
+
+    Returns:
+        The keyframes, poses in raw FRAME_WORLD odometry.
+
+    Raises:
+        MotionError: A turn in place failed (the robot is stopped).
+    """
+    robot = camera.robot
+    out: list[Keyframe] = []
+    order = list(yaws)
+    try:
+        for k in range(max(1, turns)):
+            if k > 0:
+                if not robot.motion.moveTo(0.0, 0.0, 2.0 * math.pi / turns):
+                    raise MotionError("turning in place failed during the localization scan")
+                order.reverse()  # sweep back from where the head is
+            for yaw in order:
+                look(robot, yaw, pitch)
+                out.append(camera.keyframe()[0])
+    finally:
+        robot.motion.stopMove()
+    return out
+
+
+def paper_queries(
+    camera: Camera, images: int = 2, *, pitch: float = DEFAULT_HEAD_PITCH
+) -> list[Keyframe]:
+    """The paper's way: nearest wall from a forward picture, then 1-2 pictures of it.
+
+    Args:
+        camera: The camera subscription (only the head moves).
+        images: 1 or 2 pictures (more are capped at 2).
+        pitch: Head pitch, rad.
+    """
+    robot = camera.robot
+    wall = detect_nearest_wall(robot, camera, pitch)
+    yaws = [wall.head_yaw, wall.head_yaw - math.copysign(PAPER_SECOND_OFFSET, wall.head_yaw)]
+    out: list[Keyframe] = []
+    for yaw in yaws[: max(1, min(2, images))]:
+        look(robot, yaw, pitch)
+        out.append(camera.keyframe()[0])
+    return out
+
+
+def localize(
+    robot: Robot,
+    vmap: VisualMap,
+    cfg: Config,
+    *,
+    mode: str | None = None,
+    strategy: str | None = None,
+    yaws: Sequence[float] = SCAN_YAWS,
+    turns: int = 1,
+    camera: Camera | None = None,
+    on_step: Callable[[str], None] | None = None,
+) -> Localization:
+    """Take query pictures without translating and localize them in ``vmap``.
+
+    Args:
+        robot: The robot, standing where it should be localized.
+        vmap: The map.
+        cfg: Config; uses ``localize.mode``, ``localize.images`` (paper strategy) and ``camera``.
+        mode: "verified" or "paper"; default ``cfg.localize.mode``.
+        strategy: "scan" or "paper"; default "paper" for mode paper, else "scan".
+        yaws: Head yaws of a scan, rad.
+        turns: Body headings of a scan (1 = no turning in place).
+        camera: An open camera subscription to reuse; one is opened otherwise.
+        on_step: Called with a short note as the work advances (progress display).
+
+    Returns:
+        The estimate, the queries, and the error against the truth on a simulator.
+    """
+    t0 = time.monotonic()
+    mode = mode or cfg.localize.mode
+    strategy = strategy or ("paper" if mode == "paper" else "scan")
+    own = camera is None
+    cam = camera if camera is not None else Camera(robot, cfg.camera, "naoloc_localize")
+    try:
+        stand(robot)
+        if strategy == "paper":
+            queries = paper_queries(cam, cfg.localize.images)
+        else:
+            queries = scan_queries(cam, yaws, turns=turns)
+    finally:
+        if own:
+            cam.close()
+    if on_step is not None:
+        on_step(f"{len(queries)} pictures")
+    estimate = vmap.localize(queries, mode=mode)  # type: ignore[arg-type]
+    truth = truth_in_map(robot, vmap.meta)
+    error = heading = None
+    if truth is not None:
+        error = math.hypot(estimate.x - truth.x, estimate.y - truth.y)
+        heading = math.degrees(abs(modulo2PI(estimate.theta - truth.theta)))
+    return Localization(estimate, queries, strategy, truth, error, heading, time.monotonic() - t0)

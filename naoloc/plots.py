@@ -1,0 +1,192 @@
+"""Pictures of maps and localizations (PNG), drawn with matplotlib's Agg canvas.
+
+Everything is drawn in the map frame (odometry at the survey start: x forward, y left,
+metres). When the map's meta holds ``origin_room_pose`` and ``room_size_m`` (a simulated
+survey), the room's walls are drawn too. No pyplot: no global figure state.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from naoloc.errors import NaolocError
+from naoloc.geometry import Pose2D, relative_pose
+from naoloc.keyframe import Keyframe
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+    from naoloc.mapping import Estimate, VisualMap
+
+
+def room_outline(meta: dict[str, Any]) -> np.ndarray | None:
+    """The room's corners in the map frame, ``(5, 2)`` closed polygon, or None if unknown.
+
+    Args:
+        meta: Map or dataset meta with ``origin_room_pose`` ([x, y, theta], room frame)
+            and ``room_size_m`` ([sx, sy]).
+    """
+    origin, size = meta.get("origin_room_pose"), meta.get("room_size_m")
+    if origin is None or size is None:
+        return None
+    o = Pose2D.from_list(origin)
+    sx, sy = float(size[0]), float(size[1])
+    corners = [(0.0, 0.0), (sx, 0.0), (sx, sy), (0.0, sy), (0.0, 0.0)]
+    return np.array([[p.x, p.y] for p in (relative_pose(o, Pose2D(x, y)) for x, y in corners)])
+
+
+def _figure(width: float, height: float) -> Any:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height), dpi=100)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _save(fig: Any, path: Path) -> Path:
+    path = Path(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, format="png")
+    except OSError as err:
+        raise NaolocError(f"{path}: cannot write the picture: {err.strerror}") from None
+    return path
+
+
+def _draw_map(ax: Axes, vmap: VisualMap) -> None:
+    outline = room_outline(vmap.meta)
+    if outline is not None:
+        ax.plot(outline[:, 0], outline[:, 1], "-", color="0.3", lw=2, label="room walls")
+    path = np.asarray(vmap.keyframe_poses, dtype=float)
+    if len(path):
+        ax.plot(path[:, 0], path[:, 1], "-", color="tab:blue", lw=0.8, alpha=0.6)
+        ax.plot(path[:, 0], path[:, 1], ".", color="tab:blue", ms=3, label="survey poses")
+    neurons = np.asarray(vmap.neuron_poses, dtype=float)
+    if neurons.size:
+        ok = np.all(np.isfinite(neurons), axis=1)
+        ax.plot(
+            neurons[ok, 0], neurons[ok, 1], "o", mfc="none", mec="tab:red", ms=5,
+            label=f"neurons ({int(ok.sum())} with images)",
+        )  # fmt: skip
+    ax.plot([0.0], [0.0], "k*", ms=12, label="map origin")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x (m, map frame)")
+    ax.set_ylabel("y (m, map frame)")
+    ax.grid(True, alpha=0.3)
+
+
+def _arrow(ax: Axes, pose: Pose2D, color: str, label: str) -> None:
+    ax.plot([pose.x], [pose.y], "o", color=color, ms=8, label=label)
+    ax.arrow(
+        pose.x, pose.y, 0.35 * math.cos(pose.theta), 0.35 * math.sin(pose.theta),
+        color=color, width=0.02, length_includes_head=True,
+    )  # fmt: skip
+
+
+def plot_map(vmap: VisualMap, path: str | Path, title: str | None = None) -> Path:
+    """Draw a map like the paper's Fig. 14: neuron poses over the survey path and the room.
+
+    Args:
+        vmap: The map.
+        path: PNG file to write.
+        title: Figure title; default a summary of the map.
+
+    Returns:
+        The path written.
+    """
+    fig = _figure(7.0, 7.0)
+    ax = fig.add_subplot(1, 1, 1)
+    _draw_map(ax, vmap)
+    ax.set_title(
+        title
+        or f"{vmap.images} images, {len(vmap.neuron_poses)} neurons, "
+        f"{vmap.distinct_poses} distinct poses"
+    )
+    ax.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    return _save(fig, Path(path))
+
+
+def plot_localization(
+    vmap: VisualMap,
+    estimate: Estimate,
+    path: str | Path,
+    *,
+    truth: Pose2D | None = None,
+    queries: Sequence[Keyframe] = (),
+    title: str | None = None,
+) -> Path:
+    """Draw an estimate (and the truth, if known) on the map, with the query images.
+
+    Args:
+        vmap: The map.
+        estimate: The estimate in the map frame.
+        path: PNG file to write.
+        truth: True pose in the map frame, when known.
+        queries: The images used, shown in a strip below the map (at most 10).
+        title: Figure title; default the estimate and error.
+
+    Returns:
+        The path written.
+    """
+    shown = list(queries)[:10]
+    rows = 2 if shown else 1
+    fig = _figure(8.0, 8.0 + (1.6 if shown else 0.0))
+    grid = fig.add_gridspec(rows, max(1, len(shown)), height_ratios=[5, 1][:rows])
+    ax = fig.add_subplot(grid[0, :])
+    _draw_map(ax, vmap)
+    est = Pose2D(estimate.x, estimate.y, estimate.theta)
+    _arrow(ax, est, "tab:green", f"estimate (confidence {estimate.confidence:.2f})")
+    text = f"estimate ({est.x:.2f}, {est.y:.2f}) m"
+    if truth is not None:
+        _arrow(ax, truth, "black", "truth")
+        text += f", error {est.distance(truth):.2f} m"
+    ax.set_title(title or text)
+    ax.legend(loc="best", fontsize=8)
+    for i, kf in enumerate(shown):
+        sub = fig.add_subplot(grid[1, i])
+        img = kf.image if kf.image.ndim == 2 else kf.image[..., ::-1]
+        sub.imshow(img, cmap="gray" if kf.image.ndim == 2 else None)
+        sub.set_title(f"yaw {math.degrees(kf.head_yaw):.0f}°", fontsize=7)
+        sub.axis("off")
+    fig.tight_layout()
+    return _save(fig, Path(path))
+
+
+def plot_estimates(
+    vmap: VisualMap,
+    pairs: Sequence[tuple[Pose2D, Pose2D | None]],
+    path: str | Path,
+    title: str | None = None,
+) -> Path:
+    """Draw several estimates on the map, each joined to its truth when known.
+
+    Args:
+        vmap: The map.
+        pairs: ``(estimate, truth)`` poses in the map frame; truth may be None.
+        path: PNG file to write.
+        title: Figure title.
+
+    Returns:
+        The path written.
+    """
+    fig = _figure(7.0, 7.0)
+    ax = fig.add_subplot(1, 1, 1)
+    _draw_map(ax, vmap)
+    for i, (est, truth) in enumerate(pairs):
+        first = i == 0
+        ax.plot([est.x], [est.y], "s", color="tab:green", ms=7, label="estimate" if first else None)
+        if truth is not None:
+            ax.plot([truth.x], [truth.y], "kx", ms=9, mew=2, label="truth" if first else None)
+            ax.plot([truth.x, est.x], [truth.y, est.y], "-", color="tab:green", lw=1)
+            ax.annotate(str(i + 1), (truth.x, truth.y), textcoords="offset points", xytext=(5, 5))
+    ax.set_title(title or f"{len(pairs)} localizations")
+    ax.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    return _save(fig, Path(path))

@@ -1,0 +1,201 @@
+"""Behaviours on the fake backend: survey, interruption, localize and go-home plumbing.
+
+The map is replaced here by a double that answers from the simulator's truth (plus a known
+offset), so these tests check the behaviours' geometry and control, not the map's vision;
+tests/test_cli_verbs.py runs them end to end with the real map.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from naoloc import connect
+from naoloc.behaviours import frames_per_lap, go_home, localize, survey
+from naoloc.commands.survey import record_survey
+from naoloc.config import Config, load_config
+from naoloc.dataset import read_dataset
+from naoloc.geometry import Pose2D, relative_pose
+from naoloc.keyframe import Keyframe
+from naoloc.robot import Robot
+
+pytest.importorskip("naoloc.backends.fake")
+
+
+def small_cfg(**survey: Any) -> Config:
+    """A 3 x 3 m fake room; 1 lap of a 1.5 m square in 0.5 m steps (12 frames)."""
+    return load_config(
+        {
+            "robot": {"backend": "fake"},
+            "world": {"room": {"size_m": [3.0, 3.0], "seed": 3}},
+            "survey": {"laps": 1, "step_m": 0.5, "wall_offset_m": 0.75, **survey},
+            "go_home": {"tolerance_m": 0.15, "max_tries": 4},
+        }
+    )
+
+
+@dataclass(frozen=True)
+class _Estimate:
+    x: float
+    y: float
+    theta: float
+    confidence: float
+    mode: str
+    details: dict[str, Any] = field(default_factory=dict)
+
+
+class TruthMap:
+    """A map double: the estimate is the true map-frame pose plus a fixed offset (m)."""
+
+    def __init__(self, robot: Robot, origin_room: Pose2D, *offsets: tuple[float, float]) -> None:
+        self.robot = robot
+        self.meta = {"origin_room_pose": origin_room.to_list()}
+        self.offsets = offsets  # used in turn, one per call
+        self.calls: list[int] = []
+
+    def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> _Estimate:
+        offset = self.offsets[len(self.calls) % len(self.offsets)]
+        self.calls.append(len(queries))
+        assert self.robot.sim is not None
+        truth = relative_pose(
+            Pose2D.from_list(self.meta["origin_room_pose"]),
+            Pose2D.from_list(self.robot.sim.true_pose()),
+        )
+        return _Estimate(truth.x + offset[0], truth.y + offset[1], truth.theta, 1.0, mode)
+
+
+def test_survey_walks_the_rectangle_and_records_each_step() -> None:
+    cfg = small_cfg(head_yaw_rad=-math.pi / 2)
+    got: list[tuple[Keyframe, int]] = []
+    with connect(cfg) as robot:
+        start = Pose2D.from_list(robot.sim.true_pose())  # type: ignore[union-attr]
+        result = survey(robot, cfg, lambda kf, lap, odo: got.append((kf, lap)))
+        assert not robot.motion.moveIsActive()
+    assert result.frames == len(got) == frames_per_lap((1.5, 1.5), 0.5) == 12
+    assert result.laps == 1 and result.meta["direction"] == "ccw"
+    assert result.meta["origin_room_pose"] == pytest.approx(start.to_list())
+    assert result.path_m == pytest.approx(6.0, rel=0.05)
+    # Map-frame odometry poses follow the square; the truth follows it in the room frame.
+    xy = np.array([[kf.pose.x, kf.pose.y] for kf, _ in got])
+    want = [(0.5, 0), (1.0, 0), (1.5, 0), (1.5, 0.5), (1.5, 1.0), (1.5, 1.5)]
+    assert np.allclose(xy[:6], want, atol=0.05)
+    for kf, _ in got:
+        assert kf.true_pose is not None
+        truth_map = relative_pose(start, kf.true_pose)
+        assert truth_map.distance(kf.pose) < 0.15  # odometry drift stays small
+        assert kf.head_yaw == pytest.approx(-math.pi / 2, abs=0.02)
+        assert kf.image.shape == (240, 320, 3)
+    # The walls never get closer than the offset allows: the robot stayed inside.
+    assert all(0.5 < kf.true_pose.x < 2.5 and 0.5 < kf.true_pose.y < 2.5 for kf, _ in got)  # type: ignore[union-attr]
+
+
+def test_interrupted_survey_stops_the_robot_and_keeps_frames(tmp_path: Path) -> None:
+    cfg = small_cfg(head_yaw_rad=-math.pi / 2)
+    out = tmp_path / "s.mcap"
+    count = {"n": 0}
+
+    class Stop(KeyboardInterrupt):
+        pass
+
+    with connect(cfg) as robot:
+        real_move = robot.motion.moveTo
+
+        def move_then_maybe_stop(*args: Any, **kwargs: Any) -> bool:
+            count["n"] += 1
+            if count["n"] == 6:
+                robot.motion.move(0.1, 0.0, 0.0)  # walking when the Ctrl-C arrives
+                raise Stop()
+            return bool(real_move(*args, **kwargs))
+
+        robot.motion.moveTo = move_then_maybe_stop  # type: ignore[method-assign]
+        with pytest.raises(Stop):
+            record_survey(robot, cfg, out)
+        assert not robot.motion.moveIsActive()
+        assert robot.motion.getRobotVelocity() == pytest.approx([0.0, 0.0, 0.0])
+    data = read_dataset(out)
+    assert len(data.keyframes) == 4  # 3 steps, the turn, 2 more steps; the 6th move broke
+    assert data.complete  # the writer was closed on the way out
+
+
+def test_nearest_wall_decides_the_direction_in_the_corner() -> None:
+    cfg = small_cfg()
+    with connect(cfg) as robot:
+        res = survey(robot, cfg, lambda kf, lap, odo: None)
+    assert res.wall is not None
+    # Start: 0.75 m from the walls at y = 0 (right) and x = 0 (behind), facing +x.
+    assert res.wall.side == "right", res.wall
+    assert res.meta["direction"] == "ccw"
+
+
+@pytest.mark.parametrize("strategy", ["scan", "paper"])
+def test_localize_never_translates_and_reports_error(strategy: str) -> None:
+    cfg = small_cfg()
+    with connect(cfg) as robot:
+        sim = robot.sim
+        assert sim is not None
+        origin = Pose2D.from_list(sim.true_pose())
+        sim.teleport(2.0, 1.2, 2.5)
+        vmap = TruthMap(robot, origin, (0.3, -0.4))
+        before = Pose2D.from_list(sim.true_pose())
+        loc = localize(robot, vmap, cfg, strategy=strategy)  # type: ignore[arg-type]
+        after = Pose2D.from_list(sim.true_pose())
+    assert before.distance(after) < 0.02
+    assert vmap.calls == [5 if strategy == "scan" else 2]
+    assert loc.error_m == pytest.approx(0.5, abs=1e-6)
+    assert loc.truth is not None and loc.truth.distance(relative_pose(origin, after)) < 1e-9
+    yaws = [q.head_yaw for q in loc.queries]
+    assert max(yaws) - min(yaws) > (3.5 if strategy == "scan" else 0.4)
+    summary = loc.summary()
+    assert summary["error_m"] == pytest.approx(0.5, abs=1e-3) and "heading_error_deg" in summary
+
+
+def test_localize_scan_with_a_turn_in_place() -> None:
+    cfg = small_cfg()
+    with connect(cfg) as robot:
+        sim = robot.sim
+        assert sim is not None
+        origin = Pose2D.from_list(sim.true_pose())
+        sim.teleport(1.5, 1.5, 0.0)
+        loc = localize(robot, TruthMap(robot, origin, (0.0, 0.0)), cfg, turns=2)  # type: ignore[arg-type]
+        after = Pose2D.from_list(sim.true_pose())
+    assert len(loc.queries) == 10
+    assert math.hypot(after.x - 1.5, after.y - 1.5) < 0.05
+    assert abs(abs(after.theta) - math.pi) < 0.1
+
+
+def test_go_home_walks_back_to_the_origin() -> None:
+    cfg = small_cfg()
+    with connect(cfg) as robot:
+        sim = robot.sim
+        assert sim is not None
+        origin = Pose2D.from_list(sim.true_pose())
+        sim.teleport(2.2, 2.1, -2.0)
+        vmap = TruthMap(robot, origin, (0.05, -0.05))  # a biased but honest localizer
+        result = go_home(robot, vmap, cfg)  # type: ignore[arg-type]
+        assert not robot.motion.moveIsActive()
+    assert result.reached
+    assert 1 <= result.tries <= 2
+    assert result.error_m is not None and result.error_m < 0.15
+    assert result.summary()["tries"] == result.tries
+
+
+def test_go_home_gives_up_after_max_tries() -> None:
+    cfg = small_cfg()
+    with connect(cfg) as robot:
+        sim = robot.sim
+        assert sim is not None
+        origin = Pose2D.from_list(sim.true_pose())
+        sim.teleport(1.5, 1.5, 0.0)
+        # 0.3 m off, alternating sides: the robot swings around the origin, never within 0.15.
+        vmap = TruthMap(robot, origin, (0.0, 0.3), (0.0, -0.3))
+        result = go_home(robot, vmap, cfg)  # type: ignore[arg-type]
+    assert not result.reached
+    assert result.tries == cfg.go_home.max_tries
+    assert len(result.rounds) == cfg.go_home.max_tries + 1
+    assert result.error_m == pytest.approx(0.3, abs=0.1)

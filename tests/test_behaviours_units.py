@@ -1,0 +1,71 @@
+"""Pure parts of the behaviours: the circuit's geometry and the nearest-wall detector."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from naoloc.behaviours import circuit, count_halves, frames_per_lap, nearest_wall
+from naoloc.behaviours.camera import clamp_head
+
+
+def _textured(h: int, w: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    small = rng.integers(0, 255, (h // 8, w // 8), dtype=np.uint8)
+    return np.kron(small, np.ones((8, 8), dtype=np.uint8))
+
+
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_nearest_wall_picks_the_textured_half(side: str) -> None:
+    img = np.full((240, 320), 128, dtype=np.uint8)
+    tex = _textured(240, 160, 0)
+    if side == "left":
+        img[:, :160] = tex
+    else:
+        img[:, 160:] = tex
+    wall = nearest_wall(img)
+    assert wall.side == side
+    assert wall.head_yaw == pytest.approx(math.pi / 2 if side == "left" else -math.pi / 2)
+    assert max(wall.left, wall.right) > 20 and min(wall.left, wall.right) < 5
+
+
+def test_blank_image_goes_right_with_no_keypoints() -> None:
+    assert count_halves(np.zeros((120, 160), np.uint8)) == (0, 0)
+    assert nearest_wall(np.zeros((120, 160, 3), np.uint8)).side == "right"
+
+
+def test_circuit_is_closed_and_counter_clockwise() -> None:
+    pts = circuit((4.0, 4.0), 0.2, 2, math.pi / 2)
+    pictures = [p for p in pts if p.picture]
+    assert len(pictures) == 2 * 80 == 2 * frames_per_lap((4.0, 4.0), 0.2)
+    # Every step is 0.2 m; the robot ends at the origin facing map +x.
+    xy = np.array([[p.pose.x, p.pose.y] for p in pictures])
+    steps = np.linalg.norm(np.diff(np.vstack([[0.0, 0.0], xy]), axis=0), axis=1)
+    assert np.allclose(steps[steps > 1e-9], 0.2)
+    assert pts[-1].pose.x == pytest.approx(0.0, abs=1e-9)
+    assert pts[-1].pose.y == pytest.approx(0.0, abs=1e-9)
+    assert abs(pts[-1].pose.theta) < 1e-9
+    # Counter-clockwise: the square lies in y >= 0 and the corners come in order.
+    assert xy[:, 1].min() > -1e-9 and xy[:, 0].min() > -1e-9
+    corners = [(p.pose.x, p.pose.y) for p in pts if not p.picture][:4]
+    assert np.allclose(corners, [(4, 0), (4, 4), (0, 4), (0, 0)], atol=1e-9)
+    assert [p.closes_lap for p in pts if not p.picture] == [False, False, False, True] * 2
+    assert [p.lap for p in pictures] == [0] * 80 + [1] * 80
+
+
+def test_clockwise_rectangle_with_uneven_sides() -> None:
+    pts = circuit((3.0, 1.0), 0.4, 1, -math.pi / 2)
+    corners = [(p.pose.x, p.pose.y) for p in pts if not p.picture]
+    assert np.allclose(corners, [(3, 0), (3, -1), (0, -1), (0, 0)], atol=1e-9)
+    # 3 m in 0.4 m steps -> 8 equal steps of 0.375 m; 1 m -> 2 steps (round(2.5) = 2).
+    assert frames_per_lap((3.0, 1.0), 0.4) == 2 * (8 + 2)
+    assert sum(p.picture for p in pts) == 20
+
+
+def test_head_clamped_to_limits_and_shell() -> None:
+    assert clamp_head(3.0, 0.0)[0] < 2.0857
+    assert clamp_head(-3.0, 0.0)[0] > -2.0857
+    assert clamp_head(1.57, -0.6)[1] == pytest.approx(-0.33)
+    assert clamp_head(0.0, -0.6)[1] == pytest.approx(-0.6)
