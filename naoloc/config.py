@@ -35,6 +35,15 @@ class RobotConfig(_Model):
     user: str | None = Field(None, description="NAOqi 2.9+ (tcps://) user, usually 'nao'")
     password: str | None = Field(None, description="NAOqi 2.9+ (tcps://) password")
     timeout_s: float = Field(5.0, gt=0, description="timeout of one remote call, seconds")
+    move_timeout_s: float = Field(
+        300.0, gt=0, description="naoqi only: timeout of one blocking motion call, seconds"
+    )
+    sim_service: bool = Field(
+        False, description="naoqi only: expose the virtual NAOqi's NaolocSim as robot.sim"
+    )
+    curve_keys: str | None = Field(
+        None, description="zmq transport: folder of CURVE certificates (needed off loopback)"
+    )
 
 
 class RoomConfig(_Model):

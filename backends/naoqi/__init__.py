@@ -1,0 +1,59 @@
+"""The NAOqi network backend: a Robot over a qi session (a real NAO or ``naoloc serve``).
+
+``robot.backend: naoqi`` with ``robot.url`` (``tcp://<ip>:9559``; NAOqi 2.9+:
+``tcps://<ip>:9503`` with ``robot.user`` and ``robot.password``) and
+``robot.transport`` (``libqi`` = the real qi package, ``zmq`` = naoloc's pure-Python
+shim, ``auto`` = libqi when qi imports, unless the server greets with ZeroMQ).
+
+``robot.sim`` is None unless ``robot.sim_service: true`` asks for the virtual NAOqi's
+``NaolocSim`` service (ground truth and teleport), so a real NAO never gets one.
+"""
+
+from __future__ import annotations
+
+from naoloc.config import Config
+from naoloc.errors import BackendError
+from naoloc.robot import Robot
+
+
+def create(cfg: Config) -> Robot:
+    """Connect to the NAOqi ``cfg.robot`` describes.
+
+    Raises:
+        ConnectionLost: Nothing answers at ``robot.url``.
+        DependencyNotInstalled: transport libqi without the qi package.
+        BackendError: ``robot.sim_service`` asked for but the server has no NaolocSim.
+    """
+    from naoloc.backends.naoqi.client import Link, looks_like_zmq
+    from naoloc.backends.naoqi.proxies import RemoteMotion, RemotePosture, RemoteSim, RemoteVideo
+    from naoloc.backends.naoqi.session import resolve_transport
+    from naoloc.backends.naoqi.signatures import SIM
+
+    rc = cfg.robot
+    transport = resolve_transport(rc.transport)
+    if rc.transport == "auto" and transport == "libqi" and looks_like_zmq(rc.url):
+        transport = "zmq"
+    link = Link(rc.url, transport, user=rc.user, password=rc.password, curve_keys=rc.curve_keys)
+    link.open()
+    try:
+        sim = None
+        if rc.sim_service:
+            if not link.has_service(SIM):
+                raise BackendError(
+                    f"robot.sim_service: the NAOqi at {rc.url} has no {SIM} service "
+                    "(only `naoloc serve` has one)"
+                )
+            sim = RemoteSim(link, rc.timeout_s, rc.move_timeout_s)
+        args = (link, rc.timeout_s, rc.move_timeout_s)
+        return Robot(
+            motion=RemoteMotion(*args),
+            video=RemoteVideo(*args),
+            posture=RemotePosture(*args),
+            sim=sim,
+            backend="naoqi",
+            info={"url": rc.url, "transport": transport},
+            _closer=link.close,
+        )
+    except BaseException:
+        link.close()
+        raise

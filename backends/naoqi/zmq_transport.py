@@ -1,0 +1,485 @@
+"""ZmqSession: the qi.Session call shapes over pyzmq, in pure Python, on any OS.
+
+Client side: a DEALER socket owned by one I/O thread; callers hand requests over
+through a queue and a wake-up pipe, and wait on :class:`~.session.Future` objects.
+The I/O thread also pings the server whenever it has sent nothing for
+:data:`PING_EVERY_S`, and declares the connection lost when nothing arrived for
+:data:`LOST_AFTER_S` or the socket monitor reports a disconnection. Then every pending
+call fails with :class:`~naoloc.errors.ConnectionLost` and ``disconnected`` fires.
+
+Server side: a ROUTER socket owned by one I/O thread that answers ``hello`` and
+``ping`` itself and hands each ``call`` to the worker thread of its service (one
+thread per service, so calls to one service never overlap, like libqi's
+single-threaded objects). Wire format: :mod:`.wire` (msgpack + raw frames, no pickle).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import os
+import queue
+import sys
+import threading
+import time
+from collections import deque
+from pathlib import Path
+from typing import Any, Final, Protocol, runtime_checkable
+
+import zmq
+import zmq.auth
+from naoloc.backends.naoqi import wire
+from naoloc.backends.naoqi.session import Future, Promise, Signal, error_from_text
+
+from naoloc.errors import BackendError, ConnectionLost, NaolocError, ProtocolError, RobotError
+
+PING_EVERY_S: Final = 0.2
+LOST_AFTER_S: Final = 0.9
+HELLO_TIMEOUT_S: Final = 3.0
+_POLL_MS: Final = 50
+
+
+@runtime_checkable
+class Invokable(Protocol):
+    """A served object that wants to know its caller (for the dead-man check)."""
+
+    def invoke(self, caller: str, method: str, args: list[Any]) -> Any:
+        """Run ``method(*args)`` for the client ``caller``."""
+        ...
+
+
+def make_curve_keys(folder: str | Path) -> Path:
+    """Create CURVE certificates for a server and one client in ``folder``.
+
+    Writes ``server.key`` / ``server.key_secret`` and ``client.key`` /
+    ``client.key_secret`` (zmq.auth format). Point ``robot.curve_keys`` of both the
+    server's and the client's config at this folder; copy only ``server.key`` and the
+    client's pair to the client machine.
+    """
+    path = Path(folder)
+    path.mkdir(parents=True, exist_ok=True)
+    zmq.auth.create_certificates(str(path), "server")
+    zmq.auth.create_certificates(str(path), "client")
+    return path
+
+
+def _load_pair(path: Path) -> tuple[bytes, bytes]:
+    try:
+        public, secret = zmq.auth.load_certificate(str(path))
+    except (OSError, ValueError) as err:
+        raise BackendError(f"cannot read CURVE certificate {path}: {err}") from None
+    if secret is None:
+        raise BackendError(f"{path} holds no secret key")
+    return public, secret
+
+
+class _Wake:
+    """A pipe other threads write to so that the I/O thread's poll returns."""
+
+    def __init__(self) -> None:
+        self.read_fd, self.write_fd = os.pipe()
+        os.set_blocking(self.read_fd, False)
+        os.set_blocking(self.write_fd, False)
+
+    def poke(self) -> None:
+        with contextlib.suppress(BlockingIOError, OSError):
+            os.write(self.write_fd, b"x")
+
+    def drain(self) -> None:
+        with contextlib.suppress(BlockingIOError, OSError):
+            while os.read(self.read_fd, 4096):
+                pass
+
+    def close(self) -> None:
+        for fd in (self.read_fd, self.write_fd):
+            with contextlib.suppress(OSError):
+                os.close(fd)
+
+
+class ZmqServiceProxy:
+    """A remote service: ``proxy.method(*args)`` blocks, ``_async=True`` gives a Future."""
+
+    def __init__(self, session: ZmqSession, name: str) -> None:
+        self._session = session
+        self._name = name
+
+    def __getattr__(self, method: str) -> Any:
+        if method.startswith("_"):
+            raise AttributeError(method)
+
+        def call(*args: Any, _async: bool = False) -> Any:
+            future = self._session._call(self._name, method, list(args))
+            return future if _async else future.value()
+
+        call.__name__ = method
+        return call
+
+
+class ZmqSession:
+    """The qi.Session shape over ZeroMQ (client or server, not both).
+
+    Args:
+        curve_keys: Folder of CURVE certificates (:func:`make_curve_keys`); None = plain.
+    """
+
+    def __init__(self, curve_keys: str | None = None) -> None:
+        self._curve = Path(curve_keys) if curve_keys else None
+        self._ctx: zmq.Context[Any] | None = None
+        self._thread: threading.Thread | None = None
+        self._stop = threading.Event()
+        self._wake: _Wake | None = None
+        self._outbox: deque[list[Any]] = deque()
+        self._url = ""
+        self._connected = False
+        self._lost_reason = ""
+        self.disconnected = Signal()
+        self.connected = Signal()
+        # client side
+        self._ids = itertools.count(1)
+        self._pending: dict[int, Promise] = {}
+        self._pending_lock = threading.Lock()
+        self._services: list[str] = []
+        # server side
+        self._objects: dict[str, Any] = {}
+        self._workers: dict[str, queue.Queue[Any]] = {}
+        self._worker_threads: list[threading.Thread] = []
+        self._endpoint = ""
+        self._auth: Any = None
+        self.protocol_errors = 0
+
+    # ------------------------------------------------------------------ client
+    def connect(self, url: str, _async: bool = False) -> Any:
+        """Connect to a zmq virtual NAOqi at ``tcp://host:port`` and greet it.
+
+        Raises:
+            ConnectionLost: Nothing answered within a few seconds.
+            BackendError: A bad URL or CURVE certificates.
+        """
+        if self._thread is not None:
+            raise BackendError("this session is already in use")
+        if not url.startswith(("tcp://", "ipc://")):
+            raise BackendError(f"transport zmq needs a tcp:// URL, got {url!r}")
+        self._url = url
+        self._ctx = zmq.Context()
+        sock = self._ctx.socket(zmq.DEALER)
+        sock.setsockopt(zmq.LINGER, 0)
+        sock.setsockopt(zmq.RECONNECT_IVL, 100)
+        if self._curve is not None:
+            public, secret = _load_pair(self._curve / "client.key_secret")
+            server_public, _ = zmq.auth.load_certificate(str(self._curve / "server.key"))
+            sock.curve_publickey, sock.curve_secretkey = public, secret
+            sock.curve_serverkey = server_public
+        monitor = sock.get_monitor_socket(zmq.EVENT_DISCONNECTED)
+        try:
+            sock.connect(url)
+        except zmq.ZMQError as err:
+            sock.close(0)
+            monitor.close(0)
+            raise BackendError(f"cannot connect to {url}: {err}") from None
+        self._wake = _Wake()
+        self._thread = threading.Thread(
+            target=self._client_loop, args=(sock, monitor), name="naoloc-zmq-client", daemon=True
+        )
+        self._thread.start()
+        hello = self._send_request({"k": "hello"})
+        try:
+            welcome = hello.value(int(HELLO_TIMEOUT_S * 1000))
+        except ConnectionLost:
+            self.close()
+            raise ConnectionLost(f"no virtual NAOqi (zmq) answers at {url}") from None
+        self._services = [str(s) for s in welcome.get("services", [])]
+        self._connected = True
+        self.connected()
+        done = Promise()
+        done.setValue(None)
+        return done.future() if _async else None
+
+    def isConnected(self) -> bool:
+        """True while the server answers."""
+        return self._connected
+
+    def url(self) -> str:
+        """The URL this session connected to or listens on."""
+        return self._url or self._endpoint
+
+    def services(self, _async: bool = False) -> Any:
+        """Names of the served services (libqi returns ServiceInfo structs instead)."""
+        if self._endpoint:
+            names: list[str] = sorted(self._objects)
+            return names
+        future = self._send_request({"k": "hello"})
+        future_names = Future()
+
+        def done(f: Future) -> None:
+            err = f.exception()
+            if err is not None:
+                future_names._finish(None, err)
+            else:
+                future_names._finish([str(s) for s in f.value().get("services", [])], None)
+
+        future.addCallback(done)
+        return future_names if _async else future_names.value()
+
+    def service(self, name: str) -> ZmqServiceProxy:
+        """A proxy of a served service.
+
+        Raises:
+            RobotError: The server has no such service.
+        """
+        if not self._connected:
+            raise ConnectionLost(f"not connected to {self._url or 'a server'}")
+        if name not in self._services:
+            raise RobotError(f"no service {name!r} at {self._url}")
+        return ZmqServiceProxy(self, name)
+
+    def _call(self, service: str, method: str, args: list[Any]) -> Future:
+        if not self._connected:
+            future = Future()
+            future._finish(None, ConnectionLost(self._lost_reason or "not connected"))
+            return future
+        return self._send_request({"k": "call", "s": service, "m": method, "a": args})
+
+    def _send_request(self, header: dict[str, Any]) -> Future:
+        promise = Promise()
+        ident = next(self._ids)
+        header["i"] = ident
+        try:
+            frames = wire.encode(header)
+        except ProtocolError as err:
+            promise.setError(err)
+            return promise.future()
+        with self._pending_lock:
+            if self._lost_reason:
+                promise.setError(ConnectionLost(self._lost_reason))
+                return promise.future()
+            self._pending[ident] = promise
+        self._outbox.append(frames)
+        if self._wake is not None:
+            self._wake.poke()
+        return promise.future()
+
+    def _fail_all(self, reason: str) -> None:
+        with self._pending_lock:
+            first = not self._lost_reason
+            self._lost_reason = self._lost_reason or reason
+            pending, self._pending = self._pending, {}
+        was_connected, self._connected = self._connected, False
+        for promise in pending.values():
+            promise.setError(ConnectionLost(self._lost_reason))
+        if first and was_connected:
+            self.disconnected(self._lost_reason)
+
+    def _client_loop(self, sock: zmq.Socket[Any], monitor: zmq.Socket[Any]) -> None:
+        assert self._wake is not None
+        poller = zmq.Poller()
+        poller.register(sock, zmq.POLLIN)
+        poller.register(monitor, zmq.POLLIN)
+        poller.register(self._wake.read_fd, zmq.POLLIN)
+        last_rx = last_tx = time.monotonic()
+        try:
+            while not self._stop.is_set():
+                events = dict(poller.poll(_POLL_MS))
+                now = time.monotonic()
+                if self._wake.read_fd in events:
+                    self._wake.drain()
+                while self._outbox:
+                    sock.send_multipart(self._outbox.popleft(), copy=False)
+                    last_tx = now
+                if sock in events:
+                    while sock.poll(0):
+                        self._on_reply(sock.recv_multipart(copy=False))
+                        last_rx = time.monotonic()
+                if monitor in events:
+                    while monitor.poll(0):
+                        monitor.recv_multipart()
+                        if self._connected:
+                            self._fail_all(f"connection to {self._url} lost (peer disconnected)")
+                if self._connected and now - last_tx >= PING_EVERY_S:
+                    sock.send_multipart(wire.encode({"k": "ping", "i": 0}))
+                    last_tx = now
+                if self._connected and now - last_rx > LOST_AFTER_S:
+                    self._fail_all(
+                        f"connection to {self._url} lost (silent for {now - last_rx:.1f} s)"
+                    )
+                if self._lost_reason and not self._connected:
+                    break
+        except zmq.ZMQError as err:
+            self._fail_all(f"connection to {self._url} failed: {err}")
+        finally:
+            if not self._lost_reason:
+                self._fail_all("session closed")
+            with contextlib.suppress(zmq.ZMQError):
+                sock.disable_monitor()
+            monitor.close(0)
+            sock.close(0)
+
+    def _on_reply(self, frames: list[Any]) -> None:
+        try:
+            reply = wire.decode_reply(frames)
+        except ProtocolError as err:
+            self.protocol_errors += 1
+            print(f"naoloc: dropped a bad reply from {self._url}: {err}", file=sys.stderr)
+            return
+        if reply["k"] == "pong":
+            return
+        with self._pending_lock:
+            promise = self._pending.pop(reply["i"], None)
+        if promise is None:
+            return
+        if reply["k"] == "err":
+            promise.setError(error_from_text(f"{reply['e'][0]}: {reply['e'][1]}"))
+        elif reply["k"] == "welcome" and not isinstance(reply.get("v"), dict):
+            promise.setError(ProtocolError("a welcome reply needs a map value"))
+        else:
+            promise.setValue(reply.get("v"))
+
+    # ------------------------------------------------------------------ server
+    def listenStandalone(self, url: str) -> None:
+        """Bind a ROUTER socket at ``url`` (port 0 = any free port) and start serving.
+
+        Raises:
+            BackendError: The address cannot be bound, or bad CURVE certificates.
+        """
+        if self._thread is not None:
+            raise BackendError("this session is already in use")
+        self._ctx = zmq.Context()
+        sock = self._ctx.socket(zmq.ROUTER)
+        sock.setsockopt(zmq.LINGER, 0)
+        sock.setsockopt(zmq.ROUTER_HANDOVER, 1)
+        if self._curve is not None:
+            from zmq.auth.thread import ThreadAuthenticator
+
+            public, secret = _load_pair(self._curve / "server.key_secret")
+            self._auth = ThreadAuthenticator(self._ctx)
+            self._auth.start()
+            self._auth.configure_curve(domain="*", location=str(self._curve))
+            sock.curve_server = True
+            sock.curve_publickey, sock.curve_secretkey = public, secret
+        try:
+            sock.bind(url)
+        except zmq.ZMQError as err:
+            sock.close(0)
+            self._stop_auth()
+            raise BackendError(f"cannot listen on {url}: {err}") from None
+        self._endpoint = sock.getsockopt_string(zmq.LAST_ENDPOINT)
+        self._wake = _Wake()
+        self._thread = threading.Thread(
+            target=self._server_loop, args=(sock,), name="naoloc-zmq-server", daemon=True
+        )
+        self._thread.start()
+
+    def endpoints(self) -> list[str]:
+        """The bound endpoint (with the real port), as a one-item list."""
+        return [self._endpoint] if self._endpoint else []
+
+    def registerService(self, name: str, obj: Any) -> int:
+        """Serve ``obj`` as ``name``; returns the service id (2, 3, ... like libqi)."""
+        if name in self._objects:
+            raise BackendError(f"service {name!r} is already registered")
+        self._objects[name] = obj
+        jobs: queue.Queue[Any] = queue.Queue()
+        self._workers[name] = jobs
+        thread = threading.Thread(
+            target=self._worker, args=(obj, jobs), name=f"naoloc-{name}", daemon=True
+        )
+        thread.start()
+        self._worker_threads.append(thread)
+        return len(self._objects) + 1
+
+    def _reply(self, peer: bytes, header: dict[str, Any]) -> None:
+        try:
+            frames = wire.encode(header)
+        except ProtocolError as err:
+            frames = wire.encode({"k": "err", "i": header["i"], "e": ["ProtocolError", str(err)]})
+        self._outbox.append([peer, *frames])
+        if self._wake is not None:
+            self._wake.poke()
+
+    def _worker(self, obj: Any, jobs: queue.Queue[Any]) -> None:
+        while True:
+            job = jobs.get()
+            if job is None:
+                return
+            peer, ident, method, args = job
+            try:
+                if isinstance(obj, Invokable):
+                    value = obj.invoke(peer.hex(), method, args)
+                else:
+                    target = getattr(obj, method, None)
+                    if method.startswith("_") or not callable(target):
+                        raise RobotError(f"no method {method!r}")
+                    value = target(*args)
+                self._reply(peer, {"k": "ok", "i": ident, "v": value})
+            except NaolocError as err:
+                self._reply(peer, {"k": "err", "i": ident, "e": [type(err).__name__, str(err)]})
+            except Exception as err:  # a server bug must not kill the worker
+                message = f"{type(err).__name__}: {err}".splitlines()[0]
+                self._reply(peer, {"k": "err", "i": ident, "e": ["RobotError", message]})
+
+    def _on_request(self, frames: list[Any]) -> None:
+        peer = frames[0].bytes
+        try:
+            request = wire.decode_request(frames[1:])
+        except ProtocolError as err:
+            self.protocol_errors += 1
+            print(f"naoloc serve: dropped a bad request: {err}", file=sys.stderr)
+            return
+        kind, ident = request["k"], request["i"]
+        if kind == "ping":
+            self._reply(peer, {"k": "pong", "i": ident})
+        elif kind == "hello":
+            services = sorted(self._objects)
+            self._reply(peer, {"k": "welcome", "i": ident, "v": {"services": services}})
+        elif kind == "call":
+            jobs = self._workers.get(request["s"])
+            if jobs is None:
+                error = ["RobotError", f"unknown service {request['s']!r}"]
+                self._reply(peer, {"k": "err", "i": ident, "e": error})
+            else:
+                jobs.put((peer, ident, request["m"], request["a"]))
+
+    def _server_loop(self, sock: zmq.Socket[Any]) -> None:
+        assert self._wake is not None
+        poller = zmq.Poller()
+        poller.register(sock, zmq.POLLIN)
+        poller.register(self._wake.read_fd, zmq.POLLIN)
+        try:
+            while not self._stop.is_set():
+                events = dict(poller.poll(_POLL_MS))
+                if self._wake.read_fd in events:
+                    self._wake.drain()
+                if sock in events:
+                    while sock.poll(0):
+                        self._on_request(sock.recv_multipart(copy=False))
+                while self._outbox:
+                    sock.send_multipart(self._outbox.popleft(), copy=False)
+        finally:
+            sock.close(0)
+
+    def _stop_auth(self) -> None:
+        if self._auth is not None:
+            with contextlib.suppress(Exception):
+                self._auth.stop()
+            self._auth = None
+
+    # ------------------------------------------------------------------ both
+    def close(self) -> None:
+        """Stop the I/O thread and workers, close the sockets. Safe to call twice."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout=2.0)
+        for jobs in self._workers.values():
+            jobs.put(None)
+        for thread in self._worker_threads:
+            if thread is not threading.current_thread():
+                thread.join(timeout=2.0)
+        self._worker_threads.clear()
+        self._workers.clear()
+        self._stop_auth()
+        if self._wake is not None:
+            self._wake.close()
+            self._wake = None
+        if self._ctx is not None:
+            self._ctx.term()
+            self._ctx = None
+        self._connected = False

@@ -1,0 +1,95 @@
+"""``naoloc serve``: serve the simulated robot a config describes as a virtual NAOqi.
+
+The robot (``robot.backend`` fake or mujoco) is served as ALMotion, ALVideoDevice and
+ALRobotPosture, plus NaolocSim (ground truth, teleport) and NaolocWatchdog (keep-alive),
+on ``--listen`` over libqi (NAOqi's own protocol) or zmq (naoloc's shim). It prints
+one line ``naoloc serve: listening on <url> (<transport>)`` once ready, runs until
+SIGINT or SIGTERM, and stops the robot on exit.
+
+Security: only loopback addresses unless ``--allow-remote``; on zmq a non-loopback
+address also needs CURVE keys (``robot.curve_keys``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import ipaddress
+import signal
+import threading
+from typing import Any
+from urllib.parse import urlsplit
+
+from naoloc.config import Config
+from naoloc.errors import BackendError, ConfigError
+
+
+def is_loopback(url: str) -> bool:
+    """True when ``url``'s host is a loopback address (127.0.0.0/8, ::1, localhost)."""
+    host = urlsplit(url).hostname or ""
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def check_listen(url: str, transport: str, allow_remote: bool, curve_keys: str | None) -> None:
+    """Refuse unsafe listen addresses.
+
+    Raises:
+        BackendError: A non-loopback address without ``--allow-remote``, or on zmq
+            without CURVE keys, or a URL that is not ``tcp://host:port``.
+    """
+    parts = urlsplit(url)
+    if parts.scheme != "tcp" or not parts.hostname:
+        raise BackendError(f"--listen needs tcp://HOST:PORT, got {url!r}")
+    if is_loopback(url):
+        return
+    if not allow_remote:
+        raise BackendError(
+            f"{parts.hostname} is not a loopback address; pass --allow-remote to expose the robot"
+        )
+    if transport == "zmq" and not curve_keys:
+        raise BackendError(
+            "serving zmq off loopback needs CURVE keys: set robot.curve_keys "
+            "(create them with naoloc.backends.naoqi.zmq_transport.make_curve_keys)"
+        )
+
+
+def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
+    """Serve until SIGINT/SIGTERM; return the summary printed as the last JSON line."""
+    from naoloc.backends.naoqi.server import VirtualNaoqi
+    from naoloc.backends.naoqi.session import resolve_transport
+    from naoloc.registry import connect
+
+    if cfg.robot.backend == "naoqi":
+        raise ConfigError("naoloc serve: robot.backend must be a simulator (fake or mujoco)")
+    transport = resolve_transport(args.transport or cfg.robot.transport)
+    url: str = args.listen
+    check_listen(url, transport, bool(args.allow_remote), cfg.robot.curve_keys)
+    stop = threading.Event()
+
+    def on_signal(signum: int, frame: Any) -> None:
+        stop.set()
+
+    previous = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        with (
+            connect(cfg) as robot,
+            VirtualNaoqi(robot, url, transport, curve_keys=cfg.robot.curve_keys) as server,
+        ):
+            print(f"naoloc serve: listening on {server.endpoint} ({transport})", flush=True)
+            while not stop.wait(0.2):
+                pass
+            summary = {
+                "endpoint": server.endpoint,
+                "transport": transport,
+                "backend": cfg.robot.backend,
+                "calls": server.core.calls,
+                "deadman_stops": server.core.deadman_stops,
+            }
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    return summary
