@@ -71,6 +71,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-n", type=int, default=40, help="test poses (random protocol)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
+    p.add_argument(
+        "--studies", default="none", metavar="LIST",
+        help="extra studies: none, all, or a comma list of compare,robustness",
+    )  # fmt: skip
     p.add_argument("-o", "--output", required=True, metavar="OUTDIR", type=Path)
     p = add("serve")
     p.add_argument("--listen", default="tcp://127.0.0.1:9559", metavar="URL")

@@ -1,0 +1,345 @@
+"""Run surveys, map builds and localizations over a process pool, one simulator per task.
+
+Tasks are plain picklable dataclasses; every one carries its config as a dict and its
+seeds explicitly, so a result does not depend on which worker ran it or in which order.
+The pool uses the ``spawn`` start method (MuJoCo's renderer must be created inside each
+process); with one worker everything runs in the calling process. Progress goes to a
+:class:`naoloc.progress.Progress` bar on stderr.
+
+A localization chunk creates one robot from its config, optionally changes the world
+(moves or removes a poster through ``robot.sim``), then for each test pose teleports the
+robot there, runs the localize behaviour with the chunk's primary map and mode, and
+re-scores the same query images with every other (map, mode) pair of the chunk, so
+comparisons see exactly the same images.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import math
+import multiprocessing
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TypeVar
+
+import numpy as np
+
+from naoloc.errors import NaolocError, NotBuiltError
+from naoloc.evaluation.protocols import TestPose, room_to_map
+from naoloc.geometry import Pose2D, modulo2PI
+from naoloc.progress import Progress
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+@dataclass(frozen=True)
+class SurveyTask:
+    """Survey a room and write the dataset.
+
+    Attributes:
+        name: Label of the survey (e.g. "base", "drift-x4").
+        config: Resolved config as a dict (world.odometry sets the drift).
+        dataset_path: Where the MCAP dataset goes.
+    """
+
+    name: str
+    config: dict[str, Any]
+    dataset_path: str
+
+
+@dataclass(frozen=True)
+class MapTask:
+    """Build one map from a dataset and save it.
+
+    Attributes:
+        name: Map label (e.g. "akaze-300").
+        dataset_path: The survey dataset (MCAP).
+        map_config: ``map`` section of the config as a dict.
+        map_path: Where the ``.npz`` map goes.
+    """
+
+    name: str
+    dataset_path: str
+    map_config: dict[str, Any]
+    map_path: str
+
+
+@dataclass(frozen=True)
+class Scorer:
+    """One (map, mode) pair that scores a chunk's queries.
+
+    Attributes:
+        variant: Name of the variant the estimates belong to.
+        map_path: The map file.
+        mode: "verified" or "paper" (the map's modes), or "nearest" for the plain
+            nearest-neighbour baseline over the training images.
+        strategy: How the queries are taken: "scan" (head sweep) or "paper" (nearest wall,
+            two pictures). The first scorer of each strategy runs the localize behaviour;
+            the others re-score its pictures.
+    """
+
+    variant: str
+    map_path: str
+    mode: str
+    strategy: str
+
+
+@dataclass(frozen=True)
+class LocalizeChunk:
+    """Test poses localized by one robot.
+
+    Attributes:
+        config: Config of the robot that localizes (may differ from the survey's: lighting,
+            camera noise).
+        origin_room_pose: True pose at the survey start (room frame): the map frame's origin.
+        poses: The test poses (room frame).
+        scorers: The first runs the localize behaviour; the rest re-score its queries.
+        world_changes: ``(SimControl method, args)`` applied once after the robot is created,
+            e.g. ``("remove_poster", (0,))``.
+    """
+
+    config: dict[str, Any]
+    origin_room_pose: tuple[float, float, float]
+    poses: tuple[TestPose, ...]
+    scorers: tuple[Scorer, ...]
+    world_changes: tuple[tuple[str, tuple[Any, ...]], ...] = field(default_factory=tuple)
+
+
+def run_tasks(
+    fn: Callable[[T], R],
+    tasks: Sequence[T],
+    workers: int,
+    label: str,
+    *,
+    progress: bool | None = None,
+) -> list[R]:
+    """Run ``fn`` over ``tasks`` in a spawn process pool (in-process for one worker).
+
+    Args:
+        fn: A module-level function (picklable).
+        tasks: Picklable task objects.
+        workers: Processes; 1 runs in the calling process.
+        label: Progress bar label.
+        progress: Force the bar on or off; default: on when stderr is a terminal.
+
+    Returns:
+        Results in the order of ``tasks``.
+    """
+    results: list[Any] = [None] * len(tasks)
+    with Progress(len(tasks), label, enabled=progress) as bar:
+        if workers <= 1 or len(tasks) <= 1:
+            for i, task in enumerate(tasks):
+                results[i] = fn(task)
+                bar.update()
+            return results
+        ctx = multiprocessing.get_context("spawn")
+        with cf.ProcessPoolExecutor(max_workers=min(workers, len(tasks)), mp_context=ctx) as pool:
+            futures = {pool.submit(fn, task): i for i, task in enumerate(tasks)}
+            try:
+                for fut in cf.as_completed(futures):
+                    results[futures[fut]] = fut.result()
+                    bar.update()
+            except BaseException:
+                for fut in futures:
+                    fut.cancel()
+                raise
+    return results
+
+
+def chunked(items: Sequence[T], size: int) -> list[tuple[T, ...]]:
+    """Split ``items`` into consecutive tuples of at most ``size`` (>= 1) items."""
+    size = max(1, size)
+    return [tuple(items[i : i + size]) for i in range(0, len(items), size)]
+
+
+def survey_task(task: SurveyTask) -> dict[str, Any]:
+    """Survey a room with the survey behaviour and write the dataset (runs in a worker).
+
+    Returns:
+        ``{"name", "dataset", "frames", "laps", "path_m", "wall_s", "meta"}``.
+    """
+    from naoloc.behaviours.survey import survey
+    from naoloc.dataset import DatasetWriter
+    from naoloc.registry import connect
+
+    path = Path(task.dataset_path)
+    with connect(task.config) as robot:
+        _require_sim(robot)
+        writer: DatasetWriter | None = None
+        meta_out: dict[str, Any] = {}
+
+        def on_start(meta: dict[str, Any]) -> None:
+            nonlocal writer
+            meta_out.update(meta)
+            writer = DatasetWriter(path, config=task.config, meta=meta)
+
+        def on_frame(keyframe: Any, lap: int, odometry: Pose2D) -> None:
+            assert writer is not None  # on_start runs first
+            writer.write(keyframe, lap=lap, odometry=odometry)
+
+        try:
+            result = survey(robot, _config(task.config), on_frame, on_start=on_start)
+        finally:
+            if writer is not None:
+                writer.close()
+    return {
+        "name": task.name,
+        "dataset": str(path),
+        "frames": result.frames,
+        "laps": result.laps,
+        "path_m": result.path_m,
+        "wall_s": result.wall_s,
+        "meta": meta_out,
+    }
+
+
+def map_task(task: MapTask) -> dict[str, Any]:
+    """Build a map from a dataset and save it (runs in a worker).
+
+    Returns:
+        ``{"name", "map", "images", "neurons", "epochs", "features", "distinct_poses",
+        "timings"}``.
+    """
+    from naoloc.config import MapConfig
+    from naoloc.dataset import read_dataset
+    from naoloc.mapping import build_map
+
+    data = read_dataset(task.dataset_path)
+    cfg = MapConfig.model_validate(task.map_config)
+    vmap = build_map(data.keyframes, cfg, meta=dict(data.meta))
+    vmap.save(task.map_path)
+    return {
+        "name": task.name,
+        "map": task.map_path,
+        "images": int(vmap.images),
+        "neurons": cfg.neurons,
+        "epochs": cfg.epochs,
+        "features": cfg.features,
+        "distinct_poses": int(vmap.distinct_poses),
+        "timings": {k: float(v) for k, v in vmap.timings.items()},
+    }
+
+
+def localize_chunk(chunk: LocalizeChunk) -> list[dict[str, Any]]:
+    """Localize the robot at each test pose of a chunk (runs in a worker).
+
+    Returns:
+        One record per (pose, scorer): ``variant, index, group, seed, room_pose, truth,
+        estimate, confidence, error_m, heading_error_deg, localize_ms, details`` (map frame).
+    """
+    from naoloc.mapping import load_map
+    from naoloc.registry import connect
+
+    cfg = _config(chunk.config)
+    maps = {s.map_path: load_map(s.map_path) for s in chunk.scorers}
+    records: list[dict[str, Any]] = []
+    with connect(cfg) as robot:
+        sim = _require_sim(robot)
+        for method, args in chunk.world_changes:
+            change = getattr(sim, method, None)
+            if change is None:
+                raise NotBuiltError(f"the {robot.backend} simulator has no {method}() yet")
+            change(*args)
+        for pose in chunk.poses:
+            taken: dict[str, tuple[list[Any], Pose2D]] = {}
+            done: dict[tuple[str, str, str], tuple[Any, float]] = {}
+            for scorer in chunk.scorers:
+                key = (scorer.map_path, scorer.mode, scorer.strategy)
+                if key in done:
+                    est, ms = done[key]
+                elif scorer.strategy not in taken:
+                    sim.teleport(*pose.room_pose)
+                    est, queries, ms = _localize(robot, maps[scorer.map_path], cfg, scorer)
+                    taken[scorer.strategy] = (queries, _truth(chunk, sim, queries))
+                else:
+                    t1 = time.perf_counter()
+                    est = _score(maps[scorer.map_path], taken[scorer.strategy][0], scorer.mode)
+                    ms = (time.perf_counter() - t1) * 1e3
+                done[key] = (est, ms)
+                queries, truth = taken[scorer.strategy]
+                records.append(_record(scorer, pose, truth, est, ms, len(queries)))
+    return records
+
+
+def _record(
+    scorer: Scorer, pose: TestPose, truth: Pose2D, est: Any, ms: float, queries: int
+) -> dict[str, Any]:
+    ex, ey, et = float(est.x), float(est.y), float(est.theta)
+    err = math.hypot(ex - truth.x, ey - truth.y)
+    head = abs(modulo2PI(et - truth.theta)) if math.isfinite(et) else float("nan")
+    details = dict(getattr(est, "details", {}) or {})
+    details["queries"] = queries
+    return {
+        "variant": scorer.variant,
+        "mode": scorer.mode,
+        "index": pose.index,
+        "group": pose.group,
+        "seed": pose.seed,
+        "room_pose": list(pose.room_pose),
+        "truth": truth.to_list(),
+        "estimate": [ex, ey, et],
+        "confidence": float(getattr(est, "confidence", float("nan"))),
+        "error_m": err if math.isfinite(err) else float("nan"),
+        "heading_error_deg": math.degrees(head),
+        "localize_ms": ms,
+        "details": _jsonable(details),
+    }
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _config(data: dict[str, Any]) -> Any:
+    from naoloc.config import load_config
+
+    return load_config(data)
+
+
+def _require_sim(robot: Any) -> Any:
+    if robot.sim is None:
+        raise NaolocError(f"evaluate needs a simulator (robot.sim); the {robot.backend} has none")
+    return robot.sim
+
+
+def _localize(robot: Any, vmap: Any, cfg: Any, scorer: Scorer) -> tuple[Any, list[Any], float]:
+    """Run the localize behaviour; returns the estimate, its queries and its wall time (ms)."""
+    from naoloc.behaviours.localize import localize
+
+    mode = "paper" if scorer.mode == "nearest" else scorer.mode
+    result = localize(robot, vmap, cfg, mode=mode, strategy=scorer.strategy)
+    queries = list(result.queries)
+    est = result.estimate if scorer.mode != "nearest" else _score(vmap, queries, "nearest")
+    return est, queries, float(result.wall_s) * 1e3
+
+
+def _truth(chunk: LocalizeChunk, sim: Any, queries: Sequence[Any]) -> Pose2D:
+    """True pose in the map frame when the last query was taken."""
+    last = queries[-1] if queries else None
+    if last is not None and last.true_pose is not None:
+        room = last.true_pose
+    else:
+        room = Pose2D.from_list(sim.true_pose())
+    return room_to_map(chunk.origin_room_pose, (room.x, room.y, room.theta))
+
+
+def _score(vmap: Any, queries: Sequence[Any], mode: str) -> Any:
+    """Estimate the pose from already captured queries with another map or mode."""
+    if mode == "nearest":
+        from naoloc.evaluation.baseline import nearest_neighbour
+
+        return nearest_neighbour(vmap, queries)
+    return vmap.localize(queries, mode=mode)
