@@ -69,3 +69,12 @@ def test_head_clamped_to_limits_and_shell() -> None:
     assert clamp_head(-3.0, 0.0)[0] > -2.0857
     assert clamp_head(1.57, -0.6)[1] == pytest.approx(-0.33)
     assert clamp_head(0.0, -0.6)[1] == pytest.approx(-0.6)
+
+
+def test_nearest_side_from_the_room_layout() -> None:
+    from naoloc.behaviours import nearest_side_in_room
+
+    assert nearest_side_in_room((6.0, 6.0), (1.0, 1.0, 0.0)).side == "right"
+    assert nearest_side_in_room((6.0, 6.0), (1.0, 5.0, 0.0)).side == "left"
+    assert nearest_side_in_room((6.0, 6.0), (1.0, 1.0, math.pi / 2)).side == "left"
+    assert nearest_side_in_room((4.0, 3.0), (3.5, 0.5, math.pi)).side == "left"

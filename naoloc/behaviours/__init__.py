@@ -21,7 +21,13 @@ from naoloc.behaviours.localize import (
     scan_queries,
     truth_in_map,
 )
-from naoloc.behaviours.nearest_wall import WallSide, count_halves, detect_nearest_wall, nearest_wall
+from naoloc.behaviours.nearest_wall import (
+    WallSide,
+    count_halves,
+    detect_nearest_wall,
+    nearest_side_in_room,
+    nearest_wall,
+)
 from naoloc.behaviours.survey import SurveyResult, Waypoint, circuit, frames_per_lap, survey
 
 __all__ = [
@@ -39,6 +45,7 @@ __all__ = [
     "go_home",
     "localize",
     "look",
+    "nearest_side_in_room",
     "nearest_wall",
     "paper_queries",
     "scan_queries",

@@ -86,3 +86,38 @@ def detect_nearest_wall(
     """
     look(robot, 0.0, pitch)
     return nearest_wall(camera.frame().gray())
+
+
+def nearest_side_in_room(size: tuple[float, float], start: tuple[float, float, float]) -> WallSide:
+    """The side (left or right of the robot) whose wall is nearer, from the room's layout.
+
+    For a simulated room the config knows what the paper asks the operator to arrange
+    (the robot in a corner, parallel to a wall). The detector's image cue is weak (a
+    nearer wall shows less of itself), so the survey command uses this on simulators.
+
+    Args:
+        size: Room inner size ``(x, y)``, m.
+        start: Robot pose ``(x, y, theta)`` in the room frame (m, rad).
+
+    Returns:
+        The side, with keypoint counts of 0 (no image was used).
+    """
+
+    def distance(heading: float) -> float:
+        x, y, _ = start
+        c, s = math.cos(heading), math.sin(heading)
+        hits = []
+        if c > 1e-9:
+            hits.append((size[0] - x) / c)
+        if c < -1e-9:
+            hits.append(-x / c)
+        if s > 1e-9:
+            hits.append((size[1] - y) / s)
+        if s < -1e-9:
+            hits.append(-y / s)
+        return min(hits)
+
+    theta = start[2]
+    if distance(theta + math.pi / 2) < distance(theta - math.pi / 2):
+        return WallSide("left", math.pi / 2, 0, 0)
+    return WallSide("right", -math.pi / 2, 0, 0)

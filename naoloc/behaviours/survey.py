@@ -58,7 +58,8 @@ class SurveyResult:
         path_m: Distance walked according to odometry, m.
         wall_s: Wall-clock seconds of the survey.
         head_yaw: HeadYaw kept while walking, rad.
-        wall: The nearest-wall detection, or None when the config set the head yaw.
+        wall: The nearest-wall detection (always run, used only when nothing overrides it).
+        yaw_source: Where the head yaw came from: "detector", "config" or "caller".
         meta: The meta handed to the start hook.
     """
 
@@ -68,6 +69,7 @@ class SurveyResult:
     wall_s: float = 0.0
     head_yaw: float = 0.0
     wall: WallSide | None = None
+    yaw_source: str = "detector"
     meta: dict[str, Any] = field(default_factory=dict)
 
 
@@ -138,11 +140,13 @@ def survey(
     on_start: StartHook | None = None,
     progress: Callable[[int], None] | None = None,
     head_pitch: float = DEFAULT_HEAD_PITCH,
+    head_yaw: float | None = None,
 ) -> SurveyResult:
     """Walk ``cfg.survey.laps`` closed laps and record a picture after each step.
 
-    The robot stands up, finds the nearest wall (unless ``cfg.survey.head_yaw_rad`` is
-    set), turns its head to it, records the origin, and walks. Motion is stopped on every
+    The robot stands up, runs the nearest-wall detector, turns its head to that wall (or to
+    ``cfg.survey.head_yaw_rad``, else ``head_yaw``, when given), records the origin, and
+    walks. Motion is stopped on every
     exit path (an exception or Ctrl-C included); frames already handed to ``on_frame``
     stay with the caller.
 
@@ -156,6 +160,8 @@ def survey(
             origin_room_pose and room_size_m on a simulator, head angles, direction.
         progress: Called with the number of new frames after each picture.
         head_pitch: Head pitch while walking, rad.
+        head_yaw: Head yaw to use instead of the detector's (rad), e.g. known from the
+            room's layout; ``cfg.survey.head_yaw_rad`` still wins.
 
     Returns:
         The survey's summary.
@@ -170,11 +176,16 @@ def survey(
     try:
         stand(robot)
         with Camera(robot, cfg.camera, "naoloc_survey") as camera:
+            result.wall = detect_nearest_wall(robot, camera, head_pitch)
             if cfg.survey.head_yaw_rad is not None:
                 yaw = cfg.survey.head_yaw_rad
+                result.yaw_source = "config"
+            elif head_yaw is not None:
+                yaw = head_yaw
+                result.yaw_source = "caller"
             else:
-                result.wall = detect_nearest_wall(robot, camera, head_pitch)
                 yaw = result.wall.head_yaw
+                result.yaw_source = "detector"
             yaw, pitch = look(robot, yaw, head_pitch)
             result.head_yaw = yaw
             turn = -math.copysign(math.pi / 2, yaw) if yaw != 0 else math.pi / 2
@@ -182,6 +193,7 @@ def survey(
             command_origin = pose_of(robot.motion, False)
             probe = camera.info(camera.frame())
             result.meta = _meta(robot, cfg, origin, probe, yaw, pitch, turn, result.wall)
+            result.meta["head_yaw_source"] = result.yaw_source
             if on_start is not None:
                 on_start(result.meta)
             here = Pose2D()

@@ -1,0 +1,88 @@
+"""``naoloc build-map -c CFG -d DATASET.mcap -o MAP.npz``: Algorithm 4, plus a PNG of the map."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from naoloc.config import Config
+from naoloc.dataset import read_dataset
+from naoloc.progress import Progress
+
+
+def build_from_dataset(
+    dataset: Path, cfg: Config, output: Path, *, show_progress: bool | None = None
+) -> tuple[Any, dict[str, Any]]:
+    """Read a dataset, build the map with ``cfg.map``, save it and its PNG.
+
+    Args:
+        dataset: The survey ``.mcap``.
+        cfg: Config; ``cfg.map`` sets features, neurons, epochs and seed.
+        output: The map file (``.npz``); the PNG goes beside it (``MAP.png``).
+        show_progress: Force progress bars on or off; default: on a terminal.
+
+    Returns:
+        The :class:`naoloc.mapping.VisualMap` and the JSON summary.
+
+    Raises:
+        DatasetError: The dataset is unreadable or empty.
+    """
+    data = read_dataset(dataset)  # before importing the map code: a bad file fails fast
+
+    from naoloc.mapping import build_map
+    from naoloc.plots import plot_map
+
+    meta = dict(data.meta)
+    meta.update(
+        {"dataset": str(dataset), "dataset_complete": data.complete, "frames": len(data.keyframes)}
+    )
+    bars: dict[str, Progress] = {}
+
+    def progress(stage: str, done: int, total: int) -> None:
+        bar = bars.get(stage)
+        if bar is None:
+            for old in bars.values():
+                old.close()
+            bars.clear()
+            bar = bars[stage] = Progress(total, f"build-map {stage}", enabled=show_progress)
+        bar.update(done - bar.count)
+
+    try:
+        vmap = build_map(data.keyframes, cfg.map, meta=meta, progress=progress)
+    finally:
+        for bar in bars.values():
+            bar.close()
+    vmap.save(output)
+    png = plot_map(vmap, output.with_suffix(".png"))
+    timings = vmap.timings
+    summary = {
+        "images": int(vmap.images),
+        "neurons": len(vmap.neuron_poses),
+        "distinct_poses": int(vmap.distinct_poses),
+        "features_s": round(float(timings.get("features_s", 0.0)), 3),
+        "vocabulary_s": round(float(timings.get("vocabulary_s", 0.0)), 3),
+        "gcs_s": round(float(timings.get("gcs_s", 0.0)), 3),
+        "total_s": round(float(timings.get("total_s", 0.0)), 3),
+        "map": str(output),
+        "png": str(png),
+        "dataset_complete": data.complete,
+    }
+    return vmap, summary
+
+
+def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
+    """Build the map of ``args.dataset`` into ``args.output``, with a PNG and the config."""
+    from naoloc.cli import write_resolved_config
+    from naoloc.commands.survey import config_path_for
+
+    output: Path = args.output
+    write_resolved_config(cfg, config_path_for(output))
+    _, summary = build_from_dataset(args.dataset, cfg, output)
+    partial = "" if summary["dataset_complete"] else " (partial dataset)"
+    print(
+        f"build-map: {summary['images']} images{partial} -> {summary['neurons']} neurons, "
+        f"{summary['distinct_poses']} distinct poses in {summary['total_s']:.1f} s "
+        f"-> {output}, {summary['png']}"
+    )
+    return summary

@@ -1,0 +1,60 @@
+"""``naoloc localize -c CFG -m MAP.npz [--at X Y THETA] [--png P]``: where am I in the map?"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from naoloc.config import Config
+from naoloc.errors import BackendError
+from naoloc.robot import Robot
+
+
+def teleport_if_asked(robot: Robot, at: list[float] | None) -> None:
+    """Put a simulated robot at ``at`` = [x, y, theta] (room frame); nothing when None.
+
+    Raises:
+        BackendError: ``--at`` on a robot without a simulator.
+    """
+    if at is None:
+        return
+    if robot.sim is None:
+        raise BackendError(f"--at needs a simulator; backend {robot.backend!r} has none")
+    x, y, theta = (float(v) for v in at)
+    robot.sim.teleport(x, y, theta)
+
+
+def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
+    """Localize once (head scan, or the paper's 1-2 pictures in mode paper) and report."""
+    from naoloc.behaviours.localize import localize
+    from naoloc.cli import write_resolved_config
+    from naoloc.commands.survey import config_path_for, interruptible
+    from naoloc.mapping import load_map
+    from naoloc.plots import plot_localization
+    from naoloc.progress import Progress
+    from naoloc.registry import connect
+
+    vmap = load_map(args.map)
+    png: Path | None = args.png
+    if png is not None:
+        write_resolved_config(cfg, config_path_for(png))
+    with interruptible(), connect(cfg) as robot:
+        teleport_if_asked(robot, args.at)
+        with Progress(None, "localize") as bar:
+            loc = localize(robot, vmap, cfg, on_step=lambda note: bar.update(1, note))
+    summary = loc.summary()
+    est = loc.estimate
+    line = (
+        f"localize: ({est.x:.2f}, {est.y:.2f}, {est.theta:.2f}) in the map frame, "
+        f"confidence {est.confidence:.2f}, {len(loc.queries)} images ({loc.strategy})"
+    )
+    if loc.error_m is not None:
+        line += f"; error {loc.error_m:.2f} m, {loc.heading_error_deg:.1f} deg"
+    print(line)
+    if png is not None:
+        plot_localization(vmap, est, png, truth=loc.truth, queries=loc.queries)
+        summary["png"] = str(png)
+        print(f"localize: picture -> {png}")
+    summary["localize_s"] = round(loc.wall_s, 3)
+    return summary
