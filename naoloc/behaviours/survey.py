@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from naoloc.behaviours.camera import DEFAULT_HEAD_PITCH, Camera, look, stand
-from naoloc.behaviours.nearest_wall import WallSide, detect_nearest_wall
+from naoloc.behaviours.nearest_wall import WallSide, detect_nearest_wall, nearest_side_in_room
 from naoloc.config import Config
 from naoloc.errors import MotionError
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
@@ -59,7 +59,8 @@ class SurveyResult:
         wall_s: Wall-clock seconds of the survey.
         head_yaw: HeadYaw kept while walking, rad.
         wall: The nearest-wall detection (always run, used only when nothing overrides it).
-        yaw_source: Where the head yaw came from: "detector", "config" or "caller".
+        yaw_source: Where the head yaw came from: "detector", "config", "caller" or
+            "room layout".
         meta: The meta handed to the start hook.
     """
 
@@ -144,9 +145,11 @@ def survey(
 ) -> SurveyResult:
     """Walk ``cfg.survey.laps`` closed laps and record a picture after each step.
 
-    The robot stands up, runs the nearest-wall detector, turns its head to that wall (or to
-    ``cfg.survey.head_yaw_rad``, else ``head_yaw``, when given), records the origin, and
-    walks. Motion is stopped on every
+    The robot stands up, runs the nearest-wall detector and turns its head to a wall:
+    ``cfg.survey.head_yaw_rad`` if set, else ``head_yaw`` if given, else on a simulated
+    backend the side of the nearer wall in the configured room (the detector's image cue is
+    weak and a wrong side walks the robot into a wall), else the detector's side. Then it
+    records the origin and walks. Motion is stopped on every
     exit path (an exception or Ctrl-C included); frames already handed to ``on_frame``
     stay with the caller.
 
@@ -183,6 +186,9 @@ def survey(
             elif head_yaw is not None:
                 yaw = head_yaw
                 result.yaw_source = "caller"
+            elif cfg.robot.backend != "naoqi":  # a simulated room the config describes
+                yaw = nearest_side_in_room(cfg.world.room.size_m, cfg.start_pose()).head_yaw
+                result.yaw_source = "room layout"
             else:
                 yaw = result.wall.head_yaw
                 result.yaw_source = "detector"

@@ -15,7 +15,6 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
-from naoloc.behaviours.nearest_wall import nearest_side_in_room
 from naoloc.behaviours.survey import SurveyResult, frames_per_lap, survey
 from naoloc.config import Config
 from naoloc.dataset import DatasetWriter
@@ -59,10 +58,7 @@ def record_survey(
 ) -> tuple[SurveyResult, int]:
     """Run the survey on ``robot`` and write every frame to ``output`` as it is taken.
 
-    On a simulator the head yaw (and so the circuit's direction) comes from the room's
-    layout in the config (:func:`nearest_side_in_room`); the paper's detector still runs and
-    its verdict is stored. On a real robot the detector decides, unless
-    ``survey.head_yaw_rad`` is set.
+    See :func:`naoloc.behaviours.survey.survey` for where the head yaw comes from.
 
     Args:
         robot: The robot, where the survey starts.
@@ -81,12 +77,9 @@ def record_survey(
     def on_frame(keyframe: Keyframe, lap: int, odometry: Pose2D) -> None:
         holder["w"].write(keyframe, lap=lap, odometry=odometry)
 
-    head_yaw = None
-    if robot.sim is not None:  # the config describes the room: use its layout
-        head_yaw = nearest_side_in_room(cfg.world.room.size_m, cfg.start_pose()).head_yaw
     try:
         result = survey(
-            robot, cfg, on_frame, on_start=on_start, head_yaw=head_yaw,
+            robot, cfg, on_frame, on_start=on_start,
             progress=None if progress is None else progress.update,
         )  # fmt: skip
     finally:
