@@ -1,0 +1,123 @@
+"""Local features behind one interface: A-KAZE (default), ORB or SIFT.
+
+A-KAZE and ORB give binary descriptors (uint8 bytes, compared by Hamming distance);
+SIFT gives float32 descriptors (compared by Euclidean distance). An image without
+keypoints yields empty arrays, never an error.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from naoloc.errors import DependencyNotInstalled, FeatureError
+
+FEATURE_KINDS = ("akaze", "orb", "sift")
+# Descriptor width in bytes (binary) or values (SIFT) per kind, OpenCV defaults.
+DESCRIPTOR_WIDTH = {"akaze": 61, "orb": 32, "sift": 128}
+
+
+@dataclass(frozen=True, slots=True)
+class Features:
+    """Keypoints and descriptors of one image.
+
+    Attributes:
+        xy: ``(n, 2)`` float32 keypoint positions in pixels (x right, y down).
+        descriptors: ``(n, d)`` uint8 (binary kinds) or float32 (SIFT) descriptors.
+        response: ``(n,)`` float32 detector responses (larger is stronger).
+    """
+
+    xy: np.ndarray
+    descriptors: np.ndarray
+    response: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.xy.shape[0])
+
+
+def empty_features(kind: str) -> Features:
+    """A :class:`Features` with no keypoints for a feature kind."""
+    dtype = np.float32 if kind == "sift" else np.uint8
+    return Features(
+        np.zeros((0, 2), np.float32),
+        np.zeros((0, DESCRIPTOR_WIDTH[kind]), dtype),
+        np.zeros((0,), np.float32),
+    )
+
+
+class FeatureExtractor:
+    """Detect and describe keypoints with one OpenCV detector, built once.
+
+    Args:
+        kind: ``akaze``, ``orb`` or ``sift``.
+        max_features: Keep at most this many keypoints (strongest first); 0 keeps all.
+        akaze_threshold: A-KAZE detector threshold (OpenCV default 0.001).
+
+    Raises:
+        FeatureError: On an unknown kind.
+        DependencyNotInstalled: When this OpenCV build lacks the detector (OpenCV 5).
+    """
+
+    def __init__(self, kind: str = "akaze", max_features: int = 0, akaze_threshold: float = 0.001):
+        if kind not in FEATURE_KINDS:
+            raise FeatureError(f"unknown feature kind {kind!r}; valid: {', '.join(FEATURE_KINDS)}")
+        import cv2
+
+        self.kind = kind
+        self.max_features = int(max_features)
+        self.akaze_threshold = float(akaze_threshold)
+        self.binary = kind != "sift"
+        if kind == "akaze":
+            if not hasattr(cv2, "AKAZE_create"):
+                raise DependencyNotInstalled(
+                    "this OpenCV has no A-KAZE (OpenCV 5 moved it); "
+                    "pip install 'opencv-python-headless==4.14.0.94'"
+                )
+            self._detector: Any = cv2.AKAZE_create(threshold=self.akaze_threshold)
+        elif kind == "orb":
+            self._detector = cv2.ORB_create(nfeatures=self.max_features or 500)  # type: ignore[attr-defined]
+        else:
+            self._detector = cv2.SIFT_create(nfeatures=self.max_features)  # type: ignore[attr-defined]
+
+    def params(self) -> dict[str, Any]:
+        """JSON-able parameters that reproduce this extractor."""
+        return {
+            "kind": self.kind,
+            "max_features": self.max_features,
+            "akaze_threshold": self.akaze_threshold,
+        }
+
+    def extract(self, gray: np.ndarray) -> Features:
+        """Keypoints and descriptors of one grey image.
+
+        Args:
+            gray: ``(h, w)`` uint8 image (a BGR ``(h, w, 3)`` image is converted).
+
+        Returns:
+            The features; empty arrays when the image has no keypoints.
+
+        Raises:
+            FeatureError: When the image is not a 2-D or 3-channel uint8 array.
+        """
+        import cv2
+
+        img = np.asarray(gray)
+        if img.ndim == 3 and img.shape[2] == 3:
+            img = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
+        if img.ndim != 2 or img.dtype != np.uint8 or min(img.shape) < 1:
+            raise FeatureError(f"expected a 2-D uint8 image, got {img.dtype} {img.shape}")
+        try:
+            kps, desc = self._detector.detectAndCompute(img, None)
+        except cv2.error as err:
+            raise FeatureError(f"{self.kind} extraction failed: {str(err).strip()[:120]}") from None
+        if desc is None or not kps:
+            return empty_features(self.kind)
+        xy = np.array([kp.pt for kp in kps], dtype=np.float32).reshape(-1, 2)
+        response = np.array([kp.response for kp in kps], dtype=np.float32)
+        if self.max_features and len(kps) > self.max_features:
+            keep = np.sort(np.argsort(-response, kind="stable")[: self.max_features])
+            xy, desc, response = xy[keep], desc[keep], response[keep]
+        dtype = np.uint8 if self.binary else np.float32
+        return Features(xy, np.ascontiguousarray(desc, dtype=dtype), response)

@@ -1,0 +1,420 @@
+"""Growing Cell Structures (Fritzke 1994), unsupervised, with insertion and removal.
+
+The network is a 2-D cell complex (triangles) whose cells carry weight vectors in the
+input space. Training follows Algorithm 1 of the paper (Fritzke's GCS):
+
+* adaptation: winner ``s`` moves by ``eps_b (x - w_s)``, its direct neighbours by
+  ``eps_n (x - w_c)``; the winner's signal counter grows by one and every counter decays
+  by the fraction ``alpha`` per step;
+* every ``lambda`` steps, while the network is smaller than its target size: insert a
+  cell halfway between the cell ``q`` with the largest counter and its farthest neighbour
+  ``f``, splitting every triangle that holds the edge q-f, and hand it the counter share
+  each new neighbour loses (Voronoi volumes estimated from mean edge lengths); then remove
+  the cells whose estimated probability density falls below ``eta`` and the cells left
+  outside every triangle.
+
+Volume trap: Fritzke estimates a region's volume as (mean edge length)^n; with n the
+input dimension (hundreds of histogram bins) that underflows to 0 and gives NaN. Here
+volumes use the complex's own dimension (``volume_dim``, 2) and densities are compared
+in log space relative to the mean (``p = h_c / (F_c / sum F)``), so they stay finite and
+removal keeps working for any input dimension.
+
+Speed: one float64 weight array, cached squared norms, and a maintained matrix of
+cell-to-input dot products ``dots[c, j] = w_c . x_j``. A step ``w <- w + e (x_i - w)``
+changes it by ``e (G[i] - dots[c])`` with the Gram matrix ``G = X X^T``, so finding the
+winner costs O(cells) and an update O(inputs) per moved cell; no distance to all cells
+is recomputed from the weights.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from naoloc.errors import NaolocError
+
+
+@dataclass(frozen=True, slots=True)
+class GCSParams:
+    """Learning parameters (Fritzke's typical values for 2-D complexes).
+
+    Attributes:
+        eps_b: Winner learning rate.
+        eps_n: Neighbour learning rate.
+        alpha: Signal-counter decay per adaptation step; None = ``1 / (10 * target)`` so
+            the counters remember about ten signals per cell.
+        lambda_steps: Adaptation steps between insertions (at most; fewer when the step
+            budget would not reach the target size otherwise).
+        eta: Removal threshold on the relative probability density (1 = average).
+        volume_dim: Exponent of the mean edge length in the volume estimate.
+        removal: Remove low-density cells (Fritzke's removal step).
+        grow_fraction: Share of the adaptation steps within which growth must finish;
+            the rest only adapts the final structure.
+        removal_every: Check for removal after every this many insertions.
+    """
+
+    eps_b: float = 0.06
+    eps_n: float = 0.002
+    alpha: float | None = None
+    lambda_steps: int = 100
+    eta: float = 0.09
+    volume_dim: int = 2
+    removal: bool = True
+    grow_fraction: float = 0.8
+    removal_every: int = 4
+
+
+@dataclass(frozen=True)
+class GCSNetwork:
+    """A trained network.
+
+    Attributes:
+        weights: ``(K, d)`` float64 cell weights in the input space.
+        triangles: ``(T, 3)`` int64 cell indices of the complex's triangles.
+        inserted: Cells inserted during training.
+        removed: Cells removed during training.
+        steps: Adaptation steps performed.
+    """
+
+    weights: np.ndarray
+    triangles: np.ndarray
+    inserted: int = 0
+    removed: int = 0
+    steps: int = 0
+
+    @property
+    def size(self) -> int:
+        """Number of cells."""
+        return int(self.weights.shape[0])
+
+    def edges(self) -> np.ndarray:
+        """``(E, 2)`` int64 sorted unique edges of the complex."""
+        return complex_edges(self.triangles)
+
+    def winners(self, x: np.ndarray) -> np.ndarray:
+        """Index ``(n,)`` of the nearest cell (Euclidean) for each input row."""
+        return nearest_rows(np.atleast_2d(x), self.weights)
+
+
+def nearest_rows(x: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Index of the nearest row of ``w`` for each row of ``x`` (squared Euclidean)."""
+    if w.shape[0] == 0:
+        return np.zeros(x.shape[0], np.int64)
+    w_sq = np.einsum("ij,ij->i", w, w)
+    return np.argmin(w_sq[None, :] - 2.0 * (x @ w.T), axis=1).astype(np.int64)
+
+
+def complex_edges(triangles: np.ndarray) -> np.ndarray:
+    """Unique sorted edges ``(E, 2)`` of a set of triangles ``(T, 3)``."""
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    e = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [0, 2]]])
+    e.sort(axis=1)
+    return np.unique(e, axis=0) if e.size else np.zeros((0, 2), np.int64)
+
+
+def complex_problems(triangles: np.ndarray, cells: int) -> list[str]:
+    """What is wrong with a 2-D cell complex (empty list when valid).
+
+    Valid: every triangle has three distinct cells in range, no triangle repeats, every
+    cell lies in a triangle, and every edge belongs to one or two triangles.
+    """
+    problems: list[str] = []
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    if t.size == 0:
+        return ["no triangles"]
+    if t.min() < 0 or t.max() >= cells:
+        problems.append("cell index out of range")
+    st = np.sort(t, axis=1)
+    if np.any(st[:, 0] == st[:, 1]) or np.any(st[:, 1] == st[:, 2]):
+        problems.append("degenerate triangle")
+    if np.unique(st, axis=0).shape[0] != st.shape[0]:
+        problems.append("repeated triangle")
+    if np.unique(t).size != cells:
+        problems.append("cell outside every triangle")
+    e = np.concatenate([st[:, [0, 1]], st[:, [1, 2]], st[:, [0, 2]]])
+    _, counts = np.unique(e, axis=0, return_counts=True)
+    if counts.max() > 2:
+        problems.append("edge shared by more than two triangles")
+    return problems
+
+
+class _IndexStream:
+    """Training-input order: a fresh seeded permutation of the inputs for every epoch."""
+
+    def __init__(self, n: int, rng: np.random.Generator):
+        self._n = n
+        self._rng = rng
+        self._buf = np.zeros(0, np.int64)
+
+    def take(self, count: int) -> np.ndarray:
+        while self._buf.size < count:
+            self._buf = np.concatenate([self._buf, self._rng.permutation(self._n)])
+        out, self._buf = self._buf[:count], self._buf[count:]
+        return out
+
+
+class _Trainer:
+    """Mutable training state; see the module docstring for the algorithm.
+
+    All per-cell state lives in one array ``row`` so that a step touches it with a single
+    gather and a single scatter: ``[w (d) | sq (1)]`` in direct mode, and
+    ``[w (d) | sq (1) | m (n)]`` in Gram mode, where ``m[c, j] = |w_c|^2 - 2 w_c . x_j``
+    is the winner criterion for input ``j``. A step ``w <- (1 - e) w + e x_i`` changes both
+    ``sq`` and ``m`` by ``(1 - e) v + e t + beta`` with ``t`` the input's target row
+    (``0`` and ``-2 G[i]``) and ``beta = e^2 |x_i|^2 - e (1 - e) m[c, i]``.
+    """
+
+    def __init__(self, x: np.ndarray, target: int, params: GCSParams, rng: np.random.Generator):
+        n, d = x.shape
+        self.x = x
+        self.n, self.d = n, d
+        self.p = params
+        self.gram_mode = n <= 2 * d + 64  # winner from cached dot products when inputs are few
+        self.gdiag = np.einsum("ij,ij->i", x, x)
+        kmax = max(target, 3)
+        width = d + 1 + (n if self.gram_mode else 0)
+        self.row = np.zeros((kmax, width))
+        self.target_rows = np.zeros((n, width))
+        self.target_rows[:, :d] = x
+        if self.gram_mode:
+            self.target_rows[:, d + 1 :] = -2.0 * (x @ x.T)
+        self.w = self.row[:, :d]
+        self.sq = self.row[:, d]
+        self.tau = np.zeros(kmax)
+        self.inc = 1.0
+        alpha = params.alpha if params.alpha is not None else 1.0 / (10.0 * kmax)
+        self.grow = 1.0 / (1.0 - alpha)
+        start = rng.choice(n, 3, replace=n < 3)
+        scale = float(np.abs(x).max()) or 1.0
+        self.w[:3] = x[start] + rng.normal(0.0, 1e-6 * scale, (3, d))  # distinct even on ties
+        self.k = 3
+        self.tris: list[tuple[int, int, int]] = [(0, 1, 2)]
+        self.nbrs: list[set[int]] = [{1, 2}, {0, 2}, {0, 1}]
+        self.cache: dict[int, tuple[np.ndarray, ...]] = {}
+        self.inserted = 0
+        self.removed = 0
+        self.refresh_rows(list(range(3)))
+
+    def refresh_rows(self, rows: list[int]) -> None:
+        """Recompute the cached norms (and dot products) of some cells from their weights."""
+        ix = np.asarray(rows, dtype=np.int64)
+        w = self.w[ix]
+        sq = np.einsum("ij,ij->i", w, w)
+        self.sq[ix] = sq
+        if self.gram_mode:
+            self.row[ix, self.d + 1 :] = sq[:, None] - 2.0 * (w @ self.x.T)
+
+    def refresh(self) -> None:
+        """Recompute every cached value exactly (bounds floating-point drift)."""
+        self.refresh_rows(list(range(self.k)))
+
+    def _entry(self, s: int) -> tuple[np.ndarray, ...]:
+        idx = np.array([s, *sorted(self.nbrs[s])], dtype=np.int64)
+        e = np.full(idx.size, self.p.eps_n)
+        e[0] = self.p.eps_b
+        ent = (idx, (1.0 - e)[:, None], e[:, None], e**2, e * (1.0 - e))
+        self.cache[s] = ent
+        return ent
+
+    def adapt(self, order: np.ndarray) -> None:
+        """Present the inputs ``order`` one by one (the hot loop)."""
+        row, trg, gdiag, tau, x = self.row, self.target_rows, self.gdiag, self.tau, self.x
+        cache, k, inc, grow, d = self.cache, self.k, self.inc, self.grow, self.d
+        if self.gram_mode:
+            crit = row[:k, d + 1 :]
+            for i in order.tolist():
+                s = int(crit[:, i].argmin())
+                ent = cache.get(s)
+                if ent is None:
+                    ent = self._entry(s)
+                idx, om, e, e2, eom = ent
+                r = row.take(idx, 0)
+                beta = e2 * gdiag[i] - eom * r[:, d + 1 + i]
+                r *= om
+                r += e * trg[i]
+                r[:, d:] += beta[:, None]
+                row[idx] = r
+                tau[s] += inc
+                inc *= grow
+        else:
+            w, sq = row[:k, :d], row[:k, d]
+            for i in order.tolist():
+                xi = x[i]
+                s = int(np.argmin(sq - 2.0 * (w @ xi)))
+                ent = cache.get(s)
+                if ent is None:
+                    ent = self._entry(s)
+                idx, om, e, e2, eom = ent
+                r = row.take(idx, 0)
+                beta = e2 * gdiag[i] - eom * (r[:, d] - 2.0 * (r[:, :d] @ xi))
+                r *= om
+                r += e * trg[i]
+                r[:, d] += beta
+                row[idx] = r
+                tau[s] += inc
+                inc *= grow
+        self.inc = inc
+
+    def normalise_counters(self) -> None:
+        """Fold the pending decay into the counters (true counters, scale 1)."""
+        self.tau[: self.k] /= self.inc
+        self.inc = 1.0
+
+    def _log_mean_len(self, cells: list[int]) -> dict[int, float]:
+        out = {}
+        for c in cells:
+            nb = np.fromiter(self.nbrs[c], np.int64)
+            if nb.size == 0:
+                out[c] = -np.inf
+                continue
+            d2 = self.sq[nb] + self.sq[c] - 2.0 * (self.w[nb] @ self.w[c])
+            out[c] = float(np.log(max(float(np.sqrt(np.maximum(d2, 0.0)).mean()), 1e-300)))
+        return out
+
+    def insert(self) -> None:
+        """Insert a cell between the most-signalled cell and its farthest neighbour."""
+        k, w, tau = self.k, self.w, self.tau
+        q = int(np.argmax(tau[:k]))
+        nq = np.fromiter(sorted(self.nbrs[q]), np.int64)
+        d2 = self.sq[nq] - 2.0 * (w[nq] @ w[q])
+        f = int(nq[int(np.argmax(d2))])
+        hit = [t for t in self.tris if q in t and f in t]
+        xs = [next(v for v in t if v != q and v != f) for t in hit]
+        r = k
+        around = [q, f, *xs]
+        old = self._log_mean_len(around)
+        w[r] = 0.5 * (w[q] + w[f])
+        self.refresh_rows([r])
+        hit_set = set(hit)
+        self.tris = [t for t in self.tris if t not in hit_set]
+        for xv in xs:
+            self.tris += [(q, r, xv), (r, f, xv)]
+            self.nbrs[xv].add(r)
+        self.nbrs[q].discard(f)
+        self.nbrs[f].discard(q)
+        self.nbrs[q].add(r)
+        self.nbrs[f].add(r)
+        self.nbrs.append(set(around))
+        self.k = k + 1
+        new = self._log_mean_len(around)
+        given = 0.0
+        for c in around:
+            ratio = float(np.exp(min(0.0, self.p.volume_dim * (new[c] - old[c]))))
+            share = tau[c] * (1.0 - ratio)  # the part of c's region r takes over
+            tau[c] -= share
+            given += share
+        tau[r] = given
+        for c in [*around, r]:
+            self.cache.pop(c, None)
+        self.inserted += 1
+
+    def log_density(self) -> np.ndarray:
+        """Log relative probability density ``log(h_c / (F_c / sum F))`` of every cell."""
+        k = self.k
+        pairs = [(a, b) for a in range(k) for b in self.nbrs[a] if a < b]
+        e = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+        d2 = (
+            self.sq[e[:, 0]]
+            + self.sq[e[:, 1]]
+            - 2.0 * np.einsum("ij,ij->i", self.w[e[:, 0]], self.w[e[:, 1]])
+        )
+        length = np.sqrt(np.maximum(d2, 0.0))
+        sums = np.bincount(e.ravel(), np.repeat(length, 2), minlength=k)
+        degree = np.bincount(e.ravel(), minlength=k)
+        log_mean = np.log(np.maximum(sums / np.maximum(degree, 1), 1e-300))
+        log_vol = self.p.volume_dim * log_mean
+        top = log_vol.max()
+        log_rel_vol = log_vol - (top + np.log(np.exp(log_vol - top).sum()))
+        total = self.tau[:k].sum()
+        with np.errstate(divide="ignore"):
+            log_h = np.log(self.tau[:k] / total) if total > 0 else np.zeros(k)
+        return log_h - log_rel_vol
+
+    def remove(self, max_remove: int) -> None:
+        """Remove up to ``max_remove`` cells below the density threshold ``eta``."""
+        if max_remove <= 0 or self.k <= 3:
+            return
+        logp = self.log_density()
+        low = np.flatnonzero(logp < np.log(self.p.eta))
+        if low.size == 0:
+            return
+        low = low[np.argsort(logp[low], kind="stable")][:max_remove]
+        dead = set(low.tolist())
+        tris = [t for t in self.tris if not dead.intersection(t)]
+        alive = sorted({v for t in tris for v in t})
+        if len(alive) < 3:
+            return
+        remap = {old: new for new, old in enumerate(alive)}
+        keep = np.asarray(alive, dtype=np.int64)
+        n_keep = keep.size
+        self.row[:n_keep] = self.row[keep]
+        self.tau[:n_keep] = self.tau[keep]
+        self.tris = [(remap[a], remap[b], remap[c]) for a, b, c in tris]
+        self.nbrs = [set() for _ in range(n_keep)]
+        for a, b, c in self.tris:
+            self.nbrs[a].update((b, c))
+            self.nbrs[b].update((a, c))
+            self.nbrs[c].update((a, b))
+        self.removed += self.k - n_keep
+        self.k = n_keep
+        self.cache.clear()
+
+
+def train_gcs(
+    data: np.ndarray, target: int, epochs: int, seed: int, params: GCSParams | None = None
+) -> GCSNetwork:
+    """Train an unsupervised GCS on the rows of ``data``.
+
+    Args:
+        data: ``(n, d)`` inputs, e.g. image histograms.
+        target: Network size to grow to (cells), at least 3.
+        epochs: Passes over the data; ``epochs * n`` adaptation steps in all.
+        seed: Seed of the initial cells and the input order (same seed, same network).
+        params: Learning parameters; defaults to :class:`GCSParams`.
+
+    Returns:
+        The trained network.
+
+    Raises:
+        NaolocError: When there is no data or the target is below 3.
+    """
+    p = params or GCSParams()
+    x = np.ascontiguousarray(data, dtype=np.float64)
+    if x.ndim != 2 or x.shape[0] == 0:
+        raise NaolocError(f"GCS needs a non-empty 2-D array of inputs, got shape {x.shape}")
+    if target < 3:
+        raise NaolocError(f"GCS target size must be at least 3, got {target}")
+    rng = np.random.default_rng(seed)
+    tr = _Trainer(x, target, p, rng)
+    stream = _IndexStream(x.shape[0], rng)
+    total = int(epochs) * x.shape[0]
+    grow_end = int(p.grow_fraction * total)
+    t = 0
+    chunk = 4096
+    while t < total:
+        if tr.k < target:
+            need = target - tr.k
+            end = grow_end if t < grow_end else total
+            lam = max(1, min(p.lambda_steps, (end - t) // need, total - t))
+            tr.adapt(stream.take(lam))
+            t += lam
+            tr.normalise_counters()
+            tr.insert()
+            if p.removal and tr.k < target and tr.inserted % p.removal_every == 0:
+                # Remove only as many cells as can still be re-grown at >= lambda/4 spacing.
+                spacing = max(1, p.lambda_steps // 4)
+                tr.remove(max(0, (end - t) // spacing - (target - tr.k)))
+        else:
+            step = min(chunk, total - t)
+            tr.adapt(stream.take(step))
+            t += step
+    tr.refresh()
+    k = tr.k
+    return GCSNetwork(
+        weights=tr.w[:k].copy(),
+        triangles=np.asarray(tr.tris, dtype=np.int64).reshape(-1, 3),
+        inserted=tr.inserted,
+        removed=tr.removed,
+        steps=t,
+    )

@@ -1,0 +1,347 @@
+"""Algorithm 5 (``paper``) and a geometrically verified localizer (``verified``).
+
+``paper``: histogram of each query -> winning GCS neuron (among neurons that carry a
+pose) -> the mean of those neurons' poses, exactly as the paper. Heading (which the
+paper does not estimate) is the winning neurons' mean camera heading minus the query's
+head yaw.
+
+``verified``: TF-IDF retrieval of candidate keyframes (DBoW2 L1 score) plus the
+keyframes of the query's GCS winner; ratio-tested descriptor matches from the query to
+each candidate's triangulated landmarks; ``solvePnPRansac`` per query; then a joint
+3-DoF (x, y, theta) refinement of the last query's robot pose over all queries, tied
+together by their relative odometry. When PnP fails it falls back to an inlier-weighted
+mean of candidate keyframe poses with the heading from the image-space rotation.
+
+All poses are robot (FRAME_ROBOT origin) poses in the map frame when the LAST query was
+taken (metres, radians).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from naoloc.geometry import Pose2D, modulo2PI, relative_pose
+from naoloc.keyframe import CameraInfo, Keyframe, camera_in_robot
+from naoloc.mapping.features import Features
+from naoloc.mapping.landmarks import hamming_matcher, planar_pose, ratio_matches, robot_matrix
+from naoloc.mapping.vocabulary import dbow_scores
+
+if TYPE_CHECKING:
+    from naoloc.mapping.map import VisualMap
+
+MIN_PNP_INLIERS = 10
+PNP_REPROJECTION_PX = 4.0
+CAMERA_HEIGHT_TOLERANCE_M = 0.3
+CONFIDENCE_SCALE = 25.0  # inliers at which confidence reaches 1 - 1/e
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A robot pose estimate in the map frame.
+
+    Attributes:
+        x: Forward coordinate in metres (map frame).
+        y: Left coordinate in metres (map frame).
+        theta: Heading in radians, in (-pi, pi] (map frame).
+        confidence: In [0, 1]; 0 when the queries had no usable features.
+        mode: ``verified`` or ``paper``.
+        details: JSON-able extras (candidates, inliers, method).
+    """
+
+    x: float
+    y: float
+    theta: float
+    confidence: float
+    mode: str
+    details: dict[str, Any] = field(default_factory=dict)
+
+    def pose(self) -> Pose2D:
+        """The estimate as a :class:`Pose2D`."""
+        return Pose2D(self.x, self.y, self.theta)
+
+
+def query_camera(kf: Keyframe) -> CameraInfo:
+    """The keyframe's camera model at the keyframe's actual image size."""
+    h, w = kf.image.shape[:2]
+    cam = kf.camera
+    return cam if (cam.width, cam.height) == (w, h) else cam.scaled(w, h)
+
+
+def _circular_mean(angles: np.ndarray, weights: np.ndarray) -> float:
+    return math.atan2(
+        float(np.sum(weights * np.sin(angles))), float(np.sum(weights * np.cos(angles)))
+    )
+
+
+def _to_last(queries: Sequence[Keyframe]) -> list[np.ndarray]:
+    """Per query, ``T_robotq_robotlast`` from the queries' odometry poses."""
+    last = queries[-1].pose
+    return [robot_matrix(*relative_pose(q.pose, last)) for q in queries]
+
+
+def _no_estimate(vmap: VisualMap, mode: str, reason: str) -> Estimate:
+    poses = vmap.keyframe_poses
+    cx, cy = (float(poses[:, 0].mean()), float(poses[:, 1].mean())) if len(poses) else (0.0, 0.0)
+    return Estimate(cx, cy, 0.0, 0.0, mode, {"method": "none", "reason": reason})
+
+
+def localize_paper(
+    vmap: VisualMap, feats: Sequence[Features], queries: Sequence[Keyframe]
+) -> Estimate:
+    """Algorithm 5: mean pose of the winning neurons of the query histograms."""
+    posed = np.flatnonzero(np.isfinite(vmap.neuron_poses[:, 0]))
+    usable = [i for i, f in enumerate(feats) if len(f) > 0]
+    if not usable or posed.size == 0:
+        return _no_estimate(vmap, "paper", "no features" if not usable else "no posed neuron")
+    to_last = _to_last(queries)
+    xs, ys, headings, closeness, winners = [], [], [], [], []
+    weights = vmap.gcs.weights[posed]
+    for i in usable:
+        hist = vmap.vocabulary.histogram(feats[i].descriptors)
+        d2 = np.sum((weights - hist[None, :]) ** 2, axis=1)
+        j = int(np.argmin(d2))
+        n = int(posed[j])
+        winners.append(n)
+        xs.append(vmap.neuron_poses[n, 0])
+        ys.append(vmap.neuron_poses[n, 1])
+        theta_q = vmap.neuron_views[n] - queries[i].head_yaw
+        headings.append(theta_q + math.atan2(to_last[i][1, 0], to_last[i][0, 0]))
+        closeness.append(max(0.0, 1.0 - math.sqrt(float(d2[j])) / math.sqrt(2.0)))
+    conf = len(usable) / len(feats) * float(np.mean(closeness))
+    theta = _circular_mean(np.asarray(headings), np.ones(len(headings)))
+    return Estimate(
+        float(np.mean(xs)),
+        float(np.mean(ys)),
+        modulo2PI(theta),
+        float(np.clip(conf, 0.0, 1.0)),
+        "paper",
+        {"method": "gcs", "neurons": winners},
+    )
+
+
+@dataclass
+class _Correspondences:
+    points: list[np.ndarray] = field(default_factory=list)  # (n, 3) map frame
+    pixels: list[np.ndarray] = field(default_factory=list)  # (n, 2)
+    query: list[np.ndarray] = field(default_factory=list)  # (n,) query index
+
+
+def _candidates(vmap: VisualMap, hist: np.ndarray, top_k: int) -> list[int]:
+    scores = dbow_scores(hist, vmap.histograms)
+    order = np.argsort(-scores, kind="stable")[:top_k].tolist()
+    winner = int(vmap.gcs.winners(hist)[0])
+    extra = np.flatnonzero(vmap.winners == winner)[:2].tolist()
+    return list(dict.fromkeys(order + extra))
+
+
+def _project(
+    pose: np.ndarray, mats: np.ndarray, points: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Pixels and depths of map points for a last-robot pose; ``mats`` (n, 3, 4)."""
+    t_inv = np.linalg.inv(robot_matrix(*pose))
+    pr = points @ t_inv[:3, :3].T + t_inv[:3, 3]
+    h = np.einsum("nij,nj->ni", mats[:, :, :3], pr) + mats[:, :, 3]
+    z = h[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        uv = h[:, :2] / z[:, None]
+    return uv, z
+
+
+def _residuals(pose: np.ndarray, mats: np.ndarray, pts: np.ndarray, px: np.ndarray) -> np.ndarray:
+    uv, z = _project(pose, mats, pts)
+    err = np.linalg.norm(uv - px, axis=1)
+    err[~(z > 0.05) | ~np.isfinite(err)] = np.inf
+    return err
+
+
+def _refine(pose: np.ndarray, mats: np.ndarray, pts: np.ndarray, px: np.ndarray) -> np.ndarray:
+    """Gauss-Newton on (x, y, theta) over the given correspondences (numeric Jacobian)."""
+    p = pose.astype(np.float64).copy()
+    for _ in range(6):
+        uv, _z = _project(p, mats, pts)
+        r = (uv - px).ravel()
+        jac = np.empty((r.size, 3))
+        for k, step in enumerate((1e-4, 1e-4, 1e-4)):
+            dp = p.copy()
+            dp[k] += step
+            jac[:, k] = ((_project(dp, mats, pts)[0] - px).ravel() - r) / step
+        if not np.isfinite(jac).all() or not np.isfinite(r).all():
+            break
+        delta, *_ = np.linalg.lstsq(jac, -r, rcond=None)
+        p += delta
+        if np.abs(delta).max() < 1e-6:
+            break
+    return p
+
+
+def localize_verified(
+    vmap: VisualMap,
+    feats: Sequence[Features],
+    queries: Sequence[Keyframe],
+    top_k: int = 6,
+) -> Estimate:
+    """Retrieval + landmark matching + PnP + joint 3-DoF refinement (see module doc)."""
+    import cv2
+
+    usable = [i for i, f in enumerate(feats) if len(f) > 0]
+    if not usable:
+        return _no_estimate(vmap, "verified", "no features")
+    to_last = _to_last(queries)
+    matcher = hamming_matcher(vmap.vocabulary.binary)
+    corr = _Correspondences()
+    mats: list[np.ndarray] = []
+    hypotheses: list[np.ndarray] = []
+    kf_votes: list[tuple[int, int, float, np.ndarray]] = []  # query, keyframe, weight, matches
+    cand_all: list[list[int]] = []
+    for qi in usable:
+        q, f = queries[qi], feats[qi]
+        cam = query_camera(q)
+        kmat = cam.matrix()
+        c_q = camera_in_robot(q.head_yaw, q.head_pitch, cam.index)
+        cands = _candidates(vmap, vmap.vocabulary.histogram(f.descriptors), top_k)
+        cand_all.append(cands)
+        best: dict[int, tuple[float, np.ndarray]] = {}
+        for c in cands:
+            lo, hi = int(vmap.kp_offsets[c]), int(vmap.kp_offsets[c + 1])
+            m = ratio_matches(matcher, f.descriptors, vmap.kp_desc[lo:hi])
+            if m.shape[0] == 0:
+                continue
+            kf_votes.append((qi, c, float(m.shape[0]), m))
+            pts = vmap.kp_points[lo + m[:, 1]]
+            for (a, _b), p in zip(m.tolist(), pts, strict=True):
+                if np.isfinite(p[0]) and a not in best:
+                    best[a] = (0.0, p)
+        if len(best) < 6:
+            continue
+        q_idx = np.fromiter(best.keys(), np.int64)
+        obj = np.stack([best[a][1] for a in q_idx.tolist()])
+        img = f.xy[q_idx].astype(np.float64)
+        m_q = kmat @ np.linalg.inv(c_q)[:3, :] @ to_last[qi]
+        corr.points.append(obj)
+        corr.pixels.append(img)
+        corr.query.append(np.full(len(q_idx), qi))
+        mats.append(np.repeat(m_q[None], len(q_idx), axis=0))
+        try:
+            ok, rvec, tvec, inl = cv2.solvePnPRansac(
+                obj,
+                img,
+                kmat,
+                None,
+                iterationsCount=200,
+                reprojectionError=PNP_REPROJECTION_PX,
+                confidence=0.999,
+                flags=cv2.SOLVEPNP_SQPNP,
+            )
+        except cv2.error:
+            ok = False
+        if not ok or inl is None or len(inl) < 6:
+            continue
+        rot, _ = cv2.Rodrigues(rvec)
+        t_cam_map = np.eye(4)
+        t_cam_map[:3, :3], t_cam_map[:3, 3] = rot, tvec.ravel()
+        t_map_cam = np.linalg.inv(t_cam_map)
+        if abs(t_map_cam[2, 3] - c_q[2, 3]) > CAMERA_HEIGHT_TOLERANCE_M:
+            continue
+        t_map_robot_last = t_map_cam @ np.linalg.inv(c_q) @ to_last[qi]
+        hypotheses.append(np.array(planar_pose(t_map_robot_last)))
+    details: dict[str, Any] = {"candidates": cand_all}
+    if hypotheses:
+        pts = np.concatenate(corr.points)
+        px = np.concatenate(corr.pixels)
+        mm = np.concatenate(mats)
+        best_pose, best_inl = hypotheses[0], np.zeros(0, bool)
+        for h in hypotheses:
+            h_inl = _residuals(h, mm, pts, px) < PNP_REPROJECTION_PX
+            if h_inl.sum() > best_inl.sum():
+                best_pose, best_inl = h, h_inl
+        pose = best_pose
+        for _ in range(3):
+            if best_inl.sum() < 4:
+                break
+            pose = _refine(pose, mm[best_inl], pts[best_inl], px[best_inl])
+            best_inl = _residuals(pose, mm, pts, px) < PNP_REPROJECTION_PX
+        n_inl = int(best_inl.sum())
+        if n_inl >= MIN_PNP_INLIERS:
+            qs = np.concatenate(corr.query)
+            details.update(
+                method="pnp",
+                inliers=n_inl,
+                correspondences=int(pts.shape[0]),
+                inliers_per_query=[int((best_inl & (qs == qi)).sum()) for qi in usable],
+            )
+            conf = 1.0 - math.exp(-n_inl / CONFIDENCE_SCALE)
+            return Estimate(
+                float(pose[0]), float(pose[1]), modulo2PI(float(pose[2])), conf, "verified", details
+            )
+    return _fallback(vmap, feats, queries, kf_votes, to_last, details)
+
+
+def _fallback(
+    vmap: VisualMap,
+    feats: Sequence[Features],
+    queries: Sequence[Keyframe],
+    votes: list[tuple[int, int, float, np.ndarray]],
+    to_last: list[np.ndarray],
+    details: dict[str, Any],
+) -> Estimate:
+    """Inlier-weighted mean of candidate keyframe poses; heading from image rotation."""
+    import cv2
+
+    xs, ys, ths, ws = [], [], [], []
+    for qi, c, _n, m in votes:
+        if m.shape[0] < 8:
+            continue
+        lo = int(vmap.kp_offsets[c])
+        a = feats[qi].xy[m[:, 0]].astype(np.float64)
+        b = vmap.kp_xy[lo + m[:, 1]].astype(np.float64)
+        mask: Any = None
+        try:
+            _f, mask = cv2.findFundamentalMat(a, b, cv2.FM_RANSAC, 3.0, 0.99)
+        except cv2.error:
+            mask = None
+        if mask is None or mask.size != len(a):
+            continue
+        inl = np.asarray(mask).ravel().astype(bool)
+        if inl.sum() < 8:
+            continue
+        q = queries[qi]
+        cam_q = query_camera(q)
+        cam_k = vmap.keyframe_camera(c)
+        bear_q = np.arctan((cam_q.width / 2.0 - a[inl, 0]) / cam_q.fx)
+        bear_k = np.arctan((cam_k.width / 2.0 - b[inl, 0]) / cam_k.fx)
+        yaw_k = vmap.keyframe_poses[c, 2] + vmap.keyframe_heads[c, 0]
+        yaw_q = yaw_k + float(np.median(bear_k - bear_q))
+        theta_q = yaw_q - q.head_yaw
+        # The query camera is taken to be where the keyframe's camera was.
+        t_map_cam_k = robot_matrix(*vmap.keyframe_poses[c]) @ camera_in_robot(
+            float(vmap.keyframe_heads[c, 0]), float(vmap.keyframe_heads[c, 1]), cam_k.index
+        )
+        off = camera_in_robot(q.head_yaw, q.head_pitch, cam_q.index)[:2, 3]
+        ct, st = math.cos(theta_q), math.sin(theta_q)
+        rx = t_map_cam_k[0, 3] - (ct * off[0] - st * off[1])
+        ry = t_map_cam_k[1, 3] - (st * off[0] + ct * off[1])
+        last = robot_matrix(rx, ry, theta_q) @ to_last[qi]
+        x, y, th = planar_pose(last)
+        xs.append(x)
+        ys.append(y)
+        ths.append(th)
+        ws.append(float(inl.sum()))
+    if not ws:
+        est = _no_estimate(vmap, "verified", "no verified match")
+        return Estimate(est.x, est.y, est.theta, 0.0, "verified", {**details, **est.details})
+    w = np.asarray(ws)
+    details.update(method="keyframes", inliers=int(w.sum()))
+    conf = 0.4 * (1.0 - math.exp(-float(w.max()) / CONFIDENCE_SCALE))
+    return Estimate(
+        float(np.average(xs, weights=w)),
+        float(np.average(ys, weights=w)),
+        modulo2PI(_circular_mean(np.asarray(ths), w)),
+        conf,
+        "verified",
+        details,
+    )

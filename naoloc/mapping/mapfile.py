@@ -1,0 +1,264 @@
+"""The map file: one ``.npz`` (zip of ``.npy`` arrays) with JSON metadata inside.
+
+Layout: every numeric array of :class:`~naoloc.mapping.map.VisualMap` under its own name,
+plus ``meta_json``: a uint8 array holding UTF-8 JSON with the format tag and version, the
+feature parameters, the training config, the user metadata, the timings and a SHA-256
+checksum over every array (name, dtype, shape and bytes). Files are written
+deterministically (stored, fixed timestamps), so a map round-trips bit for bit.
+
+Reading uses ``np.load(allow_pickle=False)`` and JSON only: nothing in a file is ever
+executed. Any truncated, foreign, tampered or newer-version file raises
+:class:`~naoloc.errors.MapFormatError` with a one-line reason.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import zipfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from naoloc.config import MapConfig
+from naoloc.errors import MapFormatError, NaolocError
+from naoloc.mapping.gcs import GCSNetwork
+from naoloc.mapping.map import VisualMap
+from naoloc.mapping.vocabulary import Vocabulary
+
+FORMAT_TAG = "naoloc-map"
+FORMAT_VERSION = 1
+_ZIP_TIME = (1980, 1, 1, 0, 0, 0)
+
+# name -> (allowed dtype kinds, ndim)
+_ARRAYS: dict[str, tuple[str, int]] = {
+    "vocab_centres": ("f", 2),
+    "vocab_idf": ("f", 1),
+    "gcs_weights": ("f", 2),
+    "gcs_triangles": ("i", 2),
+    "neuron_poses": ("f", 2),
+    "neuron_views": ("f", 1),
+    "keyframe_poses": ("f", 2),
+    "keyframe_heads": ("f", 2),
+    "keyframe_cameras": ("f", 2),
+    "histograms": ("f", 2),
+    "winners": ("i", 1),
+    "kp_offsets": ("i", 1),
+    "kp_xy": ("f", 2),
+    "kp_desc": ("uf", 2),
+    "kp_points": ("f", 2),
+}
+
+
+def _arrays_of(vmap: VisualMap) -> dict[str, np.ndarray]:
+    return {
+        "vocab_centres": vmap.vocabulary.centres,
+        "vocab_idf": vmap.vocabulary.idf,
+        "gcs_weights": vmap.gcs.weights,
+        "gcs_triangles": vmap.gcs.triangles,
+        "neuron_poses": vmap.neuron_poses,
+        "neuron_views": vmap.neuron_views,
+        "keyframe_poses": vmap.keyframe_poses,
+        "keyframe_heads": vmap.keyframe_heads,
+        "keyframe_cameras": vmap.keyframe_cameras,
+        "histograms": vmap.histograms,
+        "winners": vmap.winners,
+        "kp_offsets": vmap.kp_offsets,
+        "kp_xy": vmap.kp_xy,
+        "kp_desc": vmap.kp_desc,
+        "kp_points": vmap.kp_points,
+    }
+
+
+def checksum(arrays: dict[str, np.ndarray]) -> str:
+    """SHA-256 hex digest over the arrays' names, dtypes, shapes and bytes (sorted by name)."""
+    h = hashlib.sha256()
+    for name in sorted(arrays):
+        a = np.ascontiguousarray(arrays[name])
+        h.update(f"{name}|{a.dtype.str}|{a.shape}|".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def map_bytes(vmap: VisualMap) -> bytes:
+    """The map file's bytes (deterministic for a given map)."""
+    arrays = {k: np.ascontiguousarray(v) for k, v in _arrays_of(vmap).items()}
+    meta = {
+        "format": FORMAT_TAG,
+        "version": FORMAT_VERSION,
+        "features": vmap.feature_params,
+        "vocabulary": {"binary": vmap.vocabulary.binary, "size": vmap.vocabulary.size},
+        "gcs": {
+            "inserted": vmap.gcs.inserted,
+            "removed": vmap.gcs.removed,
+            "steps": vmap.gcs.steps,
+        },
+        "config": vmap.config.model_dump(mode="json"),
+        "meta": vmap.meta,
+        "timings": vmap.timings,
+        "checksum": checksum(arrays),
+    }
+    text = json.dumps(meta, sort_keys=True, allow_nan=False).encode("utf-8")
+    arrays["meta_json"] = np.frombuffer(text, dtype=np.uint8)
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_STORED) as zf:
+        for name in sorted(arrays):
+            member = io.BytesIO()
+            np.lib.format.write_array(member, arrays[name], allow_pickle=False)
+            zf.writestr(zipfile.ZipInfo(f"{name}.npy", date_time=_ZIP_TIME), member.getvalue())
+    return buf.getvalue()
+
+
+def save_map(vmap: VisualMap, path: str | Path) -> None:
+    """Write a map file.
+
+    Raises:
+        NaolocError: When the file cannot be written or the metadata is not JSON-able.
+    """
+    try:
+        data = map_bytes(vmap)
+    except (TypeError, ValueError) as err:
+        raise NaolocError(f"map metadata is not JSON-able: {err}") from None
+    try:
+        Path(path).write_bytes(data)
+    except OSError as err:
+        raise NaolocError(f"{path}: cannot write map file: {err.strerror or err}") from None
+
+
+def _fail(path: str, why: str) -> MapFormatError:
+    return MapFormatError(f"{path}: not a valid naoloc map: {why}")
+
+
+def _read(source: str | Path | bytes) -> tuple[dict[str, np.ndarray], str]:
+    name = "<bytes>" if isinstance(source, bytes) else str(source)
+    stream: Any = io.BytesIO(source) if isinstance(source, bytes) else source
+    try:
+        with np.load(stream, allow_pickle=False) as npz:
+            if not hasattr(npz, "files"):
+                raise _fail(name, "not an .npz archive")
+            return {k: np.asarray(npz[k]) for k in npz.files}, name
+    except MapFormatError:
+        raise
+    except FileNotFoundError:
+        raise MapFormatError(f"{name}: no such map file") from None
+    except Exception as err:  # zip, npy header, pickle refusal, truncation: all format errors
+        raise _fail(name, f"{type(err).__name__}: {str(err)[:100]}") from None
+
+
+def _check(arrays: dict[str, np.ndarray], name: str) -> dict[str, Any]:
+    raw = arrays.get("meta_json")
+    if raw is None or raw.dtype != np.uint8 or raw.ndim != 1:
+        raise _fail(name, "no metadata (meta_json)")
+    try:
+        meta = json.loads(raw.tobytes().decode("utf-8"))
+    except (UnicodeDecodeError, ValueError):
+        raise _fail(name, "metadata is not JSON") from None
+    if not isinstance(meta, dict) or meta.get("format") != FORMAT_TAG:
+        raise _fail(name, f"format tag is not {FORMAT_TAG!r}")
+    version = meta.get("version")
+    if not isinstance(version, int) or isinstance(version, bool) or version < 1:
+        raise _fail(name, f"bad format version {version!r}")
+    if version > FORMAT_VERSION:
+        raise MapFormatError(
+            f"{name}: map format version {version} is newer than this naoloc reads "
+            f"({FORMAT_VERSION}); upgrade naoloc"
+        )
+    for key, (kinds, ndim) in _ARRAYS.items():
+        a = arrays.get(key)
+        if a is None:
+            raise _fail(name, f"missing array {key}")
+        if a.dtype.kind not in kinds or a.ndim != ndim:
+            raise _fail(name, f"array {key} has dtype {a.dtype} and {a.ndim} dimensions")
+    body = {k: v for k, v in arrays.items() if k != "meta_json"}
+    if set(body) != set(_ARRAYS):
+        raise _fail(name, "unexpected arrays " + ", ".join(sorted(set(body) - set(_ARRAYS))))
+    if meta.get("checksum") != checksum(body):
+        raise _fail(name, "checksum mismatch (the file was modified)")
+    return meta
+
+
+def _consistent(a: dict[str, np.ndarray], name: str) -> None:
+    n = a["keyframe_poses"].shape[0]
+    k, v = a["gcs_weights"].shape[0], a["vocab_centres"].shape[0]
+    m = a["kp_xy"].shape[0]
+    off = a["kp_offsets"]
+    rules = [
+        (a["keyframe_poses"].shape[1] == 3, "keyframe_poses must be (N, 3)"),
+        (a["keyframe_heads"].shape == (n, 2), "keyframe_heads must be (N, 2)"),
+        (a["keyframe_cameras"].shape == (n, 5), "keyframe_cameras must be (N, 5)"),
+        (a["histograms"].shape == (n, v), "histograms must be (N, vocabulary)"),
+        (a["vocab_idf"].shape == (v,), "vocab_idf must be (vocabulary,)"),
+        (a["gcs_weights"].shape[1] == v, "gcs_weights must be (K, vocabulary)"),
+        (a["neuron_poses"].shape == (k, 3), "neuron_poses must be (K, 3)"),
+        (a["neuron_views"].shape == (k,), "neuron_views must be (K,)"),
+        (a["winners"].shape == (n,), "winners must be (N,)"),
+        (n == 0 or (a["winners"].min() >= 0 and a["winners"].max() < k), "winner out of range"),
+        (a["gcs_triangles"].shape[1] == 3, "gcs_triangles must be (T, 3)"),
+        (
+            a["gcs_triangles"].size == 0
+            or (a["gcs_triangles"].min() >= 0 and a["gcs_triangles"].max() < k),
+            "triangle cell out of range",
+        ),
+        (off.shape == (n + 1,), "kp_offsets must be (N + 1,)"),
+        (
+            off.size > 0 and off[0] == 0 and off[-1] == m and bool(np.all(np.diff(off) >= 0)),
+            "bad kp_offsets",
+        ),
+        (a["kp_xy"].shape[1] == 2, "kp_xy must be (M, 2)"),
+        (a["kp_desc"].shape[0] == m, "kp_desc must have M rows"),
+        (a["kp_points"].shape == (m, 3), "kp_points must be (M, 3)"),
+        (n > 0 and k >= 3, "empty map"),
+    ]
+    for ok, why in rules:
+        if not ok:
+            raise _fail(name, why)
+
+
+def load_map(source: str | Path | bytes) -> VisualMap:
+    """Read a map file (or its bytes).
+
+    Raises:
+        MapFormatError: On a missing, truncated, foreign, tampered or newer-version file.
+    """
+    arrays, name = _read(source)
+    meta = _check(arrays, name)
+    _consistent(arrays, name)
+    try:
+        config = MapConfig.model_validate(meta["config"])
+        features = dict(meta["features"])
+        binary = bool(meta["vocabulary"]["binary"])
+        g = meta["gcs"]
+        gcs = GCSNetwork(
+            arrays["gcs_weights"],
+            arrays["gcs_triangles"].astype(np.int64),
+            int(g["inserted"]),
+            int(g["removed"]),
+            int(g["steps"]),
+        )
+        user_meta = meta.get("meta", {})
+        timings = {str(k): float(t) for k, t in dict(meta.get("timings", {})).items()}
+        if features.get("kind") not in ("akaze", "orb", "sift") or not isinstance(user_meta, dict):
+            raise ValueError("bad feature kind or metadata")
+    except Exception as err:
+        raise _fail(name, f"bad metadata: {type(err).__name__}") from None
+    return VisualMap(
+        config=config,
+        meta=user_meta,
+        feature_params=features,
+        vocabulary=Vocabulary(arrays["vocab_centres"], arrays["vocab_idf"], binary),
+        gcs=gcs,
+        neuron_poses=arrays["neuron_poses"],
+        neuron_views=arrays["neuron_views"],
+        keyframe_poses=arrays["keyframe_poses"],
+        keyframe_heads=arrays["keyframe_heads"],
+        keyframe_cameras=arrays["keyframe_cameras"],
+        histograms=arrays["histograms"],
+        winners=arrays["winners"].astype(np.int64),
+        kp_offsets=arrays["kp_offsets"].astype(np.int64),
+        kp_xy=arrays["kp_xy"],
+        kp_desc=arrays["kp_desc"],
+        kp_points=arrays["kp_points"],
+        timings=timings,
+    )

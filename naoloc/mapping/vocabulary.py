@@ -1,0 +1,161 @@
+"""Visual vocabulary: k-majority (Hamming) or k-means (Euclidean) words, TF-IDF histograms.
+
+Binary descriptors are unpacked to 0/1 bits; on such vectors the squared Euclidean
+distance is the Hamming distance, so k-means with centres thresholded at 0.5 is
+k-majority clustering (DBoW2/DBoW3). SIFT descriptors use plain Euclidean k-means.
+Image vectors are TF-IDF weighted: ``v_i = (n_id / n_d) * log(N / N_i)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+# Descriptors drawn from the training images to cluster (the rest are only assigned).
+MAX_TRAIN_DESCRIPTORS = 20000
+KMEANS_ITERATIONS = 10
+
+
+def descriptor_vectors(desc: np.ndarray, binary: bool) -> np.ndarray:
+    """Descriptors as float32 vectors: unpacked bits for binary kinds, as-is for SIFT."""
+    if binary:
+        return np.unpackbits(np.ascontiguousarray(desc, dtype=np.uint8), axis=1).astype(np.float32)
+    return np.asarray(desc, dtype=np.float32)
+
+
+def _sq_dists(x: np.ndarray, c: np.ndarray, c_sq: np.ndarray) -> np.ndarray:
+    """Squared distances ``(n, k)`` between rows of x and centres c (Hamming on bits)."""
+    x_sq = np.einsum("ij,ij->i", x, x)
+    d = x_sq[:, None] + c_sq[None, :] - 2.0 * (x @ c.T)
+    np.maximum(d, 0.0, out=d)
+    return d
+
+
+@dataclass(frozen=True)
+class Vocabulary:
+    """A trained vocabulary.
+
+    Attributes:
+        centres: ``(k, d)`` float32 word centres (0/1 bits for binary descriptors).
+        idf: ``(k,)`` float64 inverse document frequencies ``log(N / N_i)``.
+        binary: True when words live in Hamming space.
+    """
+
+    centres: np.ndarray
+    idf: np.ndarray
+    binary: bool
+
+    @property
+    def size(self) -> int:
+        """Number of words."""
+        return int(self.centres.shape[0])
+
+    def assign(self, desc: np.ndarray) -> np.ndarray:
+        """Word index ``(n,)`` int64 of each descriptor (nearest centre)."""
+        if desc.shape[0] == 0:
+            return np.zeros(0, np.int64)
+        x = descriptor_vectors(desc, self.binary)
+        c_sq = np.einsum("ij,ij->i", self.centres, self.centres)
+        # argmin |x - c|^2 = argmin (|c|^2 - 2 x.c): |x|^2 is constant per row.
+        return np.argmin(c_sq[None, :] - 2.0 * (x @ self.centres.T), axis=1).astype(np.int64)
+
+    def tfidf(self, words: np.ndarray) -> np.ndarray:
+        """TF-IDF vector ``(k,)`` float64 of an image's word indices (zeros when empty)."""
+        counts = np.bincount(words, minlength=self.size).astype(np.float64)
+        total = counts.sum()
+        if total == 0:
+            return counts
+        return counts / total * self.idf
+
+    def histogram(self, desc: np.ndarray) -> np.ndarray:
+        """L2-normalised TF-IDF histogram ``(k,)`` float64 of an image's descriptors."""
+        return l2_normalise(self.tfidf(self.assign(desc)))
+
+
+def l2_normalise(v: np.ndarray) -> np.ndarray:
+    """Rows (or a vector) scaled to unit L2 norm; zero rows stay zero."""
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    return np.divide(v, n, out=np.zeros_like(v, dtype=np.float64), where=n > 0)
+
+
+def l1_normalise(v: np.ndarray) -> np.ndarray:
+    """Rows (or a vector) scaled to unit L1 norm; zero rows stay zero."""
+    n = np.abs(v).sum(axis=-1, keepdims=True)
+    return np.divide(v, n, out=np.zeros_like(v, dtype=np.float64), where=n > 0)
+
+
+def dbow_scores(query: np.ndarray, database: np.ndarray) -> np.ndarray:
+    """DBoW2 L1 scores ``1 - 0.5 |q/|q|_1 - d/|d|_1|_1`` in [0, 1] of one query against rows."""
+    q = l1_normalise(query)
+    d = l1_normalise(database)
+    return 1.0 - 0.5 * np.abs(d - q[None, :]).sum(axis=1)
+
+
+def _init_centres(x: np.ndarray, k: int, rng: np.random.Generator) -> np.ndarray:
+    """k-means++ seeding (distance-squared sampling) on the rows of x."""
+    n = x.shape[0]
+    centres = np.empty((k, x.shape[1]), np.float32)
+    centres[0] = x[rng.integers(n)]
+    x_sq = np.einsum("ij,ij->i", x, x)
+    best = np.maximum(x_sq - 2.0 * (x @ centres[0]) + float(centres[0] @ centres[0]), 0.0)
+    for j in range(1, k):
+        total = float(best.sum())
+        idx = int(rng.integers(n)) if total <= 0 else int(rng.choice(n, p=best / total))
+        centres[j] = x[idx]
+        d = np.maximum(x_sq - 2.0 * (x @ centres[j]) + float(centres[j] @ centres[j]), 0.0)
+        np.minimum(best, d, out=best)
+    return centres
+
+
+def train_vocabulary(
+    descriptor_sets: Sequence[np.ndarray], size: int, binary: bool, seed: int
+) -> Vocabulary:
+    """Cluster descriptors into words and compute IDF over the images.
+
+    Args:
+        descriptor_sets: One ``(n_i, d)`` descriptor array per training image.
+        size: Number of words wanted (fewer when there are fewer distinct descriptors).
+        binary: Hamming-space k-majority when True, Euclidean k-means otherwise.
+        seed: Seed of sampling and initialisation.
+
+    Returns:
+        The vocabulary; a single all-zero word when no image has any descriptor.
+    """
+    rng = np.random.default_rng(seed)
+    nonempty = [d for d in descriptor_sets if d.shape[0] > 0]
+    width = descriptor_vectors(descriptor_sets[0][:0], binary).shape[1] if descriptor_sets else 8
+    if not nonempty:
+        return Vocabulary(np.zeros((1, width), np.float32), np.zeros(1), binary)
+    all_desc = np.concatenate(nonempty, axis=0)
+    if all_desc.shape[0] > MAX_TRAIN_DESCRIPTORS:
+        pick = np.sort(rng.choice(all_desc.shape[0], MAX_TRAIN_DESCRIPTORS, replace=False))
+        all_desc = all_desc[pick]
+    x = descriptor_vectors(all_desc, binary)
+    k = int(min(size, x.shape[0]))
+    centres = _init_centres(x, k, rng)
+    for _ in range(KMEANS_ITERATIONS):
+        c_sq = np.einsum("ij,ij->i", centres, centres)
+        labels = np.argmin(c_sq[None, :] - 2.0 * (x @ centres.T), axis=1)
+        counts = np.bincount(labels, minlength=k).astype(np.float32)
+        sums = np.zeros_like(centres)
+        np.add.at(sums, labels, x)
+        new = sums / np.maximum(counts, 1.0)[:, None]
+        if binary:
+            new = (new >= 0.5).astype(np.float32)  # k-majority: bitwise majority vote
+        empty = counts == 0
+        if empty.any():  # reseed empty words on the descriptors farthest from their word
+            far = _sq_dists(x, centres, c_sq)[np.arange(x.shape[0]), labels]
+            new[empty] = x[np.argsort(-far, kind="stable")[: int(empty.sum())]]
+        if np.array_equal(new, centres):
+            break
+        centres = new
+    vocab = Vocabulary(centres, np.zeros(k), binary)
+    n_images = len(descriptor_sets)
+    doc_freq = np.zeros(k)
+    for d in descriptor_sets:
+        if d.shape[0]:
+            doc_freq[np.unique(vocab.assign(d))] += 1
+    idf = np.log(n_images / np.maximum(doc_freq, 1.0))
+    return Vocabulary(centres, idf, binary)
