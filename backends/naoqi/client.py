@@ -102,7 +102,7 @@ class Link:
         self._heartbeat.start()
 
     def _connect(self, timeout_s: float) -> Any:
-        session = new_session(self.transport, curve_keys=self._curve)
+        session = new_session(self.transport, curve_keys=self._curve, connect_timeout_s=timeout_s)
         try:
             if self.transport == "libqi" and self._user:
                 from naoloc.backends.naoqi.libqi_transport import set_login
@@ -257,8 +257,18 @@ class Link:
                 )
             future.wait(max(1, min(_SLICE_MS, int(remaining * 1000))))
         if future.hasError():
-            raise error_from_text(future.error())
+            error = error_from_text(future.error())
+            if self._lost or not self._session_alive():
+                raise ConnectionLost(self._lost or str(error))
+            raise error
         return future.value()
+
+    def _session_alive(self) -> bool:
+        session = self._session
+        try:
+            return session is not None and bool(session.isConnected())
+        except Exception:  # a closed libqi session may raise
+            return False
 
     def call(
         self,

@@ -29,6 +29,9 @@ def import_qi() -> Any:
         import qi
     except ImportError:
         raise DependencyNotInstalled(QI_INSTALL_HINT) from None
+    # libqi logs "No Application was created" and every service registration; naoloc
+    # reports problems itself, so keep libqi's own log to errors.
+    qi.logging.setLevel(qi.logging.ERROR)
     return qi
 
 

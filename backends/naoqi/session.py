@@ -191,13 +191,16 @@ def resolve_transport(transport: str) -> Transport:
     raise BackendError(f"unknown transport {transport!r}; valid: auto, libqi, zmq")
 
 
-def new_session(transport: Transport, *, curve_keys: str | None = None) -> Any:
+def new_session(
+    transport: Transport, *, curve_keys: str | None = None, connect_timeout_s: float = 3.0
+) -> Any:
     """A fresh, unconnected session with the qi.Session call shapes.
 
     Args:
         transport: ``libqi`` (a real ``qi.Session``) or ``zmq`` (our shim).
         curve_keys: zmq only: folder with CURVE certificates (see
             :func:`~.zmq_transport.make_curve_keys`); None = no encryption.
+        connect_timeout_s: zmq only: how long ``connect`` waits for the server's greeting.
 
     Raises:
         DependencyNotInstalled: libqi without the qi package.
@@ -208,7 +211,7 @@ def new_session(transport: Transport, *, curve_keys: str | None = None) -> Any:
         return libqi_transport.new_session()
     from naoloc.backends.naoqi.zmq_transport import ZmqSession
 
-    return ZmqSession(curve_keys=curve_keys)
+    return ZmqSession(curve_keys=curve_keys, connect_timeout_s=connect_timeout_s)
 
 
 def error_from_text(text: str) -> NaolocError:
@@ -243,6 +246,7 @@ def error_from_text(text: str) -> NaolocError:
         if name not in ("RuntimeError", "Exception"):
             break
         line = rest
-    if "not connected" in line.lower():
+    lowered = line.lower()
+    if any(m in lowered for m in ("not connected", "session closed", "connection closed")):
         return errors.ConnectionLost(line)
     return errors.RobotError(line)

@@ -35,7 +35,6 @@ from naoloc.errors import BackendError, ConnectionLost, NaolocError, ProtocolErr
 
 PING_EVERY_S: Final = 0.2
 LOST_AFTER_S: Final = 0.9
-HELLO_TIMEOUT_S: Final = 3.0
 _POLL_MS: Final = 50
 
 
@@ -120,10 +119,12 @@ class ZmqSession:
 
     Args:
         curve_keys: Folder of CURVE certificates (:func:`make_curve_keys`); None = plain.
+        connect_timeout_s: How long ``connect`` waits for the server's greeting.
     """
 
-    def __init__(self, curve_keys: str | None = None) -> None:
+    def __init__(self, curve_keys: str | None = None, connect_timeout_s: float = 3.0) -> None:
         self._curve = Path(curve_keys) if curve_keys else None
+        self._connect_timeout_s = connect_timeout_s
         self._ctx: zmq.Context[Any] | None = None
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
@@ -152,7 +153,7 @@ class ZmqSession:
         """Connect to a zmq virtual NAOqi at ``tcp://host:port`` and greet it.
 
         Raises:
-            ConnectionLost: Nothing answered within a few seconds.
+            ConnectionLost: Nothing answered within ``connect_timeout_s``.
             BackendError: A bad URL or CURVE certificates.
         """
         if self._thread is not None:
@@ -183,7 +184,7 @@ class ZmqSession:
         self._thread.start()
         hello = self._send_request({"k": "hello"})
         try:
-            welcome = hello.value(int(HELLO_TIMEOUT_S * 1000))
+            welcome = hello.value(max(1, int(self._connect_timeout_s * 1000)))
         except ConnectionLost:
             self.close()
             raise ConnectionLost(f"no virtual NAOqi (zmq) answers at {url}") from None
@@ -258,16 +259,18 @@ class ZmqSession:
             self._wake.poke()
         return promise.future()
 
-    def _fail_all(self, reason: str) -> None:
+    def _fail_all(self, why: str) -> None:
+        """Fail every pending call; ``why`` is short, e.g. "peer disconnected"."""
         with self._pending_lock:
             first = not self._lost_reason
-            self._lost_reason = self._lost_reason or reason
+            if first:
+                self._lost_reason = f"connection to {self._url} lost ({why})"
             pending, self._pending = self._pending, {}
         was_connected, self._connected = self._connected, False
         for promise in pending.values():
             promise.setError(ConnectionLost(self._lost_reason))
         if first and was_connected:
-            self.disconnected(self._lost_reason)
+            self.disconnected(why)
 
     def _client_loop(self, sock: zmq.Socket[Any], monitor: zmq.Socket[Any]) -> None:
         assert self._wake is not None
@@ -293,18 +296,16 @@ class ZmqSession:
                     while monitor.poll(0):
                         monitor.recv_multipart()
                         if self._connected:
-                            self._fail_all(f"connection to {self._url} lost (peer disconnected)")
+                            self._fail_all("peer disconnected")
                 if self._connected and now - last_tx >= PING_EVERY_S:
                     sock.send_multipart(wire.encode({"k": "ping", "i": 0}))
                     last_tx = now
                 if self._connected and now - last_rx > LOST_AFTER_S:
-                    self._fail_all(
-                        f"connection to {self._url} lost (silent for {now - last_rx:.1f} s)"
-                    )
+                    self._fail_all(f"silent for {now - last_rx:.1f} s")
                 if self._lost_reason and not self._connected:
                     break
         except zmq.ZMQError as err:
-            self._fail_all(f"connection to {self._url} failed: {err}")
+            self._fail_all(f"socket error: {err}")
         finally:
             if not self._lost_reason:
                 self._fail_all("session closed")
