@@ -112,10 +112,11 @@ def _draw_text(rng: np.random.Generator, img: np.ndarray, top: int, bottom: int)
     cv2.putText(img, text, (x, y), font, scale, colour, thickness, cv2.LINE_AA)
 
 
-def _draw_shape(rng: np.random.Generator, img: np.ndarray) -> None:
+def _draw_shape(rng: np.random.Generator, img: np.ndarray, small: bool = False) -> None:
     h, w = img.shape[:2]
     colour = _random_colour(rng, (0.2, 1.0), (0.1, 1.0))
-    size = int(rng.uniform(0.08, 0.35) * min(w, h)) + 2
+    rel = rng.uniform(0.012, 0.04) if small else rng.uniform(0.04, 0.25)
+    size = int(rel * min(w, h)) + 2
     cx, cy = int(rng.integers(0, w)), int(rng.integers(0, h))
     kind = int(rng.integers(0, 6))
     if kind == 0:
@@ -145,30 +146,66 @@ def _draw_shape(rng: np.random.Generator, img: np.ndarray) -> None:
                 cv2.rectangle(img, p0, (p0[0] + cell - 1, p0[1] + cell - 1), c, -1)
 
 
+def _fractal(rng: np.random.Generator, h: int, w: int) -> np.ndarray:
+    """Multi-scale value noise in [0, 1], ``(h, w)`` float32: a photograph-like texture."""
+    acc = np.zeros((h, w), np.float32)
+    for cell, amp in ((48, 1.0), (24, 0.9), (12, 0.8), (6, 0.8), (3, 0.6)):
+        acc += amp * _smooth_noise(rng, h, w, cell)
+    lo, hi = float(acc.min()), float(acc.max())
+    return (acc - lo) / max(hi - lo, 1e-6)
+
+
+def _photo(rng: np.random.Generator, width: int, height: int) -> np.ndarray:
+    """A photograph-like picture: fractal noise through a random colour palette."""
+    value = _fractal(rng, height, width)
+    bands = ((0.05, 0.25), (0.3, 0.5), (0.55, 0.75), (0.8, 1.0))  # dark to bright
+    palette = np.array([_random_colour(rng, (0.2, 0.9), band) for band in bands], np.float32)
+    pos = value * 3.0
+    idx = np.minimum(pos.astype(np.int32), 2)
+    frac = (pos - idx)[..., None]
+    return (palette[idx] * (1 - frac) + palette[idx + 1] * frac).clip(0, 255).astype(np.uint8)
+
+
 def make_poster(rng: np.random.Generator, width: int, height: int) -> np.ndarray:
     """One unique poster, ``(height, width, 3)`` uint8 RGB.
+
+    Three kinds: a graphic (gradient, many shapes, words), a photograph (fractal
+    colours with a caption) and a text sheet (lines of words); all framed.
 
     Args:
         rng: Source of every random choice (seeded by the caller).
         width: Width in pixels.
         height: Height in pixels.
     """
-    c0 = np.array(_random_colour(rng, (0.1, 0.8), (0.5, 1.0)), np.float32)
-    c1 = np.array(_random_colour(rng, (0.1, 0.8), (0.3, 1.0)), np.float32)
-    ang = rng.uniform(0, 2 * np.pi)
-    yy, xx = np.mgrid[0:height, 0:width].astype(np.float32)
-    ramp = (np.cos(ang) * xx / max(width, 1) + np.sin(ang) * yy / max(height, 1) + 1) / 2
-    img = (c0 + (c1 - c0) * ramp[..., None]).clip(0, 255).astype(np.uint8)
-    if rng.random() < 0.35:  # stripes
+    kind = int(rng.integers(0, 3))
+    if kind == 1:
+        img = _photo(rng, width, height)
+        shapes, texts = int(rng.integers(2, 6)), int(rng.integers(1, 3))
+    else:
+        c0 = np.array(_random_colour(rng, (0.1, 0.8), (0.5, 1.0)), np.float32)
+        c1 = np.array(_random_colour(rng, (0.1, 0.8), (0.3, 1.0)), np.float32)
+        ang = rng.uniform(0, 2 * np.pi)
+        yy, xx = np.mgrid[0:height, 0:width].astype(np.float32)
+        ramp = (np.cos(ang) * xx / max(width, 1) + np.sin(ang) * yy / max(height, 1) + 1) / 2
+        img = (c0 + (c1 - c0) * ramp[..., None]).clip(0, 255).astype(np.uint8)
+        shapes = int(rng.integers(14, 26)) if kind == 0 else int(rng.integers(3, 7))
+        texts = int(rng.integers(2, 5)) if kind == 0 else int(rng.integers(6, 10))
+    if kind == 0 and rng.random() < 0.35:  # stripes
         period = max(4, int(rng.uniform(0.04, 0.15) * width))
         colour = _random_colour(rng, (0.2, 1.0), (0.2, 0.9))
         for x in range(int(rng.integers(0, period)), width, period):
             cv2.line(img, (x, 0), (x + height // 3, height), colour, max(1, period // 4))
-    for _ in range(int(rng.integers(6, 12))):
+    for _ in range(shapes):
         _draw_shape(rng, img)
-    for _ in range(int(rng.integers(1, 4))):
-        top = int(rng.uniform(0.0, 0.7) * height)
-        _draw_text(rng, img, top, min(height, top + int(0.3 * height)))
+    for _ in range(int(rng.integers(50, 90))):  # small details: keypoints at every place
+        _draw_shape(rng, img, small=True)
+    for k in range(texts):
+        if kind == 2:  # text lines from top to bottom
+            top = int(k * height / texts)
+            _draw_text(rng, img, top, top + int(0.9 * height / texts))
+        else:
+            top = int(rng.uniform(0.0, 0.8) * height)
+            _draw_text(rng, img, top, min(height, top + int(rng.uniform(0.08, 0.25) * height)))
     noise = rng.normal(0, 5, img.shape)
     img = (img + noise).clip(0, 255).astype(np.uint8)
     frame = max(2, min(width, height) // 40)
@@ -206,7 +243,7 @@ def make_wall(
     """A painted wall with a skirting board, posters and small fixtures, ``(H, W, 3)`` uint8 RGB.
 
     Posters hang where the robot's camera (about 0.5 m above the floor) sees them: each
-    covers 70-90 % of its slot along the wall and spans heights of roughly 0.2-1.2 m.
+    covers 70-90 % of its slot along the wall and spans heights of roughly 0.12-1.3 m.
 
     Args:
         rng: Source of every random choice.
@@ -230,10 +267,10 @@ def make_wall(
         return img
     slot = length_m / posters
     for i in range(posters):
-        pw_m = slot * rng.uniform(0.7, 0.9)
-        ph_m = min(rng.uniform(0.6, 1.0), height_m - 0.25)
+        pw_m = slot * rng.uniform(0.75, 0.92)
+        ph_m = min(rng.uniform(0.9, 1.2), height_m - 0.25)
         cu = (i + 0.5) * slot + rng.uniform(-0.5, 0.5) * (slot - pw_m)
-        cz = rng.uniform(0.6, 0.8)
+        cz = rng.uniform(0.6, 0.72)
         cz = min(max(cz, 0.12 + ph_m / 2), height_m - 0.05 - ph_m / 2)
         pw, ph = max(4, round(pw_m * ppm)), max(4, round(ph_m * ppm))
         x0 = round((cu - pw_m / 2) * ppm)

@@ -167,7 +167,10 @@ class FakeWorld:
         self.command = self.command * inc
         self.command = Pose2D(self.command.x, self.command.y, _wrap(self.command.theta))
         self.sensor.add(inc)
-        self.velocity = (inc.x / self.dt, inc.y / self.dt, inc.theta / self.dt)
+        if isinstance(task, VelocityWalk):
+            self.velocity = (task.vx, task.vy, task.wz)
+        else:
+            self.velocity = (inc.x / self.dt, inc.y / self.dt, inc.theta / self.dt)
         if isinstance(task, PathWalk):
             task.advance()
             if task.done:
