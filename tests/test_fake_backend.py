@@ -263,7 +263,7 @@ with naoloc.connect({"robot": {"backend": "fake"}}) as robot:
     robot.motion.wakeUp()
     reached = robot.motion.moveTo(0.5, 0.0, 0.0)
     x, y, theta = robot.motion.getRobotPosition(False)
-    truth = _sim(robot).true_pose()
+    truth = robot.sim.true_pose()
 heavy = sorted(m for m in sys.modules if m.split(".")[0] in ("mujoco", "qi", "zmq"))
 print(json.dumps({"shape": list(frame.pixels.shape), "reached": reached, "odometry": [x, y, theta],
                   "truth": list(truth), "heavy": heavy}))
