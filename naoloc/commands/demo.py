@@ -98,25 +98,23 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
             loc = localize(robot, vmap, cfg)
             est = loc.estimate
             pairs.append((Pose2D(est.x, est.y, est.theta), loc.truth))
-            truth = loc.truth or Pose2D(math.nan, math.nan, math.nan)
+            truth = loc.truth
             rows.append(
                 {
-                    "truth": [round(truth.x, 3), round(truth.y, 3), round(truth.theta, 3)],
+                    "truth": None if truth is None else [round(v, 3) for v in truth],
                     "estimate": [round(est.x, 3), round(est.y, 3), round(est.theta, 3)],
-                    "error_m": round(loc.error_m or math.nan, 3),
-                    "heading_error_deg": round(loc.heading_error_deg or math.nan, 2),
+                    "error_m": _rounded(loc.error_m, 3),
+                    "heading_error_deg": _rounded(loc.heading_error_deg, 2),
                     "confidence": round(float(est.confidence), 3),
                     "localize_s": round(loc.wall_s, 3),
                 }
             )
-            print(
-                f"demo: pose {i + 1}/{len(poses)}: error {rows[-1]['error_m']:.2f} m",
-                flush=True,
-            )
+            err = math.nan if loc.error_m is None else loc.error_m
+            print(f"demo: pose {i + 1}/{len(poses)}: error {err:.2f} m", flush=True)
     png = plot_estimates(vmap, pairs, out / "localize.png")
     _print_table(rows)
-    errors = [r["error_m"] for r in rows if math.isfinite(r["error_m"])]
-    headings = [r["heading_error_deg"] for r in rows if math.isfinite(r["heading_error_deg"])]
+    errors = [r["error_m"] for r in rows if r["error_m"] is not None]
+    headings = [r["heading_error_deg"] for r in rows if r["heading_error_deg"] is not None]
     summary = {
         "frames": frames,
         "images": built["images"],
@@ -137,12 +135,20 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     return summary
 
 
+def _rounded(value: float | None, digits: int) -> float | None:
+    return None if value is None else round(value, digits)
+
+
+def _nan(value: float | None) -> float:
+    return math.nan if value is None else value
+
+
 def _print_table(rows: list[dict[str, Any]]) -> None:
     print(f"{'#':>2}  {'truth (map frame)':>24}  {'estimate':>24}  {'error m':>8}  {'head deg':>8}")
     for i, r in enumerate(rows):
-        t, e = r["truth"], r["estimate"]
+        t, e = r["truth"] or [math.nan] * 3, r["estimate"]
         print(
             f"{i + 1:>2}  ({t[0]:6.2f}, {t[1]:6.2f}, {t[2]:5.2f})  "
-            f"({e[0]:6.2f}, {e[1]:6.2f}, {e[2]:5.2f})  {r['error_m']:8.2f}  "
-            f"{r['heading_error_deg']:8.1f}"
+            f"({e[0]:6.2f}, {e[1]:6.2f}, {e[2]:5.2f})  {_nan(r['error_m']):8.2f}  "
+            f"{_nan(r['heading_error_deg']):8.1f}"
         )
