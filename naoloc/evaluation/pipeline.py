@@ -31,7 +31,7 @@ from naoloc.evaluation.plan import STUDIES, Plan, make_plan
 from naoloc.evaluation.protocols import (
     PAPER_POSITIONS,
     PAPER_SQUARE_M,
-    TestPose,
+    EvalPose,
     lap_of,
     paper_poses,
     room_to_map,
@@ -44,6 +44,7 @@ from naoloc.evaluation.runner import (
     Scorer,
     SurveyTask,
     chunked,
+    jsonable,
     localize_chunk,
     map_task,
     run_tasks,
@@ -158,11 +159,13 @@ def evaluate(
     poses = _test_poses(cfg, protocol, n, seed, origin, room_size)
     chunks = _chunks(plan, cfg, base_dict, poses, origin, map_paths, workers, chunk_size)
     results = run_tasks(localize_chunk, chunks, workers, "localize", progress=progress)
-    records = [rec for chunk in results for rec in chunk]
+    flat = [rec for chunk in results for rec in chunk]
+    records = [r for r in flat if "skipped" not in r]
+    skipped = {r["variant"]: r["skipped"] for r in flat if "skipped" in r}
 
     # 4. Outputs.
     summary = _summary(
-        plan, protocol, seed, workers, cfg, surveys, maps, records, origin, room_size
+        plan, protocol, seed, workers, cfg, surveys, maps, records, origin, room_size, skipped
     )
     summary["wall_s"] = round(time.monotonic() - t_start, 2)
     _write_outputs(outdir, summary, records, plan, maps, surveys, origin, room_size, protocol)
@@ -198,7 +201,7 @@ def _test_poses(
     seed: int,
     origin: tuple[float, float, float],
     room_size: tuple[float, float],
-) -> list[TestPose]:
+) -> list[EvalPose]:
     if protocol == "paper":
         return paper_poses(origin, seed)
     from naoloc.registry import connect
@@ -213,7 +216,7 @@ def _chunks(
     plan: Plan,
     cfg: Config,
     base_dict: dict[str, Any],
-    poses: Sequence[TestPose],
+    poses: Sequence[EvalPose],
     origin: tuple[float, float, float],
     map_paths: dict[str, str],
     workers: int,
@@ -263,6 +266,7 @@ def _summary(
     records: Sequence[dict[str, Any]],
     origin: tuple[float, float, float],
     room_size: tuple[float, float],
+    skipped: dict[str, str],
 ) -> dict[str, Any]:
     by_variant: dict[str, list[dict[str, Any]]] = {v.name: [] for v in plan.variants}
     for rec in records:
@@ -302,6 +306,7 @@ def _summary(
                 "strategy": v.strategy,
                 "robot": v.robot,
                 **_variant_summary(by_variant[v.name]),
+                **({"skipped": skipped[v.name]} if v.name in skipped else {}),
             }
             for v in plan.variants
         },
@@ -417,7 +422,7 @@ def _write_outputs(
     main_recs = [r for r in records if r["variant"] == plan.main.name]
     figures.plot_estimates(
         outdir / "estimates.png", main_recs,
-        f"{protocol} protocol, {plan.main.description}: median "
+        f"{protocol} protocol, {plan.main.description}\nmedian "
         f"{summary['median_error_m']} m, p90 {summary['p90_error_m']} m",
         poly, np.array(summary["survey"]["keyframe_poses"]),
     )  # fmt: skip
@@ -438,6 +443,6 @@ def _write_outputs(
         figures.plot_cdf(
             outdir / "cdf_robustness.png", rob, "robustness: cumulative position error"
         )
-    (outdir / "summary.json").write_text(json.dumps(summary, indent=1), encoding="utf-8")
-    (outdir / "estimates.json").write_text(json.dumps(list(records)), encoding="utf-8")
+    (outdir / "summary.json").write_text(json.dumps(jsonable(summary), indent=1), encoding="utf-8")
+    (outdir / "estimates.json").write_text(json.dumps(jsonable(list(records))), encoding="utf-8")
     (outdir / "report.md").write_text(report.render(summary), encoding="utf-8")

@@ -96,7 +96,7 @@ PAPER_POSITIONS: tuple[PaperPosition, ...] = (
 
 
 @dataclass(frozen=True, slots=True)
-class TestPose:
+class EvalPose:
     """One place the robot is put to localize itself.
 
     Attributes:
@@ -128,7 +128,7 @@ def sample_random_poses(
     band_m: tuple[float, float] = (0.6, 1.4),
     clearance_m: float = 0.25,
     max_draws: int = 200_000,
-) -> list[TestPose]:
+) -> list[EvalPose]:
     """Draw the ``random`` protocol's poses by rejection sampling.
 
     Positions are uniform over the part of the floor whose distance to the nearest wall is
@@ -158,7 +158,7 @@ def sample_random_poses(
         raise ConfigError(f"room {sx} x {sy} m has no floor {lo} m from every wall")
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0x7E57]))
     child_seeds = rng.integers(0, 2**31 - 1, size=n)
-    poses: list[TestPose] = []
+    poses: list[EvalPose] = []
     draws = 0
     while len(poses) < n:
         if draws >= max_draws:
@@ -174,7 +174,7 @@ def sample_random_poses(
         if not (lo <= d <= hi) or not is_free(x, y, clearance_m):
             continue
         i = len(poses)
-        poses.append(TestPose(i, i, (x, y, theta), int(child_seeds[i])))
+        poses.append(EvalPose(i, i, (x, y, theta), int(child_seeds[i])))
     return poses
 
 
@@ -184,7 +184,7 @@ def paper_poses(
     *,
     evaluations: int = PAPER_EVALUATIONS,
     jitter_rad: float = PAPER_HEADING_JITTER_RAD,
-) -> list[TestPose]:
+) -> list[EvalPose]:
     """The ``paper`` protocol's poses: each Table 3 position ``evaluations`` times.
 
     Args:
@@ -198,13 +198,13 @@ def paper_poses(
     """
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0x7AB3]))
     origin = Pose2D(*origin_room_pose)
-    poses: list[TestPose] = []
+    poses: list[EvalPose] = []
     for pos in PAPER_POSITIONS:
         for _ in range(evaluations):
             heading = pos.heading + float(rng.uniform(-jitter_rad, jitter_rad))
             room = (origin * Pose2D(pos.x, pos.y, heading)).normalized()
             seed_i = int(rng.integers(0, 2**31 - 1))
-            poses.append(TestPose(len(poses), pos.number, (room.x, room.y, room.theta), seed_i))
+            poses.append(EvalPose(len(poses), pos.number, (room.x, room.y, room.theta), seed_i))
     return poses
 
 

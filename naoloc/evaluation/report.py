@@ -138,10 +138,11 @@ def variants_table(summary: dict[str, Any], studies: Sequence[str]) -> str:
     for name, v in summary["variants"].items():
         if v["study"] not in studies:
             continue
+        what = v["description"] + (f" (skipped: {v['skipped']})" if "skipped" in v else "")
         rows.append(
             [
                 name,
-                v["description"],
+                what,
                 v["n"],
                 _f(v["median_error_m"]),
                 _f(v["p90_error_m"]),

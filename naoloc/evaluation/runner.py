@@ -8,9 +8,11 @@ process); with one worker everything runs in the calling process. Progress goes 
 
 A localization chunk creates one robot from its config, optionally changes the world
 (moves or removes a poster through ``robot.sim``), then for each test pose teleports the
-robot there, runs the localize behaviour with the chunk's primary map and mode, and
-re-scores the same query images with every other (map, mode) pair of the chunk, so
-comparisons see exactly the same images.
+robot there and, for each way of taking pictures (a head scan, or the paper's two
+pictures of the nearest wall), runs the localize behaviour once with the first scorer of
+that strategy and re-scores the very same pictures with every other (map, mode) pair, so
+comparisons see exactly the same images. A world change the simulator lacks makes the
+chunk's variants "skipped" (with the reason), never silently measured without it.
 """
 
 from __future__ import annotations
@@ -26,8 +28,8 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from naoloc.errors import NaolocError, NotBuiltError
-from naoloc.evaluation.protocols import TestPose, room_to_map
+from naoloc.errors import NaolocError
+from naoloc.evaluation.protocols import EvalPose, room_to_map
 from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.progress import Progress
 
@@ -103,7 +105,7 @@ class LocalizeChunk:
 
     config: dict[str, Any]
     origin_room_pose: tuple[float, float, float]
-    poses: tuple[TestPose, ...]
+    poses: tuple[EvalPose, ...]
     scorers: tuple[Scorer, ...]
     world_changes: tuple[tuple[str, tuple[Any, ...]], ...] = field(default_factory=tuple)
 
@@ -142,6 +144,8 @@ def run_tasks(
                 for fut in cf.as_completed(futures):
                     results[futures[fut]] = fut.result()
                     bar.update()
+            except cf.process.BrokenProcessPool as err:
+                raise NaolocError(f"{label}: a worker process died ({err})") from None
             except BaseException:
                 for fut in futures:
                     fut.cancel()
@@ -210,6 +214,7 @@ def map_task(task: MapTask) -> dict[str, Any]:
     data = read_dataset(task.dataset_path)
     cfg = MapConfig.model_validate(task.map_config)
     vmap = build_map(data.keyframes, cfg, meta=dict(data.meta))
+    Path(task.map_path).parent.mkdir(parents=True, exist_ok=True)
     vmap.save(task.map_path)
     return {
         "name": task.name,
@@ -234,15 +239,16 @@ def localize_chunk(chunk: LocalizeChunk) -> list[dict[str, Any]]:
     from naoloc.registry import connect
 
     cfg = _config(chunk.config)
-    maps = {s.map_path: load_map(s.map_path) for s in chunk.scorers}
     records: list[dict[str, Any]] = []
     with connect(cfg) as robot:
         sim = _require_sim(robot)
         for method, args in chunk.world_changes:
             change = getattr(sim, method, None)
-            if change is None:
-                raise NotBuiltError(f"the {robot.backend} simulator has no {method}() yet")
+            if change is None:  # reported as skipped, not silently measured without the change
+                reason = f"the {robot.backend} simulator has no {method}()"
+                return [{"variant": s.variant, "skipped": reason} for s in chunk.scorers]
             change(*args)
+        maps = {s.map_path: load_map(s.map_path) for s in chunk.scorers}
         for pose in chunk.poses:
             taken: dict[str, tuple[list[Any], Pose2D]] = {}
             done: dict[tuple[str, str, str], tuple[Any, float]] = {}
@@ -265,7 +271,7 @@ def localize_chunk(chunk: LocalizeChunk) -> list[dict[str, Any]]:
 
 
 def _record(
-    scorer: Scorer, pose: TestPose, truth: Pose2D, est: Any, ms: float, queries: int
+    scorer: Scorer, pose: EvalPose, truth: Pose2D, est: Any, ms: float, queries: int
 ) -> dict[str, Any]:
     ex, ey, et = float(est.x), float(est.y), float(est.theta)
     err = math.hypot(ex - truth.x, ey - truth.y)
@@ -285,17 +291,18 @@ def _record(
         "error_m": err if math.isfinite(err) else float("nan"),
         "heading_error_deg": math.degrees(head),
         "localize_ms": ms,
-        "details": _jsonable(details),
+        "details": jsonable(details),
     }
 
 
-def _jsonable(value: Any) -> Any:
+def jsonable(value: Any) -> Any:
+    """``value`` with numpy types as Python ones and NaN/inf as None (strict JSON)."""
     if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
+        return {str(k): jsonable(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
-        return [_jsonable(v) for v in value]
+        return [jsonable(v) for v in value]
     if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
+        return jsonable(value.tolist())
     if isinstance(value, np.generic):
         return value.item()
     if isinstance(value, float) and not math.isfinite(value):
