@@ -72,7 +72,7 @@ def serve_cached(transport: str, backend_cfg: dict[str, Any]) -> None:
                 cache[handle] = real(handle)
             return cache[handle]
 
-        robot.video.getImageRemote = cached  # type: ignore[method-assign]
+        robot.video.getImageRemote = cached  # type: ignore[method-assign,assignment]
         with VirtualNaoqi(robot, "tcp://127.0.0.1:0", transport) as server:  # type: ignore[arg-type]
             print(f"naoloc serve: listening on {server.endpoint} ({transport})", flush=True)
             sys.stdin.read()  # until the parent closes our stdin
