@@ -131,6 +131,7 @@ def triangulate(
     cams: np.ndarray,
     intrinsics: Sequence[np.ndarray],
     binary: bool,
+    pairs: Sequence[tuple[int, int]] | None = None,
 ) -> LandmarkSet:
     """Triangulate landmarks from features matched between nearby keyframes.
 
@@ -144,6 +145,7 @@ def triangulate(
         cams: ``(N, 4, 4)`` ``T_map_cam`` of every keyframe.
         intrinsics: Per keyframe 3x3 K.
         binary: Hamming (True) or L2 matching.
+        pairs: Keyframe pairs to match; default: :func:`select_pairs` of the cameras.
 
     Returns:
         The landmarks, one row per keypoint of every keyframe.
@@ -154,7 +156,7 @@ def triangulate(
     sums = np.zeros((int(offsets[-1]), 3))
     counts = np.zeros(int(offsets[-1]))
     matcher = hamming_matcher(binary)
-    pairs = select_pairs(cams)
+    pairs = select_pairs(cams) if pairs is None else list(pairs)
     projs = [_projection(intrinsics[i], cams[i]) for i in range(cams.shape[0])]
     for i, j in pairs:
         m = ratio_matches(matcher, desc[i], desc[j])

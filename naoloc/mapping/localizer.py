@@ -314,11 +314,11 @@ def _fallback(
         cam_k = vmap.keyframe_camera(c)
         bear_q = np.arctan((cam_q.width / 2.0 - a[inl, 0]) / cam_q.fx)
         bear_k = np.arctan((cam_k.width / 2.0 - b[inl, 0]) / cam_k.fx)
-        yaw_k = vmap.keyframe_poses[c, 2] + vmap.keyframe_heads[c, 0]
+        yaw_k = vmap.refined_poses[c, 2] + vmap.keyframe_heads[c, 0]
         yaw_q = yaw_k + float(np.median(bear_k - bear_q))
         theta_q = yaw_q - q.head_yaw
         # The query camera is taken to be where the keyframe's camera was.
-        t_map_cam_k = robot_matrix(*vmap.keyframe_poses[c]) @ camera_in_robot(
+        t_map_cam_k = robot_matrix(*vmap.refined_poses[c]) @ camera_in_robot(
             float(vmap.keyframe_heads[c, 0]), float(vmap.keyframe_heads[c, 1]), cam_k.index
         )
         off = camera_in_robot(q.head_yaw, q.head_pitch, cam_q.index)[:2, 3]

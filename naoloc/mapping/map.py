@@ -23,6 +23,7 @@ from naoloc.mapping.features import FeatureExtractor, Features
 from naoloc.mapping.gcs import GCSNetwork, train_gcs
 from naoloc.mapping.landmarks import camera_matrix_in_map, triangulate
 from naoloc.mapping.localizer import Estimate, localize_paper, localize_verified, query_camera
+from naoloc.mapping.posegraph import refine_poses
 from naoloc.mapping.vocabulary import Vocabulary, train_vocabulary
 
 ProgressFn = Callable[[str, int, int], None]
@@ -44,6 +45,8 @@ class VisualMap:
         neuron_views: ``(K,)`` mean camera heading (rad, map frame) of those keyframes; NaN
             when none.
         keyframe_poses: ``(N, 3)`` odometry poses of the keyframes (map frame).
+        refined_poses: ``(N, 3)`` keyframe poses after the visual loop-closure refinement
+            (naoloc.mapping.posegraph); landmarks and the verified mode use these.
         keyframe_heads: ``(N, 2)`` HeadYaw, HeadPitch (rad) of the keyframes.
         keyframe_cameras: ``(N, 5)`` width, height (px), hfov, vfov (rad), camera index.
         histograms: ``(N, V)`` L2-normalised TF-IDF histograms of the keyframes.
@@ -64,6 +67,7 @@ class VisualMap:
     neuron_poses: np.ndarray
     neuron_views: np.ndarray
     keyframe_poses: np.ndarray
+    refined_poses: np.ndarray
     keyframe_heads: np.ndarray
     keyframe_cameras: np.ndarray
     histograms: np.ndarray
@@ -209,19 +213,19 @@ def build_map(
     )
     winners = gcs.winners(hists)
     neuron_poses, neuron_views = _neuron_poses(winners, poses, poses[:, 2] + heads[:, 0], gcs.size)
+    xys, descs = [f.xy for f in feats], [f.descriptors for f in feats]
+    kmats = [c.matrix() for c in cams_info]
+    refined = refine_poses(
+        poses, heads, xys, descs, kmats, [c.index for c in cams_info], hists, extractor.binary
+    )
+    report("poses", 1, 1)
     cams = np.stack(
         [
-            camera_matrix_in_map(poses[i], heads[i, 0], heads[i, 1], c.index)
+            camera_matrix_in_map(refined.poses[i], heads[i, 0], heads[i, 1], c.index)
             for i, c in enumerate(cams_info)
         ]
     )
-    lm = triangulate(
-        [f.xy for f in feats],
-        [f.descriptors for f in feats],
-        cams,
-        [c.matrix() for c in cams_info],
-        extractor.binary,
-    )
+    lm = triangulate(xys, descs, cams, kmats, extractor.binary)
     report("landmarks", 1, 1)
     t4 = time.perf_counter()
     offsets = np.concatenate([[0], np.cumsum([len(f) for f in feats])]).astype(np.int64)
@@ -234,13 +238,14 @@ def build_map(
     }
     return VisualMap(
         config=cfg,
-        meta=dict(meta or {}),
+        meta={**dict(meta or {}), "loop_closures": refined.loops},
         feature_params=extractor.params(),
         vocabulary=vocab,
         gcs=gcs,
         neuron_poses=neuron_poses,
         neuron_views=neuron_views,
         keyframe_poses=poses,
+        refined_poses=refined.poses,
         keyframe_heads=heads,
         keyframe_cameras=cameras,
         histograms=hists,

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 # Descriptors drawn from the training images to cluster (the rest are only assigned).
-MAX_TRAIN_DESCRIPTORS = 20000
+MAX_TRAIN_DESCRIPTORS = 10000
 KMEANS_ITERATIONS = 10
 
 
