@@ -2,11 +2,12 @@
 
 Usage::
 
-    .venv/bin/python tools/fake_snapshot.py [-c CONFIG] [--seed N] [-o fake_snapshot.png]
+    .venv/bin/python tools/fake_snapshot.py [-c CONFIG] [--seed N] [-o fake_snapshot.png] [--bench]
 
 Frames (QVGA, top camera unless noted), room frame poses: the four walls seen from the
 room centre, a wall seen from 1 m, a corner, the view from the start pose, and the bottom
-camera. Each tile is labelled with its pose. Prints the A-KAZE keypoint count per frame.
+camera. Each tile is labelled with its pose. Prints the A-KAZE keypoint count per frame;
+``--bench`` also prints the median wall time of getImageRemote per resolution.
 """
 
 from __future__ import annotations
@@ -14,13 +15,22 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import time
 from pathlib import Path
 
 import cv2
 import numpy as np
 
 import naoloc
-from naoloc.constants import kBottomCamera, kQVGA, kRGBColorSpace, kTopCamera
+from naoloc.constants import (
+    RESOLUTION_NAMES,
+    kBottomCamera,
+    kQQVGA,
+    kQVGA,
+    kRGBColorSpace,
+    kTopCamera,
+    kVGA,
+)
 from naoloc.image import frame_from_naoqi
 
 
@@ -30,6 +40,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("-c", "--config", help="YAML config (robot.backend is forced to fake)")
     parser.add_argument("--seed", type=int, default=None, help="world.room.seed override")
     parser.add_argument("-o", "--output", default="fake_snapshot.png", help="PNG to write")
+    parser.add_argument("--bench", action="store_true", help="time frames per resolution")
     args = parser.parse_args(argv)
     cfg = naoloc.load_config(args.config)
     overrides: dict = {"robot": {"backend": "fake"}}
@@ -66,6 +77,8 @@ def main(argv: list[str] | None = None) -> int:
             cv2.putText(tile, text, (4, 14), cv2.FONT_HERSHEY_PLAIN, 0.9, (0, 0, 0), 3)
             cv2.putText(tile, text, (4, 14), cv2.FONT_HERSHEY_PLAIN, 0.9, (255, 255, 255), 1)
             tiles.append(tile)
+        if args.bench:
+            _bench(robot, sx, sy)
     rows = [np.hstack(tiles[i : i + 4]) for i in range(0, len(tiles), 4)]
     sheet = np.vstack(rows)
     out = Path(args.output)
@@ -74,6 +87,22 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     print(f"wrote {out} ({sheet.shape[1]}x{sheet.shape[0]})")
     return 0
+
+
+def _bench(robot: naoloc.Robot, sx: float, sy: float, frames: int = 30) -> None:
+    """Print the median wall time of one getImageRemote per resolution."""
+    assert robot.sim is not None
+    for resolution in (kQQVGA, kQVGA, kVGA):
+        handle = robot.video.subscribeCamera("bench", kTopCamera, resolution, kRGBColorSpace, 30)
+        times = []
+        for k in range(frames):
+            robot.sim.teleport(1.0 + (sx - 2.0) * k / frames, sy / 2, 0.7 * k)
+            t0 = time.perf_counter()
+            robot.video.getImageRemote(handle)
+            times.append(time.perf_counter() - t0)
+        robot.video.unsubscribe(handle)
+        name = RESOLUTION_NAMES[resolution]
+        print(f"getImageRemote {name}: {1e3 * float(np.median(times)):.1f} ms median")
 
 
 if __name__ == "__main__":

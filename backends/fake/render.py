@@ -33,13 +33,18 @@ class RoomRenderer:
         self._size = (float(size[0]), float(size[1]))
         self._height = float(wall_height)
         regions = atlas.regions
-        self._x0 = np.array([r.x0 for r in regions], np.float64)
-        self._y0 = np.array([r.y0 for r in regions], np.float64)
-        self._w = np.array([r.width for r in regions], np.float64)
-        self._h = np.array([r.height for r in regions], np.float64)
-        self._ppm = np.array([r.ppm for r in regions], np.float64)
+        self._x0 = np.array([r.x0 for r in regions], np.float32)
+        self._y0 = np.array([r.y0 for r in regions], np.float32)
+        self._w = np.array([r.width for r in regions], np.float32)
+        self._h = np.array([r.height for r in regions], np.float32)
+        self._ppm = np.array([r.ppm for r in regions], np.float32)
+        sx, sy = self._size
+        # u = ua * x + ub * y + uc per surface (south, east, north, west, floor, ceiling).
+        self._ua = np.array([-1, 0, 1, 0, 1, 1], np.float32)
+        self._ub = np.array([0, -1, 0, 1, 0, 0], np.float32)
+        self._uc = np.array([sx, sy, 0, 0, 0, 0], np.float32)
         self._rays: dict[tuple[int, int, float, float], tuple[np.ndarray, np.ndarray]] = {}
-        # ray directions (optical frame, z = 1) and their norms, per image size and FOV
+        # (3, N) ray directions (optical frame, z = 1) and their norms, per image size and FOV
 
     def _camera_rays(
         self, width: int, height: int, hfov: float, vfov: float
@@ -51,8 +56,8 @@ class RoomRenderer:
             u = (np.arange(width) + 0.5 - width / 2.0) / fx
             v = (np.arange(height) + 0.5 - height / 2.0) / fy
             uu, vv = np.meshgrid(u, v)
-            dirs = np.stack([uu.ravel(), vv.ravel(), np.ones(uu.size)], axis=1)
-            self._rays[key] = (dirs, np.linalg.norm(dirs, axis=1))
+            dirs = np.stack([uu.ravel(), vv.ravel(), np.ones(uu.size)]).astype(np.float32)
+            self._rays[key] = (dirs, np.linalg.norm(dirs, axis=0))
         return self._rays[key]
 
     def render(
@@ -71,57 +76,58 @@ class RoomRenderer:
         Returns:
             ``(height, width, 3)`` uint8 RGB image.
         """
-        dirs_cam, dnorm = self._camera_rays(width, height, hfov, vfov)
+        dirs, dnorm = self._camera_rays(width, height, hfov, vfov)
         focal = 0.5 * ((width / 2.0) / math.tan(hfov / 2.0) + (height / 2.0) / math.tan(vfov / 2.0))
-        rot = cam_in_room[:3, :3]
-        origin = cam_in_room[:3, 3]
         sx, sy = self._size
         sz = self._height
-        ox = min(max(origin[0], 1e-6), sx - 1e-6)
-        oy = min(max(origin[1], 1e-6), sy - 1e-6)
-        oz = min(max(origin[2], 1e-6), sz - 1e-6)
-        d = dirs_cam @ rot.T
-        dx, dy, dz = d[:, 0], d[:, 1], d[:, 2]
+        origin = cam_in_room[:3, 3]
+        ox = min(max(float(origin[0]), 1e-4), sx - 1e-4)
+        oy = min(max(float(origin[1]), 1e-4), sy - 1e-4)
+        oz = min(max(float(origin[2]), 1e-4), sz - 1e-4)
+        dx, dy, dz = cam_in_room[:3, :3].astype(np.float32) @ dirs  # room-frame directions
         with np.errstate(divide="ignore", invalid="ignore"):
-            tx = np.where(dx > 0, (sx - ox) / dx, np.where(dx < 0, -ox / dx, np.inf))
-            ty = np.where(dy > 0, (sy - oy) / dy, np.where(dy < 0, -oy / dy, np.inf))
-            tz = np.where(dz > 0, (sz - oz) / dz, np.where(dz < 0, -oz / dz, np.inf))
-        ts = np.stack([tx, ty, tz])
-        axis = np.argmin(ts, axis=0)
-        t = np.take_along_axis(ts, axis[None], axis=0)[0]
-        px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
+            # Distance (in ray units) to the wall each ray points at, per axis (+inf if parallel).
+            tx = np.where(dx > 0, np.float32(sx - ox), np.float32(-ox)) / dx
+            ty = np.where(dy > 0, np.float32(sy - oy), np.float32(-oy)) / dy
+            tz = np.where(dz > 0, np.float32(sz - oz), np.float32(-oz)) / dz
+        tx[~np.isfinite(tx) | (tx < 0)] = np.inf
+        ty[~np.isfinite(ty) | (ty < 0)] = np.inf
+        tz[~np.isfinite(tz) | (tz < 0)] = np.inf
+        t = np.minimum(np.minimum(tx, ty), tz)
+        hit_x = tx <= t
+        hit_y = ~hit_x & (ty <= t)
+        hit_wall = hit_x | hit_y
         surf = np.where(
-            axis == 0,
+            hit_x,
             np.where(dx > 0, 1, 3),
-            np.where(axis == 1, np.where(dy > 0, 2, 0), np.where(dz > 0, 5, 4)),
-        )
-        # Texture coordinates in metres: u to the right seen from inside, v down from the top.
-        down = sz - pz
-        u = np.select([surf == 0, surf == 1, surf == 2, surf == 3], [sx - px, sy - py, px, py], px)
-        v = np.where(surf <= 3, down, py)
+            np.where(hit_y, np.where(dy > 0, 2, 0), np.where(dz > 0, 5, 4)),
+        ).astype(np.intp)
+        px, py = ox + t * dx, oy + t * dy
+        # Texture coordinates (metres): u to the right seen from inside, v down from the top;
+        # u = A px + B py + C per surface, v = sz - pz on walls and py on floor and ceiling.
+        u = self._ua[surf] * px + self._ub[surf] * py + self._uc[surf]
+        v = np.where(hit_wall, sz - (oz + t * dz), py)
         ppm = self._ppm[surf]
         tu = np.clip(u * ppm - 0.5, 0, self._w[surf] - 1) + self._x0[surf]
         tv = np.clip(v * ppm - 0.5, 0, self._h[surf] - 1) + self._y0[surf]
-        # Footprint of a pixel on the surface, in texels: distance * angle / cos(incidence).
-        comp = np.choose(axis, [np.abs(dx), np.abs(dy), np.abs(dz)])
+        # Pixel footprint on the surface in texels: distance / focal / cos(incidence), the mip
+        # level is its log2 (trilinear: weight 1 - |level - l| for level l).
+        comp = np.abs(np.where(hit_x, dx, np.where(hit_y, dy, dz)))
         cos_inc = np.maximum(comp / dnorm, 0.2)
-        texels = t * dnorm / focal * ppm / cos_inc
+        texels = t * dnorm * ppm / (focal * cos_inc)
         level = np.clip(np.log2(np.maximum(texels, 1e-6)), 0, MIP_LEVELS - 1)
-        lo = np.floor(level).astype(np.int64)
-        frac = (level - lo).astype(np.float32)
         out = np.zeros((height * width, 3), np.float32)
-        for lvl in range(int(lo.min()), min(int(lo.max()) + 2, MIP_LEVELS)):
-            weight = np.where(lo == lvl, 1.0 - frac, 0.0) + np.where(lo + 1 == lvl, frac, 0.0)
+        for lvl in range(int(level.min()), min(int(np.ceil(level.max())) + 1, MIP_LEVELS)):
+            weight = np.maximum(1.0 - np.abs(level - lvl), 0.0)
             if not np.any(weight > 0):
                 continue
-            scale = 2.0**lvl
-            mx = ((tu + 0.5) / scale - 0.5).astype(np.float32).reshape(height, width)
-            my = ((tv + 0.5) / scale - 0.5).astype(np.float32).reshape(height, width)
+            scale = np.float32(2.0**lvl)
+            mx = ((tu + 0.5) / scale - 0.5).reshape(height, width)
+            my = ((tv + 0.5) / scale - 0.5).reshape(height, width)
             img = cv2.remap(
                 self._atlas.levels[lvl], mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
             )
-            out += img.reshape(-1, 3).astype(np.float32) * weight[:, None].astype(np.float32)
-        out *= _SHADE[surf][:, None]
+            out += img.reshape(-1, 3) * (weight * _SHADE[surf])[:, None]
         return out.reshape(height, width, 3).clip(0, 255).astype(np.uint8)
 
 
