@@ -35,8 +35,8 @@ CAMERA_LEVELS: dict[str, dict[str, Any]] = {
 
 #: World changes after mapping: name -> (SimControl method, args, description).
 POSTER_CHANGES: dict[str, tuple[str, tuple[Any, ...], str]] = {
-    "poster-moved": ("move_poster", (0, 1.0), "poster 0 slid 1 m along its wall"),
-    "poster-removed": ("remove_poster", (0,), "poster 0 taken off its wall"),
+    "poster-moved": ("move_poster", ("y0", 1.0), "middle poster of wall 1 slid 1 m along it"),
+    "poster-removed": ("remove_poster", ("y0",), "middle poster of wall 1 taken off"),
 }
 
 STUDIES = ("main", "compare", "robustness")

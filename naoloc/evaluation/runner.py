@@ -28,7 +28,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from naoloc.errors import NaolocError
+from naoloc.errors import NaolocError, RobotError
 from naoloc.evaluation.protocols import EvalPose, room_to_map
 from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.progress import Progress
@@ -100,7 +100,8 @@ class LocalizeChunk:
         poses: The test poses (room frame).
         scorers: The first runs the localize behaviour; the rest re-score its queries.
         world_changes: ``(SimControl method, args)`` applied once after the robot is created,
-            e.g. ``("remove_poster", (0,))``.
+            e.g. ``("remove_poster", ("y0",))``; a wall id as a poster method's first
+            argument stands for the middle poster on that wall.
     """
 
     config: dict[str, Any]
@@ -247,7 +248,7 @@ def localize_chunk(chunk: LocalizeChunk) -> list[dict[str, Any]]:
             if change is None:  # reported as skipped, not silently measured without the change
                 reason = f"the {robot.backend} simulator has no {method}()"
                 return [{"variant": s.variant, "skipped": reason} for s in chunk.scorers]
-            change(*args)
+            change(*_resolve_posters(sim, method, args))
         maps = {s.map_path: load_map(s.map_path) for s in chunk.scorers}
         for pose in chunk.poses:
             taken: dict[str, tuple[list[Any], Pose2D]] = {}
@@ -257,7 +258,11 @@ def localize_chunk(chunk: LocalizeChunk) -> list[dict[str, Any]]:
                 if key in done:
                     est, ms = done[key]
                 elif scorer.strategy not in taken:
-                    sim.teleport(*pose.room_pose)
+                    try:
+                        sim.teleport(*pose.room_pose)
+                    except RobotError as err:  # furniture there: not the localizer's fault
+                        records.append({"variant": scorer.variant, "skipped": str(err)})
+                        break
                     est, queries, ms = _localize(robot, maps[scorer.map_path], cfg, scorer)
                     taken[scorer.strategy] = (queries, _truth(chunk, sim, queries))
                 else:
@@ -308,6 +313,20 @@ def jsonable(value: Any) -> Any:
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
+
+
+def _resolve_posters(sim: Any, method: str, args: tuple[Any, ...]) -> tuple[Any, ...]:
+    """For poster changes, turn a wall id ("x0", "x1", "y0", "y1") into its middle poster.
+
+    Raises:
+        RobotError: The wall has no poster.
+    """
+    if not method.endswith("_poster") or not args or args[0] not in ("x0", "x1", "y0", "y1"):
+        return args
+    names = sorted(n for n in sim.poster_names() if n.startswith(f"poster_{args[0]}_"))
+    if not names:
+        raise RobotError(f"wall {args[0]} has no poster to change")
+    return (names[len(names) // 2], *args[1:])
 
 
 def _config(data: dict[str, Any]) -> Any:
