@@ -190,3 +190,24 @@ def test_curve_keys_admit_only_clients_that_hold_them(fake_robot: Robot, tmp_pat
         plain = {"robot": {"backend": "naoqi", "url": url, "transport": "zmq"}}
         with pytest.raises(ConnectionLost, match="no virtual NAOqi"):
             naoloc.connect(plain)
+
+
+@pytest.mark.sim
+def test_mujoco_robot_served_over_zmq_walks_and_sees() -> None:
+    pytest.importorskip("mujoco")
+    cfg = {"robot": {"backend": "mujoco"}, "world": {"room": {"size_m": [4.0, 4.0], "seed": 3}}}
+    with (
+        served(cfg, "zmq") as server,
+        naoloc.connect(server.client_config(sim_service=True)) as robot,
+    ):
+        robot.motion.wakeUp()
+        assert robot.posture.goToPosture("StandInit", 0.5) is True
+        start = robot.sim.true_pose()  # type: ignore[union-attr]
+        assert robot.motion.moveTo(0.3, 0.0, 0.0) is True
+        end = robot.sim.true_pose()  # type: ignore[union-attr]
+        assert abs((end[0] - start[0]) - 0.3) < 0.05
+        assert abs(robot.motion.getRobotPosition(True)[0] - 0.3) < 0.05
+        handle = robot.video.subscribeCamera("smoke", 0, 1, 11, 30)
+        frame = robot.video.getImageRemote(handle)
+        assert (frame[0], frame[1], len(frame[6])) == (320, 240, 320 * 240 * 3)
+        assert len(set(frame[6][::97])) > 10  # a rendered room, not a blank buffer
