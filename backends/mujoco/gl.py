@@ -1,0 +1,53 @@
+"""Choose the headless OpenGL platform before mujoco is imported: EGL, else OSMesa.
+
+MuJoCo and PyOpenGL read ``MUJOCO_GL`` and ``PYOPENGL_PLATFORM`` when they are first
+imported, so the choice must be made before that and cannot change afterwards in the
+same process. A value the user already set is respected.
+"""
+
+from __future__ import annotations
+
+import ctypes.util
+import os
+import sys
+
+from naoloc.errors import RenderError
+
+EGL_PACKAGES = "libegl1 libegl-mesa0 libgl1-mesa-dri"
+OSMESA_PACKAGES = "libosmesa6"
+
+
+def missing_message() -> str:
+    """The one-line fix for a machine that cannot render headless."""
+    return (
+        "headless rendering needs EGL or OSMesa: "
+        f"apt-get install {EGL_PACKAGES} (or {OSMESA_PACKAGES} with MUJOCO_GL=osmesa)"
+    )
+
+
+def select_gl() -> str:
+    """Set ``MUJOCO_GL`` (and a matching ``PYOPENGL_PLATFORM``) if unset; return the choice.
+
+    EGL is preferred when libEGL and a vendor library (Mesa or NVIDIA) are installed;
+    OSMesa is the fallback.
+
+    Raises:
+        RenderError: When neither library is installed (names the Debian packages).
+    """
+    chosen = os.environ.get("MUJOCO_GL", "").strip().lower()
+    if not chosen:
+        has_egl = ctypes.util.find_library("EGL") is not None
+        has_vendor = any(ctypes.util.find_library(v) for v in ("EGL_mesa", "EGL_nvidia"))
+        has_osmesa = ctypes.util.find_library("OSMesa") is not None
+        if has_egl and has_vendor:
+            chosen = "egl"
+        elif has_osmesa:
+            chosen = "osmesa"
+        elif has_egl:
+            chosen = "egl"
+        else:
+            raise RenderError(missing_message())
+        os.environ["MUJOCO_GL"] = chosen
+    if chosen in ("egl", "osmesa") and "OpenGL" not in sys.modules:
+        os.environ["PYOPENGL_PLATFORM"] = chosen
+    return chosen

@@ -1,0 +1,118 @@
+"""Facts about the NAO model that the backend needs besides the MJCF: postures, leg height.
+
+Joint limits and speeds live in ``model/nao.xml`` (joint ranges and ``speed/<joint>``
+custom numerics) and are read from the compiled model; see ``model/README.md`` for sources.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from types import MappingProxyType
+from typing import Final
+
+from naoloc.keyframe import TORSO_HEIGHT_STANDINIT
+
+MODEL_DIR: Final = Path(__file__).resolve().parent / "model"
+NAO_XML: Final = MODEL_DIR / "nao.xml"
+
+# Link lengths in metres (NAO H25 "Links" documentation page).
+HIP_OFFSET_Z: Final = 0.085
+THIGH_LENGTH: Final = 0.100
+TIBIA_LENGTH: Final = 0.1029
+FOOT_HEIGHT: Final = 0.04519
+
+ROBOT_RADIUS: Final = 0.15  # m, radius of the collision capsule around the body
+
+
+def torso_height(hip_pitch: float, knee_pitch: float) -> float:
+    """Height of the torso frame above the floor for a leg pose (sagittal plane, feet flat).
+
+    Args:
+        hip_pitch: HipPitch in radians (negative moves the thigh forward).
+        knee_pitch: KneePitch in radians (positive bends the knee).
+
+    Returns:
+        Height in metres.
+    """
+    return (
+        HIP_OFFSET_Z
+        + THIGH_LENGTH * math.cos(hip_pitch)
+        + TIBIA_LENGTH * math.cos(hip_pitch + knee_pitch)
+        + FOOT_HEIGHT
+    )
+
+
+def _knee_for_height(hip_pitch: float, height: float) -> float:
+    """KneePitch that puts the torso at ``height`` m with the given HipPitch (rad)."""
+    rest = (height - HIP_OFFSET_Z - FOOT_HEIGHT - THIGH_LENGTH * math.cos(hip_pitch)) / TIBIA_LENGTH
+    return math.acos(max(-1.0, min(1.0, rest))) - hip_pitch
+
+
+def _legs(hip: float, knee: float) -> dict[str, float]:
+    ankle = -(hip + knee)  # keeps the feet flat with an upright torso
+    out: dict[str, float] = {}
+    for side in "LR":
+        out.update(
+            {
+                f"{side}HipYawPitch": 0.0,
+                f"{side}HipRoll": 0.0,
+                f"{side}HipPitch": hip,
+                f"{side}KneePitch": knee,
+                f"{side}AnklePitch": max(-1.18, ankle),
+                f"{side}AnkleRoll": 0.0,
+            }
+        )
+    return out
+
+
+def _arms(
+    pitch: float, roll: float, elbow_yaw: float, elbow_roll: float, hand: float
+) -> dict[str, float]:
+    return {
+        "LShoulderPitch": pitch,
+        "LShoulderRoll": roll,
+        "LElbowYaw": elbow_yaw,
+        "LElbowRoll": -elbow_roll,
+        "LWristYaw": 0.0,
+        "LHand": hand,
+        "RShoulderPitch": pitch,
+        "RShoulderRoll": -roll,
+        "RElbowYaw": -elbow_yaw,
+        "RElbowRoll": elbow_roll,
+        "RWristYaw": 0.0,
+        "RHand": hand,
+    }
+
+
+_HEAD0 = {"HeadYaw": 0.0, "HeadPitch": 0.0}
+_STANDINIT_HIP = -0.45
+_STANDINIT_KNEE = _knee_for_height(_STANDINIT_HIP, TORSO_HEIGHT_STANDINIT)
+
+# Joint angles (rad) of NAOqi's predefined postures, approximated from the figures of the
+# ALRobotPosture documentation with the torso kept upright (the model does not tilt or lie
+# down: Sit and Lying postures only set the joints). StandInit's legs put the torso at
+# naoloc.keyframe.TORSO_HEIGHT_STANDINIT, so cameras match naoloc.keyframe.camera_in_robot.
+POSTURES: Final = MappingProxyType(
+    {
+        "StandInit": {
+            **_HEAD0,
+            **_arms(1.40, 0.30, -1.39, 1.00, 0.25),
+            **_legs(_STANDINIT_HIP, _STANDINIT_KNEE),
+        },
+        "Stand": {**_HEAD0, **_arms(1.40, 0.20, -1.39, 0.50, 0.25), **_legs(-0.20, 0.40)},
+        "StandZero": {**_HEAD0, **_arms(0.0, 0.0, 0.0, 0.0349, 0.0), **_legs(0.0, 0.0)},
+        "Crouch": {**_HEAD0, **_arms(1.50, 0.15, -1.20, 0.90, 0.0), **_legs(-0.70, 1.85)},
+        "Sit": {**_HEAD0, **_arms(0.90, 0.20, -1.20, 0.60, 0.0), **_legs(-1.40, 1.30)},
+        "SitRelax": {**_HEAD0, **_arms(1.20, 0.30, -0.80, 0.40, 0.0), **_legs(-1.20, 1.50)},
+        "LyingBack": {**_HEAD0, **_arms(1.60, 0.10, 0.0, 0.0349, 0.0), **_legs(0.0, 0.0)},
+        "LyingBelly": {**_HEAD0, **_arms(-1.20, 0.10, 0.0, 0.0349, 0.0), **_legs(0.0, 0.0)},
+    }
+)
+STANDING_POSTURES: Final = ("StandInit", "Stand", "StandZero")
+
+
+def posture_torso_height(name: str) -> float:
+    """Torso height (m) of a predefined posture, from its left-leg angles."""
+    angles = POSTURES[name]
+    return torso_height(angles["LHipPitch"], angles["LKneePitch"])

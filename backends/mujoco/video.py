@@ -1,0 +1,249 @@
+"""ALVideoDevice on the MuJoCo simulation: subscriptions, rendering, the NAOqi image array.
+
+One ``mujoco.Renderer`` per image size, created on first use and reused; frames are
+rendered into preallocated buffers. Rendering happens only in ``getImageRemote``, which
+advances simulated time by one ALMotion cycle and then renders the scene at that time
+(the timestamp in slots [4] and [5]). Optional realism (``world.camera_realism``) is
+applied to the RGB frame before the colorspace conversion: exposure gain, Gaussian blur,
+Gaussian noise, then a JPEG round trip, in that order; all off by default.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import cv2
+import numpy as np
+from naoloc.backends.mujoco.sim import CAMERA_NAMES, Simulation
+
+from naoloc.config import CameraRealismConfig
+from naoloc.constants import (
+    CAMERA_FPS,
+    COLORSPACE_LAYERS,
+    RESOLUTION_NAMES,
+    RESOLUTIONS,
+    k4VGA,
+    kBottomCamera,
+    kTopCamera,
+)
+from naoloc.errors import HandleError, RenderError, RobotError
+from naoloc.image import from_rgb
+
+# Imported by name so that type checkers never confuse it with this package's folder.
+mujoco: Any = importlib.import_module("mujoco")
+
+MAX_SIZE = RESOLUTIONS[k4VGA]  # the offscreen buffer of the room model (1280 x 960)
+HIDDEN_GROUPS = (3, 4, 5)  # head shell, collision shapes, removed posters
+RENDER_PACKAGES = "apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri (or libosmesa6)"
+
+
+@dataclass
+class Subscription:
+    """One camera subscriber."""
+
+    camera: int
+    resolution: int
+    colorspace: int
+    fps: int
+
+
+class Realism:
+    """Seeded image degradations of a simulated camera (``world.camera_realism``)."""
+
+    def __init__(self, cfg: CameraRealismConfig, sim_seed: int) -> None:
+        """Prepare the degradations a config asks for."""
+        self.cfg = cfg
+        self.rng = np.random.default_rng([sim_seed, cfg.seed, 0xCA4])
+        self.enabled = bool(
+            cfg.noise_std > 0 or cfg.blur_px > 0 or cfg.exposure != 1.0 or cfg.jpeg_quality
+        )
+
+    def apply(self, rgb: np.ndarray) -> np.ndarray:
+        """Degrade an ``(h, w, 3)`` uint8 RGB frame; returns a new array when enabled."""
+        if not self.enabled:
+            return rgb
+        c = self.cfg
+        img: np.ndarray = rgb.astype(np.float32)
+        if c.exposure != 1.0:
+            img *= c.exposure
+        if c.blur_px > 0:
+            img = cv2.GaussianBlur(img, (0, 0), c.blur_px)
+        if c.noise_std > 0:
+            img += self.rng.normal(0.0, c.noise_std, img.shape).astype(np.float32)
+        out = np.clip(img, 0, 255).astype(np.uint8)
+        if c.jpeg_quality:
+            ok, buf = cv2.imencode(
+                ".jpg", out[..., ::-1], [cv2.IMWRITE_JPEG_QUALITY, c.jpeg_quality]
+            )
+            decoded = cv2.imdecode(buf, cv2.IMREAD_COLOR) if ok else None
+            if decoded is not None:
+                out = np.ascontiguousarray(decoded[..., ::-1])
+        return out
+
+
+class MujocoVideo:
+    """ALVideoDevice: subscribe to the simulated cameras and render their images."""
+
+    def __init__(self, sim: Simulation) -> None:
+        """Serve ALVideoDevice on a simulation."""
+        self._sim = sim
+        self._subs: dict[str, Subscription] = {}
+        self._renderers: dict[tuple[int, int], Any] = {}
+        self._buffers: dict[tuple[int, int], np.ndarray] = {}
+        self._active = kTopCamera
+        self._option = mujoco.MjvOption()
+        for g in HIDDEN_GROUPS:
+            self._option.geomgroup[g] = 0
+        self._realism = Realism(sim.cfg.world.camera_realism, sim.cfg.world.sim.seed)
+
+    # ------------------------------------------------------------------ subscriptions
+    def subscribeCamera(
+        self, name: str, cameraIndex: int, resolution: int, colorSpace: int, fps: int
+    ) -> str:
+        """Subscribe to a camera; returns a handle unique among subscribers.
+
+        Raises:
+            RobotError: For an unknown camera, resolution, colorspace or frame rate.
+        """
+        if cameraIndex not in (kTopCamera, kBottomCamera):
+            raise RobotError(f"camera index {cameraIndex} does not exist (0 top, 1 bottom)")
+        if resolution not in RESOLUTIONS:
+            raise RobotError(f"unknown resolution id {resolution}; valid: {sorted(RESOLUTIONS)}")
+        w, h = RESOLUTIONS[resolution]
+        if w > MAX_SIZE[0] or h > MAX_SIZE[1]:
+            raise RobotError(
+                f"resolution {RESOLUTION_NAMES[resolution]} is not supported by the simulator "
+                "(k4VGA at most)"
+            )
+        if colorSpace not in COLORSPACE_LAYERS:
+            raise RobotError(
+                f"unknown colorspace id {colorSpace}; valid: {sorted(COLORSPACE_LAYERS)}"
+            )
+        if fps not in CAMERA_FPS:
+            raise RobotError(f"fps must be one of {list(CAMERA_FPS)}, got {fps}")
+        handle, k = str(name), 0
+        while handle in self._subs:
+            k += 1
+            handle = f"{name}_{k}"
+        self._subs[handle] = Subscription(
+            int(cameraIndex), int(resolution), int(colorSpace), int(fps)
+        )
+        self._sim.cycle()
+        return handle
+
+    def _sub(self, handle: str) -> Subscription:
+        try:
+            return self._subs[handle]
+        except KeyError:
+            raise HandleError(f"no camera subscriber named {handle!r}") from None
+
+    def unsubscribe(self, nameId: str) -> bool:
+        """Drop a subscription; True when it existed."""
+        self._sim.cycle()
+        return self._subs.pop(nameId, None) is not None
+
+    def releaseImage(self, nameId: str) -> None:
+        """Give the image buffer back (a no-op for remote images)."""
+        self._sub(nameId)
+        self._sim.cycle()
+
+    def setActiveCamera(self, cameraIndex: int) -> bool:
+        """Select the active camera; True when it exists."""
+        self._sim.cycle()
+        if cameraIndex not in (kTopCamera, kBottomCamera):
+            return False
+        self._active = int(cameraIndex)
+        return True
+
+    def getActiveCamera(self) -> int:
+        """Index of the active camera."""
+        self._sim.cycle()
+        return self._active
+
+    def getHorizontalFOV(self, cameraIndex: int) -> float:
+        """Horizontal field of view in radians."""
+        self._sim.cycle()
+        return self._sim.fov[0]
+
+    def getVerticalFOV(self, cameraIndex: int) -> float:
+        """Vertical field of view in radians."""
+        self._sim.cycle()
+        return self._sim.fov[1]
+
+    def getResolution(self, nameId: str) -> int:
+        """Resolution id of a subscription."""
+        sub = self._sub(nameId)
+        self._sim.cycle()
+        return sub.resolution
+
+    def getColorSpace(self, nameId: str) -> int:
+        """Colorspace id of a subscription."""
+        sub = self._sub(nameId)
+        self._sim.cycle()
+        return sub.colorspace
+
+    def getCameraIndex(self, nameId: str) -> int:
+        """Camera index of a subscription."""
+        sub = self._sub(nameId)
+        self._sim.cycle()
+        return sub.camera
+
+    # ------------------------------------------------------------------ images
+    def _renderer(self, width: int, height: int) -> tuple[Any, np.ndarray]:
+        key = (width, height)
+        renderer = self._renderers.get(key)
+        if renderer is None:
+            try:
+                renderer = mujoco.Renderer(self._sim.model, height, width)
+            except Exception as err:  # GL errors come as many different types
+                why = str(err).strip().splitlines()[0] if str(err).strip() else ""
+                raise RenderError(
+                    f"headless rendering failed ({type(err).__name__}: {why}); {RENDER_PACKAGES}"
+                ) from None
+            self._renderers[key] = renderer
+            self._buffers[key] = np.empty((height, width, 3), np.uint8)
+        return renderer, self._buffers[key]
+
+    def render_rgb(self, camera: int, width: int, height: int) -> np.ndarray:
+        """Render a camera now, without advancing time; ``(h, w, 3)`` uint8 RGB (reused buffer)."""
+        renderer, buf = self._renderer(width, height)
+        self._sim.prepare_render()
+        renderer.update_scene(
+            self._sim.data, camera=CAMERA_NAMES[camera], scene_option=self._option
+        )
+        renderer.render(out=buf)
+        return buf
+
+    def getImageRemote(self, nameId: str) -> list[Any]:
+        """Advance one cycle, render, and return the NAOqi image array.
+
+        Returns:
+            ``[width, height, layers, colorspace, sec, usec, bytes, camera, left, top,
+            right, bottom]`` with angles in radians from the field of view.
+        """
+        sub = self._sub(nameId)
+        self._sim.cycle()
+        width, height = RESOLUTIONS[sub.resolution]
+        rgb = self._realism.apply(self.render_rgb(sub.camera, width, height))
+        pixels = from_rgb(rgb, sub.colorspace)
+        stamp = self._sim.sim_time()
+        sec = math.floor(stamp)
+        usec = min(999_999, round((stamp - sec) * 1e6))
+        hfov, vfov = self._sim.fov
+        return [
+            width, height, int(pixels.shape[2]) if pixels.ndim == 3 else 1, sub.colorspace,
+            sec, usec, pixels.tobytes(), sub.camera,
+            hfov / 2, vfov / 2, -hfov / 2, -vfov / 2,
+        ]  # fmt: skip
+
+    def close(self) -> None:
+        """Free every renderer (GL contexts); safe to call twice."""
+        for renderer in self._renderers.values():
+            with contextlib.suppress(Exception):  # best effort at shutdown
+                renderer.close()
+        self._renderers.clear()
+        self._buffers.clear()
