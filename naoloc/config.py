@@ -97,6 +97,11 @@ class SimConfig(_Model):
     realtime: bool = Field(False, description="pace simulated time to the wall clock")
     light: float = Field(1.0, gt=0, le=4, description="scale of the room lights' intensity")
     seed: int = Field(0, ge=0, description="seed of the simulator's own randomness")
+    start_awake: bool = Field(
+        True,
+        description="start standing in StandInit with motors on (as Webots' NAO does); "
+        "false = at rest in Crouch, motors off, like a NAO just switched on",
+    )
 
 
 class WorldConfig(_Model):

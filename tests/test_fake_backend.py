@@ -126,8 +126,15 @@ def test_walls_block_walking() -> None:
         assert robot.motion.getRobotVelocity() == [0.0, 0.0, 0.0]
 
 
-def test_robot_at_rest_does_not_walk_and_joints_hold() -> None:
+def test_starts_standing_awake_by_default() -> None:
     with _robot() as robot:
+        assert robot.motion.robotIsWakeUp() is True
+        assert robot.posture.getPosture() == "StandInit"
+        assert robot.motion.moveTo(0.3, 0.0, 0.0) is True
+
+
+def test_robot_at_rest_does_not_walk_and_joints_hold() -> None:
+    with _robot(world={"sim": {"start_awake": False}}) as robot:
         assert robot.motion.robotIsWakeUp() is False
         assert robot.posture.getPosture() == "Crouch"
         assert robot.motion.moveTo(0.5, 0.0, 0.0) is False
@@ -260,7 +267,6 @@ import naoloc
 with naoloc.connect({"robot": {"backend": "fake"}}) as robot:
     handle = robot.video.subscribeCamera("acceptance", 0, 1, 11, 30)
     frame = naoloc.frame_from_naoqi(robot.video.getImageRemote(handle))
-    robot.motion.wakeUp()
     reached = robot.motion.moveTo(0.5, 0.0, 0.0)
     x, y, theta = robot.motion.getRobotPosition(False)
     truth = robot.sim.true_pose()

@@ -8,8 +8,9 @@ yet real enough that feature extraction and the survey -> map -> localize pipeli
 - ``getRobotPosition(False)`` integrates the commands, ``getRobotPosition(True)`` adds the
   seeded drift of ``world.odometry``; both read ``[0, 0, 0]`` at ``cfg.start_pose()``.
 - Frames are ray-cast in numpy from the true pose and head angles.
-- The robot starts at rest in Crouch (motors off), like a NAO that was just switched on:
-  call ``motion.wakeUp()`` (and usually ``posture.goToPosture("StandInit", 0.5)``) first.
+- The robot starts standing in StandInit with its motors on, as Webots' NAO does; with
+  ``world.sim.start_awake: false`` it starts at rest in Crouch (motors off), like a NAO that
+  was just switched on, and walks only after ``motion.wakeUp()``.
 
 Usage::
 

@@ -71,9 +71,10 @@ class FakeWorld:
         self.task: PathWalk | VelocityWalk | None = None
         self.last_move_failed = False
         self.velocity = (0.0, 0.0, 0.0)
-        self.posture = "Crouch"
-        self.stiffness = dict.fromkeys(JOINT_NAMES, 0.0)
-        self.joint_cmd = posture_angles("Crouch")
+        awake = cfg.world.sim.start_awake
+        self.posture = "StandInit" if awake else "Crouch"
+        self.stiffness = dict.fromkeys(JOINT_NAMES, 1.0 if awake else 0.0)
+        self.joint_cmd = posture_angles(self.posture)
         self.joint_actual = dict(self.joint_cmd)
         self.joint_target = dict(self.joint_cmd)
         self.joint_speed = dict.fromkeys(JOINT_NAMES, 0.0)
