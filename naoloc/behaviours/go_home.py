@@ -13,12 +13,14 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from naoloc.behaviours.camera import Camera
 from naoloc.behaviours.localize import Localization, localize, truth_in_map
 from naoloc.config import Config
 from naoloc.errors import MotionError
 from naoloc.geometry import Pose2D, relative_pose
-from naoloc.robot import Robot
+from naoloc.robot import Robot, pose_of
 
 if TYPE_CHECKING:
     from naoloc.mapping import VisualMap
@@ -83,13 +85,18 @@ def go_home(
     Returns:
         The final estimate, walks made, and the true error on a simulator.
 
+    A localization with confidence 0 (nothing recognised) is followed by a quarter turn in
+    place instead of a walk. A walk that fails (an obstacle) is retried after localizing
+    again along the survey circuit, which the robot is known to have walked.
+
     Raises:
-        MotionError: A walk failed (the robot is stopped).
+        MotionError: Turning in place failed (the robot is stopped).
     """
     tolerance = cfg.go_home.tolerance_m
     rounds: list[Localization] = []
     tries = 0
     reached = False
+    blocked = False
     with Camera(robot, cfg.camera, "naoloc_go_home") as camera:
         try:
             while True:
@@ -98,20 +105,76 @@ def go_home(
                 if on_round is not None:
                     on_round(tries, loc)
                 est = loc.estimate
-                if math.hypot(est.x, est.y) <= tolerance:
+                lost = est.confidence <= 0.0
+                if not lost and math.hypot(est.x, est.y) <= tolerance:
                     reached = True
                     break
                 if tries >= cfg.go_home.max_tries:
                     break
-                home = relative_pose(Pose2D(est.x, est.y, est.theta), Pose2D())
                 tries += 1
-                if not robot.motion.moveTo(home.x, home.y, home.theta):
-                    raise MotionError(
-                        f"moveTo({home.x:.2f}, {home.y:.2f}, {home.theta:.2f}) toward the "
-                        "map origin failed"
-                    )
+                if lost:  # nothing recognised: look elsewhere by turning in place
+                    if not robot.motion.moveTo(0.0, 0.0, math.pi / 2):
+                        raise MotionError("turning in place failed while lost")
+                    continue
+                here = Pose2D(est.x, est.y, est.theta)
+                route = route_home(vmap, here) if blocked else straight_home(here)
+                blocked = not _follow(robot, here, route)
         finally:
             robot.motion.stopMove()
     truth = truth_in_map(robot, vmap.meta)
     error = None if truth is None else math.hypot(truth.x, truth.y)
     return GoHomeResult(rounds[-1], tries, reached, rounds, truth, error)
+
+
+def straight_home(here: Pose2D, leg_m: float = 0.75) -> list[Pose2D]:
+    """Waypoints (map frame) on the straight line from ``here`` to the origin, ``leg_m`` apart.
+
+    Short legs re-planned from odometry keep the walk's own errors from adding up.
+    """
+    distance = math.hypot(here.x, here.y)
+    legs = max(1, math.ceil(distance / leg_m))
+    return [Pose2D(here.x * (1 - k / legs), here.y * (1 - k / legs)) for k in range(1, legs + 1)]
+
+
+def route_home(vmap: VisualMap, here: Pose2D, spacing: int = 5) -> list[Pose2D]:
+    """Waypoints (map frame) to the origin along the survey circuit's first lap.
+
+    Args:
+        vmap: The map; ``keyframe_poses`` and ``meta["frames_per_lap"]`` give the circuit.
+        here: The robot's estimated pose, map frame.
+        spacing: Keep every ``spacing``-th survey pose as a waypoint.
+
+    Returns:
+        From the circuit pose nearest ``here``, the shorter way round to the origin, which
+        ends the list.
+    """
+    poses = np.asarray(vmap.keyframe_poses, dtype=float)[:, :2]
+    per_lap = int(vmap.meta.get("frames_per_lap") or len(poses))
+    ring = poses[: max(1, min(per_lap, len(poses)))]
+    i = int(np.argmin(np.hypot(ring[:, 0] - here.x, ring[:, 1] - here.y)))
+    forward = ring[i:]
+    backward = ring[i::-1]
+
+    def length(path: np.ndarray) -> float:
+        return float(np.sum(np.hypot(*np.diff(np.vstack([path, [0.0, 0.0]]), axis=0).T)))
+
+    path = forward if length(forward) <= length(backward) else backward
+    kept = path[::spacing]
+    return [Pose2D(float(x), float(y)) for x, y in kept] + [Pose2D()]
+
+
+def _follow(robot: Robot, start: Pose2D, route: list[Pose2D]) -> bool:
+    """Walk through map-frame waypoints by odometry from ``start``; False if a move failed.
+
+    Each waypoint is approached facing it; the last one (the origin) ends facing map +x.
+    """
+    odo0 = pose_of(robot.motion, True)
+    for k, point in enumerate(route):
+        here = start * relative_pose(odo0, pose_of(robot.motion, True))
+        last = k == len(route) - 1
+        heading = 0.0 if last else math.atan2(point.y - here.y, point.x - here.x)
+        move = relative_pose(here, Pose2D(point.x, point.y, heading))
+        if not robot.motion.moveTo(move.x, move.y, move.theta):
+            robot.motion.stopMove()
+            return False
+    return True
