@@ -2,19 +2,22 @@
 
 from __future__ import annotations
 
+import importlib
+import importlib.util
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
-pytest.importorskip("mujoco")
+if importlib.util.find_spec("mujoco") is None:
+    pytest.skip("mujoco is not installed", allow_module_level=True)
 
 from naoloc.backends.mujoco import gl
 
-gl.select_gl()
+gl.select_gl()  # before mujoco is imported: it reads MUJOCO_GL once
 
-import mujoco  # noqa: E402
 from naoloc.backends.mujoco.nao import MODEL_DIR, posture_torso_height  # noqa: E402
 from naoloc.backends.mujoco.room import build_layout, survey_circuit  # noqa: E402
 from naoloc.backends.mujoco.sim import Simulation  # noqa: E402
@@ -28,6 +31,7 @@ from naoloc.constants import (  # noqa: E402
 )
 from naoloc.keyframe import TORSO_HEIGHT_STANDINIT, camera_in_robot  # noqa: E402
 
+mujoco: Any = importlib.import_module("mujoco")
 pytestmark = pytest.mark.sim
 
 

@@ -25,14 +25,19 @@ def missing_message() -> str:
     )
 
 
-def select_gl() -> str:
+def select_gl(strict: bool = True) -> str:
     """Set ``MUJOCO_GL`` (and a matching ``PYOPENGL_PLATFORM``) if unset; return the choice.
 
     EGL is preferred when libEGL and a vendor library (Mesa or NVIDIA) are installed;
-    OSMesa is the fallback.
+    OSMesa is the fallback. The backend's modules call this (not strict) before they
+    import mujoco, which reads the variable once, at import.
+
+    Args:
+        strict: Raise when neither library is installed; otherwise leave the variable unset
+            and return "".
 
     Raises:
-        RenderError: When neither library is installed (names the Debian packages).
+        RenderError: When strict and neither library is installed (names the Debian packages).
     """
     chosen = os.environ.get("MUJOCO_GL", "").strip().lower()
     if not chosen:
@@ -45,8 +50,10 @@ def select_gl() -> str:
             chosen = "osmesa"
         elif has_egl:
             chosen = "egl"
-        else:
+        elif strict:
             raise RenderError(missing_message())
+        else:
+            return ""
         os.environ["MUJOCO_GL"] = chosen
     if chosen in ("egl", "osmesa") and "OpenGL" not in sys.modules:
         os.environ["PYOPENGL_PLATFORM"] = chosen

@@ -21,6 +21,7 @@ import time
 from typing import Any
 
 import numpy as np
+from naoloc.backends.mujoco.gl import select_gl
 from naoloc.backends.mujoco.nao import (
     NAO_XML,
     POSTURES,
@@ -37,7 +38,9 @@ from naoloc.errors import BackendError, RobotError
 from naoloc.geometry import Pose2D, modulo2PI, pose2DInverse
 from naoloc.keyframe import TORSO_HEIGHT_STANDINIT
 
-# Imported by name so that type checkers never confuse it with this package's folder.
+# mujoco reads MUJOCO_GL when first imported: choose the headless platform first. Imported
+# by name so that type checkers never confuse it with this package's folder.
+select_gl(strict=False)
 mujoco: Any = importlib.import_module("mujoco")
 
 CAMERA_NAMES = ("CameraTop", "CameraBottom")

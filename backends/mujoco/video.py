@@ -18,6 +18,7 @@ from typing import Any
 
 import cv2
 import numpy as np
+from naoloc.backends.mujoco.gl import select_gl
 from naoloc.backends.mujoco.sim import CAMERA_NAMES, Simulation
 
 from naoloc.config import CameraRealismConfig
@@ -33,12 +34,17 @@ from naoloc.constants import (
 from naoloc.errors import HandleError, RenderError, RobotError
 from naoloc.image import from_rgb
 
-# Imported by name so that type checkers never confuse it with this package's folder.
+# mujoco reads MUJOCO_GL when first imported: choose the headless platform first. Imported
+# by name so that type checkers never confuse it with this package's folder.
+select_gl(strict=False)
 mujoco: Any = importlib.import_module("mujoco")
 
 MAX_SIZE = RESOLUTIONS[k4VGA]  # the offscreen buffer of the room model (1280 x 960)
 HIDDEN_GROUPS = (3, 4, 5)  # head shell, collision shapes, removed posters
-RENDER_PACKAGES = "apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri (or libosmesa6)"
+RENDER_PACKAGES = (
+    "apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri (or libosmesa6), and set "
+    "MUJOCO_GL=egl (or osmesa) before mujoco is first imported"
+)
 
 
 @dataclass
