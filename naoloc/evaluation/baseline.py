@@ -3,8 +3,9 @@
 Exactly the paper's Algorithm 5 with the network taken out: each query's histogram (same
 features, same vocabulary, same distance as the GCS winner search) is matched to the
 nearest *training image* histogram instead of the nearest neuron, and the estimate is
-the mean pose of those images. Built only from the map's public data
-(``vocabulary``, ``histograms``, ``keyframe_poses``, ``keyframe_heads``, ``extract``).
+the mean pose of those images. Training images without keypoints are left out. Built
+only from the map's public data (``vocabulary``, ``histograms``, ``keyframe_poses``,
+``keyframe_heads``, ``kp_offsets``, ``extract``).
 """
 
 from __future__ import annotations
@@ -40,6 +41,12 @@ def nearest_neighbour(vmap: Any, queries: Sequence[Keyframe]) -> Any:
         return Estimate(cx, cy, 0.0, 0.0, "nearest", {"method": "none", "reason": "no features"})
     hists = np.asarray(vmap.histograms, dtype=np.float64)
     heads = np.asarray(vmap.keyframe_heads, dtype=np.float64)
+    # Training images without a keypoint have no histogram to compare: leave them out (an
+    # empty histogram would be the nearest one to every unusual query).
+    has_kp = np.diff(np.asarray(vmap.kp_offsets)) > 0
+    if not has_kp.any():
+        has_kp[:] = True
+    hists = np.where(has_kp[:, None], hists, np.inf)
     last = queries[-1].pose
     xs, ys, sin_sum, cos_sum, closeness, images = [], [], 0.0, 0.0, [], []
     for i in usable:
