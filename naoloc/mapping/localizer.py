@@ -183,7 +183,7 @@ def localize_verified(
     vmap: VisualMap,
     feats: Sequence[Features],
     queries: Sequence[Keyframe],
-    top_k: int = 6,
+    top_k: int = 5,
 ) -> Estimate:
     """Retrieval + landmark matching + PnP + joint 3-DoF refinement (see module doc)."""
     import cv2
@@ -232,10 +232,10 @@ def localize_verified(
                 img,
                 kmat,
                 None,
-                iterationsCount=200,
+                iterationsCount=100,
                 reprojectionError=PNP_REPROJECTION_PX,
-                confidence=0.999,
-                flags=cv2.SOLVEPNP_SQPNP,
+                confidence=0.99,
+                flags=cv2.SOLVEPNP_AP3P,
             )
         except cv2.error:
             ok = False

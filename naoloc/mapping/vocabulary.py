@@ -47,6 +47,11 @@ class Vocabulary:
     idf: np.ndarray
     binary: bool
 
+    def __post_init__(self) -> None:
+        c = np.ascontiguousarray(self.centres, dtype=np.float32)
+        object.__setattr__(self, "_centres_t", np.ascontiguousarray(c.T))
+        object.__setattr__(self, "_centres_sq", np.einsum("ij,ij->i", c, c))
+
     @property
     def size(self) -> int:
         """Number of words."""
@@ -57,9 +62,10 @@ class Vocabulary:
         if desc.shape[0] == 0:
             return np.zeros(0, np.int64)
         x = descriptor_vectors(desc, self.binary)
-        c_sq = np.einsum("ij,ij->i", self.centres, self.centres)
+        c_sq: np.ndarray = self._centres_sq  # type: ignore[attr-defined]
+        c_t: np.ndarray = self._centres_t  # type: ignore[attr-defined]
         # argmin |x - c|^2 = argmin (|c|^2 - 2 x.c): |x|^2 is constant per row.
-        return np.argmin(c_sq[None, :] - 2.0 * (x @ self.centres.T), axis=1).astype(np.int64)
+        return np.argmin(c_sq[None, :] - 2.0 * (x @ c_t), axis=1).astype(np.int64)
 
     def tfidf(self, words: np.ndarray) -> np.ndarray:
         """TF-IDF vector ``(k,)`` float64 of an image's word indices (zeros when empty)."""
