@@ -17,6 +17,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Final
 
 from naoloc.backends.naoqi.session import Transport, new_session
@@ -41,22 +42,49 @@ def _stderr(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
+class RobotThread:
+    """One thread that runs every call to a robot, its creation and its closing included.
+
+    Simulated backends are not thread-safe and MuJoCo's OpenGL context belongs to the
+    thread that made it, while libqi calls services from a pool of threads.
+    """
+
+    def __init__(self) -> None:
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="naoloc-robot")
+
+    def run(self, function: Callable[..., Any], *args: Any) -> Any:
+        """Run ``function(*args)`` on the robot thread; return its result or raise its error."""
+        return self._pool.submit(function, *args).result()
+
+    def close(self) -> None:
+        """Finish queued calls and end the thread."""
+        self._pool.shutdown(wait=True)
+
+
 class ServedRobot:
     """Serializes calls to a robot and stops it when its driving client goes silent.
 
     Args:
         robot: The robot to serve (fake or MuJoCo backend).
+        thread: The thread that runs every robot call (the one that created the robot);
+            None = a new one.
         deadman_s: Wall-clock silence (s) after which a lasting motion is stopped.
         log: Where one-line notices go (stderr by default).
     """
 
     def __init__(
-        self, robot: Robot, *, deadman_s: float = DEADMAN_S, log: Callable[[str], None] = _stderr
+        self,
+        robot: Robot,
+        *,
+        thread: RobotThread | None = None,
+        deadman_s: float = DEADMAN_S,
+        log: Callable[[str], None] = _stderr,
     ) -> None:
         self.robot = robot
         self.deadman_s = deadman_s
         self._log = log
-        self._lock = threading.Lock()
+        self._own_thread = thread is None
+        self._robot_thread = thread or RobotThread()
         self._seen_lock = threading.Lock()
         self._last_seen: dict[str, float] = {}
         self._owner: str | None = None
@@ -71,7 +99,7 @@ class ServedRobot:
             self._last_seen[caller] = time.monotonic()
 
     def invoke(self, caller: str, service: str, method: str, args: list[Any]) -> Any:
-        """Call ``robot.<service>.<method>(*args)`` under the robot lock.
+        """Call ``robot.<service>.<method>(*args)`` on the robot thread.
 
         Raises:
             RobotError: Unknown service or method (or what the robot raises).
@@ -84,16 +112,20 @@ class ServedRobot:
         if function is None or method.startswith("_"):
             raise RobotError(f"{service} has no method {method!r}")
         self.touch(caller)
-        with self._lock:
-            self.calls += 1
-            result = function(*args)
-            key = (service, method)
-            if key in STARTS_MOTION:
-                moving = any(float(a) != 0.0 for a in args)
-                self._owner = caller if moving else None
-            elif key in ENDS_MOTION:
-                self._owner = None
+        result = self._robot_thread.run(self._call, caller, (service, method), function, args)
         self.touch(caller)
+        return result
+
+    def _call(
+        self, caller: str, key: tuple[str, str], function: Callable[..., Any], args: list[Any]
+    ) -> Any:
+        self.calls += 1
+        result = function(*args)
+        if key in STARTS_MOTION:
+            moving = any(float(a) != 0.0 for a in args)
+            self._owner = caller if moving else None
+        elif key in ENDS_MOTION:
+            self._owner = None
         return result
 
     def check_deadman(self) -> bool:
@@ -105,17 +137,21 @@ class ServedRobot:
             silent = time.monotonic() - self._last_seen.get(owner, 0.0)
         if silent <= self.deadman_s:
             return False
-        with self._lock:
-            if self._owner != owner:
-                return False
-            self._owner = None
-            try:
-                self.robot.motion.stopMove()
-            except NaolocError as err:
-                self._log(f"naoloc serve: dead-man stop failed: {err}")
-                return False
-        self.deadman_stops += 1
-        self._log(f"naoloc serve: client silent for {silent:.2f} s: robot stopped (dead-man)")
+        stopped: bool = self._robot_thread.run(self._deadman_stop, owner)
+        if stopped:
+            self.deadman_stops += 1
+            self._log(f"naoloc serve: client silent for {silent:.2f} s: robot stopped (dead-man)")
+        return stopped
+
+    def _deadman_stop(self, owner: str) -> bool:
+        if self._owner != owner:
+            return False
+        self._owner = None
+        try:
+            self.robot.motion.stopMove()
+        except NaolocError as err:
+            self._log(f"naoloc serve: dead-man stop failed: {err}")
+            return False
         return True
 
     def _run_deadman(self) -> None:
@@ -136,12 +172,16 @@ class ServedRobot:
         if self._thread is not None:
             self._thread.join(timeout=2.0)
             self._thread = None
-        with self._lock:
-            try:
-                self.robot.motion.stopMove()
-            except NaolocError as err:
-                self._log(f"naoloc serve: could not stop the robot: {err}")
-            self._owner = None
+        self._robot_thread.run(self._final_stop)
+        if self._own_thread:
+            self._robot_thread.close()
+
+    def _final_stop(self) -> None:
+        self._owner = None
+        try:
+            self.robot.motion.stopMove()
+        except NaolocError as err:
+            self._log(f"naoloc serve: could not stop the robot: {err}")
 
 
 def _plain(value: Any) -> Any:
@@ -191,6 +231,8 @@ class VirtualNaoqi:
         url: Where to listen, e.g. ``tcp://127.0.0.1:9559`` (port 0 = any free port).
         transport: ``libqi`` or ``zmq``.
         curve_keys: zmq only: CURVE certificate folder (required off loopback).
+        thread: The robot's thread (:class:`RobotThread`, the one that created it);
+            None = a new one.
         deadman_s: Silence (s, wall clock) after which a lasting motion is stopped.
         log: Where one-line notices go.
     """
@@ -202,10 +244,11 @@ class VirtualNaoqi:
         transport: Transport,
         *,
         curve_keys: str | None = None,
+        thread: RobotThread | None = None,
         deadman_s: float = DEADMAN_S,
         log: Callable[[str], None] = _stderr,
     ) -> None:
-        self.core = ServedRobot(robot, deadman_s=deadman_s, log=log)
+        self.core = ServedRobot(robot, thread=thread, deadman_s=deadman_s, log=log)
         self.transport = transport
         self._session: Any = new_session(transport, curve_keys=curve_keys)
         names = [n for n in SERVICES if n != SIM or robot.sim is not None]
@@ -224,9 +267,11 @@ class VirtualNaoqi:
                 self._session.registerService(name, endpoint)
         except NaolocError:
             self._session.close()
+            self.core.stop()
             raise
         except Exception as err:  # libqi raises RuntimeError for a bad or busy address
             self._session.close()
+            self.core.stop()
             raise BackendError(f"cannot serve on {url}: {str(err).splitlines()[0]}") from None
         self.services = names
         self.core.start()

@@ -59,7 +59,7 @@ def check_listen(url: str, transport: str, allow_remote: bool, curve_keys: str |
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """Serve until SIGINT/SIGTERM; return the summary printed as the last JSON line."""
-    from naoloc.backends.naoqi.server import VirtualNaoqi
+    from naoloc.backends.naoqi.server import RobotThread, VirtualNaoqi
     from naoloc.backends.naoqi.session import resolve_transport
     from naoloc.registry import connect
 
@@ -74,22 +74,29 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         stop.set()
 
     previous = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    # The robot lives on one thread: created, called and closed there (MuJoCo's OpenGL
+    # context belongs to its thread; libqi calls services from a thread pool).
+    robot_thread = RobotThread()
     try:
-        with (
-            connect(cfg) as robot,
-            VirtualNaoqi(robot, url, transport, curve_keys=cfg.robot.curve_keys) as server,
-        ):
-            print(f"naoloc serve: listening on {server.endpoint} ({transport})", flush=True)
-            while not stop.wait(0.2):
-                pass
-            summary = {
-                "endpoint": server.endpoint,
-                "transport": transport,
-                "backend": cfg.robot.backend,
-                "calls": server.core.calls,
-                "deadman_stops": server.core.deadman_stops,
-            }
+        robot = robot_thread.run(connect, cfg)
+        try:
+            with VirtualNaoqi(
+                robot, url, transport, curve_keys=cfg.robot.curve_keys, thread=robot_thread
+            ) as server:
+                print(f"naoloc serve: listening on {server.endpoint} ({transport})", flush=True)
+                while not stop.wait(0.2):
+                    pass
+                summary = {
+                    "endpoint": server.endpoint,
+                    "transport": transport,
+                    "backend": cfg.robot.backend,
+                    "calls": server.core.calls,
+                    "deadman_stops": server.core.deadman_stops,
+                }
+        finally:
+            robot_thread.run(robot.close)
     finally:
+        robot_thread.close()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
     return summary
