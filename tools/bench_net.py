@@ -61,21 +61,27 @@ def _row(name: str, robot: Robot, n: int) -> dict[str, float]:
 
 def serve_cached(transport: str, backend_cfg: dict[str, Any]) -> None:
     """Child mode: serve a robot whose camera returns one cached frame per subscription."""
-    from naoloc.backends.naoqi.server import VirtualNaoqi
+    from naoloc.backends.naoqi.server import RobotThread, VirtualNaoqi
 
-    with naoloc.connect(backend_cfg) as robot:
-        real = robot.video.getImageRemote
-        cache: dict[str, list[Any]] = {}
+    thread = RobotThread()  # the robot is created, called and closed on one thread
+    robot = thread.run(naoloc.connect, backend_cfg)
+    real = robot.video.getImageRemote
+    cache: dict[str, list[Any]] = {}
 
-        def cached(handle: str) -> list[Any]:
-            if handle not in cache:
-                cache[handle] = real(handle)
-            return cache[handle]
+    def cached(handle: str) -> list[Any]:
+        if handle not in cache:
+            cache[handle] = real(handle)
+        return cache[handle]
 
-        robot.video.getImageRemote = cached  # type: ignore[method-assign,assignment]
-        with VirtualNaoqi(robot, "tcp://127.0.0.1:0", transport) as server:  # type: ignore[arg-type]
+    robot.video.getImageRemote = cached  # type: ignore[method-assign,assignment]
+    url, kind = "tcp://127.0.0.1:0", transport
+    try:
+        with VirtualNaoqi(robot, url, kind, thread=thread) as server:  # type: ignore[arg-type]
             print(f"naoloc serve: listening on {server.endpoint} ({transport})", flush=True)
             sys.stdin.read()  # until the parent closes our stdin
+    finally:
+        thread.run(robot.close)
+        thread.close()
 
 
 def _cached_row(transport: str, backend_cfg: dict[str, Any], n: int) -> dict[str, float]:
