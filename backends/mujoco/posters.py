@@ -30,13 +30,45 @@ _FONTS = (
 _PHOTO_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".webp")
 
 
-def _color(rng: np.random.Generator) -> tuple[int, int, int]:
-    c = rng.integers(0, 256, 3)
+_LUMA = np.array([0.299, 0.587, 0.114])
+
+
+def _luma(rgb: np.ndarray) -> float:
+    return float(np.dot(np.asarray(rgb, np.float64), _LUMA))
+
+
+def _color(rng: np.random.Generator, dark: bool | None = None) -> tuple[int, int, int]:
+    """A random colour; ``dark`` True/False puts its luminance below 60 / above 175."""
+    c = rng.uniform(0, 255, 3)
+    if dark is not None:
+        target = rng.uniform(5, 60) if dark else rng.uniform(175, 250)
+        c = c * (target / max(1.0, _luma(c)))
+        if c.max() > 255:  # too bright a hue for the target: blend toward white
+            c = c / c.max() * 255
+            c = c + (255 - c) * (target - _luma(c)) / max(1.0, 255 - _luma(c))
+    c = np.clip(c, 0, 255)
     return (int(c[0]), int(c[1]), int(c[2]))
+
+
+def _photo_patch(w: int, h: int, rng: np.random.Generator) -> np.ndarray:
+    """Multi-scale noise that looks like a blurry photograph: many blobs of full contrast."""
+    lum = np.zeros((h, w), np.float32)
+    for cell, weight in ((40, 0.55), (14, 0.3), (5, 0.15)):
+        small = rng.uniform(0, 1, (h // cell + 2, w // cell + 2)).astype(np.float32)
+        lum += weight * cv2.resize(small, (w, h), interpolation=cv2.INTER_CUBIC)
+    lum = (lum - float(lum.min())) / max(1e-6, float(lum.max() - lum.min()))
+    tint_a = rng.uniform(0, 255, 3).astype(np.float32) * 0.3
+    tint_b = rng.uniform(0, 255, 3).astype(np.float32) * 0.3 + 178
+    out = tint_a + (tint_b - tint_a) * lum[..., None]
+    return np.clip(out, 0, 255).astype(np.uint8)
 
 
 def procedural_poster(width: int, height: int, rng: np.random.Generator) -> np.ndarray:
     """Draw one unique feature-rich poster.
+
+    Content: a gradient, one or two photograph-like patches of multi-scale noise, a few
+    dozen filled and outlined shapes in contrasting tones, a title and a block of small
+    text, a checkerboard patch, a frame, and fine print noise.
 
     Args:
         width: Image width in pixels.
@@ -58,13 +90,21 @@ def procedural_poster(width: int, height: int, rng: np.random.Generator) -> np.n
     gradient = cv2.resize(corners, (width, height), interpolation=cv2.INTER_LINEAR)
     img = np.ascontiguousarray(np.clip(gradient, 0, 255).astype(np.uint8))
     scale = min(width, height)
-    # Filled shapes.
-    for _ in range(int(rng.integers(8, 16))):
+    # Photograph-like patches.
+    for _ in range(int(rng.integers(1, 3))):
+        pw = int(width * rng.uniform(0.3, 0.55))
+        ph = int(height * rng.uniform(0.25, 0.45))
+        x0 = int(rng.integers(0, width - pw))
+        y0 = int(rng.integers(0, height - ph))
+        img[y0 : y0 + ph, x0 : x0 + pw] = _photo_patch(pw, ph, rng)
+    # Shapes in contrasting tones.
+    for _ in range(int(rng.integers(35, 60))):
         kind = int(rng.integers(0, 4))
         center = (int(rng.integers(0, width)), int(rng.integers(0, height)))
-        size = int(rng.uniform(0.04, 0.22) * scale)
-        thick = -1 if rng.random() < 0.6 else int(rng.integers(2, 6))
-        color = _color(rng)
+        size = max(3, int(rng.uniform(0.015, 0.1) * scale))
+        thick = -1 if rng.random() < 0.7 else int(rng.integers(2, 5))
+        under = img[min(center[1], height - 1), min(center[0], width - 1)]
+        color = _color(rng, dark=_luma(under) > 120)  # contrast with what is below
         if kind == 0:
             cv2.circle(img, center, size, color, thick, cv2.LINE_AA)
         elif kind == 1:
@@ -79,26 +119,19 @@ def procedural_poster(width: int, height: int, rng: np.random.Generator) -> np.n
             cv2.ellipse(
                 img, center, axes, float(rng.uniform(0, 180)), 0, 360, color, thick, cv2.LINE_AA
             )
-    # Lines and stripes.
-    for _ in range(int(rng.integers(4, 10))):
+    # Lines.
+    for _ in range(int(rng.integers(3, 8))):
         p1 = (int(rng.integers(0, width)), int(rng.integers(0, height)))
         p2 = (int(rng.integers(0, width)), int(rng.integers(0, height)))
-        cv2.line(img, p1, p2, _color(rng), int(rng.integers(1, 5)), cv2.LINE_AA)
-    # Text: a title and a few smaller words.
-    for i in range(int(rng.integers(3, 6))):
-        word = _WORDS[int(rng.integers(0, len(_WORDS)))]
-        font = _FONTS[int(rng.integers(0, len(_FONTS)))]
-        fscale = scale / 512.0 * (rng.uniform(1.6, 2.6) if i == 0 else rng.uniform(0.7, 1.4))
-        thick = max(1, int(fscale * 2.2))
-        (tw, th), _ = cv2.getTextSize(word, font, fscale, thick)
-        x = int(rng.integers(0, max(1, width - tw)))
-        y = int(rng.integers(th + 2, max(th + 3, height - 2)))
-        cv2.putText(img, word, (x, y), font, fscale, _color(rng), thick, cv2.LINE_AA)
-    # A checker or dot pattern patch: strong corners.
-    cell = max(4, int(scale * rng.uniform(0.02, 0.05)))
-    pw, ph = int(rng.integers(3, 7)) * cell, int(rng.integers(3, 7)) * cell
+        cv2.line(img, p1, p2, _color(rng), int(rng.integers(2, 5)), cv2.LINE_AA)
+    # A title and a block of small text.
+    _text(img, rng, 1, scale / 512.0 * rng.uniform(1.6, 2.4))
+    _text(img, rng, int(rng.integers(4, 8)), scale / 512.0 * rng.uniform(0.6, 0.9))
+    # A checkerboard patch: strong corners.
+    cell = max(4, int(scale * rng.uniform(0.02, 0.04)))
+    pw, ph = int(rng.integers(4, 8)) * cell, int(rng.integers(3, 6)) * cell
     x0, y0 = int(rng.integers(0, max(1, width - pw))), int(rng.integers(0, max(1, height - ph)))
-    ca, cb = _color(rng), _color(rng)
+    ca, cb = _color(rng, dark=True), _color(rng, dark=False)
     for j in range(ph // cell):
         for i in range(pw // cell):
             col = ca if (i + j) % 2 == 0 else cb
@@ -108,6 +141,22 @@ def procedural_poster(width: int, height: int, rng: np.random.Generator) -> np.n
     cv2.rectangle(img, (0, 0), (width - 1, height - 1), _color(rng), max(2, scale // 64))
     noise = rng.integers(-10, 11, img.shape, dtype=np.int16)  # uniform, std about 6
     return cv2.add(img, noise, dtype=cv2.CV_8U)
+
+
+def _text(img: np.ndarray, rng: np.random.Generator, lines: int, fscale: float) -> None:
+    """Draw ``lines`` lines of random words in one colour that contrasts with the poster."""
+    height, width = img.shape[:2]
+    font = _FONTS[int(rng.integers(0, len(_FONTS) - 1))]
+    thick = max(1, int(fscale * 2.0))
+    dark = _luma(img.reshape(-1, 3).mean(axis=0)) > 120
+    color = _color(rng, dark=dark)
+    (_, th), _ = cv2.getTextSize("Ag", font, fscale, thick)
+    x = int(rng.integers(0, max(1, width // 3)))
+    y = int(rng.integers(th + 2, max(th + 3, height - lines * (th + 6))))
+    for _ in range(lines):
+        words = [_WORDS[int(rng.integers(0, len(_WORDS)))] for _ in range(int(rng.integers(2, 5)))]
+        cv2.putText(img, " ".join(words), (x, y), font, fscale, color, thick, cv2.LINE_AA)
+        y += th + max(4, th // 2)
 
 
 def photo_posters(folder: str, count: int, size: tuple[int, int], seed: int) -> list[np.ndarray]:

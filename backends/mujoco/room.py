@@ -153,8 +153,8 @@ def _place_posters(cfg: Config, rng: np.random.Generator) -> tuple[Poster, ...]:
     for wall, length in walls:
         slot = length / max(n, 1)
         for k in range(n):
-            width = min(0.9, 0.8 * slot) * float(rng.uniform(0.8, 1.0))
-            height = min(1.0, room.wall_height_m - 0.3, width * float(rng.uniform(0.7, 1.3)))
+            width = min(0.9, 0.9 * slot) * float(rng.uniform(0.85, 1.0))
+            height = min(1.0, room.wall_height_m - 0.3, width * float(rng.uniform(0.85, 1.3)))
             jitter = float(rng.uniform(-1.0, 1.0)) * (slot - width) * 0.3
             along = (k + 0.5) * slot + jitter
             zc = max(float(rng.uniform(0.45, 0.7)), height / 2 + 0.1)
