@@ -123,14 +123,31 @@ def test_interrupted_survey_stops_the_robot_and_keeps_frames(tmp_path: Path) -> 
     assert data.complete  # the writer was closed on the way out
 
 
-def test_nearest_wall_decides_the_direction_in_the_corner() -> None:
-    cfg = small_cfg()
+@pytest.mark.parametrize(
+    ("start", "side", "direction"),
+    [((0.75, 0.75, 0.0), "right", "ccw"), ((0.75, 2.25, 0.0), "left", "cw")],
+)
+def test_parallax_decides_the_direction_in_the_corner(
+    start: tuple[float, float, float], side: str, direction: str
+) -> None:
+    cfg = small_cfg().with_overrides({"world": {"start_pose": list(start)}})
     with connect(cfg) as robot:
         res = survey(robot, cfg, lambda kf, lap, odo: None)
-    assert res.wall is not None
-    # Start: 0.75 m from the walls at y = 0 (right) and x = 0 (behind), facing +x.
-    assert res.wall.side == "right", res.wall
-    assert res.meta["direction"] == "ccw"
+        end = robot.sim.true_pose() if robot.sim is not None else None
+    assert res.wall is not None  # the paper's detector ran and was recorded
+    assert res.parallax is not None and res.yaw_source == "parallax"
+    assert res.parallax.side == side, res.parallax
+    # The nearer wall (0.75 m) shifts features about 3x more than the far one (2.25 m).
+    near, far = (
+        (res.parallax.right_shift_px, res.parallax.left_shift_px)
+        if side == "right"
+        else (res.parallax.left_shift_px, res.parallax.right_shift_px)
+    )
+    assert near > 2.0 * far
+    assert res.meta["direction"] == direction
+    assert res.meta["parallax"]["side"] == side
+    assert res.frames == frames_per_lap((1.5, 1.5), 0.5)
+    assert end is not None and math.hypot(end[0] - start[0], end[1] - start[1]) < 0.3
 
 
 @pytest.mark.parametrize("strategy", ["scan", "paper"])

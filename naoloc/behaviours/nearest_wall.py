@@ -1,7 +1,11 @@
-"""The paper's nearest-wall detector (Fig. 10): A-KAZE keypoints in each image half.
+"""Which side the nearest wall is on: the paper's detector (Fig. 10) and a robust one.
 
-The image is split into a left and a right half; the side with more keypoints is taken as
-the side of the nearest wall, and the head turns to it (+pi/2 left, -pi/2 right).
+- :func:`nearest_wall` is the paper's: one forward image is split into a left and a right
+  half; the side with more A-KAZE keypoints is taken as the nearest wall. Its cue is weak
+  (a nearer wall shows less of itself), so naoloc records it but does not steer by it.
+- :func:`detect_wall_by_parallax` is what the survey steers by: the robot looks left and
+  right, steps forward, and looks again; features on a wall at distance d shift by about
+  ``f * step / d`` pixels, so the side whose features move more is the nearer wall.
 """
 
 from __future__ import annotations
@@ -13,7 +17,7 @@ from typing import Literal
 import numpy as np
 
 from naoloc.behaviours.camera import DEFAULT_HEAD_PITCH, Camera, look
-from naoloc.errors import FeatureError
+from naoloc.errors import FeatureError, MotionError
 from naoloc.robot import Robot
 
 Side = Literal["left", "right"]
@@ -86,6 +90,108 @@ def detect_nearest_wall(
     """
     look(robot, 0.0, pitch)
     return nearest_wall(camera.frame().gray())
+
+
+@dataclass(frozen=True, slots=True)
+class ParallaxWall:
+    """Result of the parallax detector.
+
+    Attributes:
+        side: "left" or "right" of the robot.
+        head_yaw: HeadYaw that faces that wall, rad (+pi/2 left, -pi/2 right).
+        left_shift_px: Median horizontal feature shift on the left side (NaN: too few matches).
+        right_shift_px: The same on the right side.
+        left_matches: Matched features on the left side.
+        right_matches: Matched features on the right side.
+    """
+
+    side: Side
+    head_yaw: float
+    left_shift_px: float
+    right_shift_px: float
+    left_matches: int
+    right_matches: int
+
+
+MIN_PARALLAX_MATCHES = 8
+
+
+def feature_shift(before: np.ndarray, after: np.ndarray) -> tuple[float, int]:
+    """Median horizontal shift (px) of A-KAZE features matched between two grey images.
+
+    Args:
+        before: ``(h, w)`` uint8 image.
+        after: ``(h, w)`` uint8 image of the same view after the camera moved.
+
+    Returns:
+        ``(median |dx| in pixels, matches)``; the shift is NaN with fewer than
+        :data:`MIN_PARALLAX_MATCHES` matches.
+    """
+    import cv2
+
+    akaze = cv2.AKAZE_create()  # type: ignore[attr-defined]
+    kp1, d1 = akaze.detectAndCompute(before, None)
+    kp2, d2 = akaze.detectAndCompute(after, None)
+    if d1 is None or d2 is None or len(kp1) < 2 or len(kp2) < 2:
+        return float("nan"), 0
+    pairs = cv2.BFMatcher(cv2.NORM_HAMMING).knnMatch(d1, d2, k=2)
+    good = [p[0] for p in pairs if len(p) == 2 and p[0].distance < 0.75 * p[1].distance]
+    # A sideways wall seen while walking forward moves horizontally, not vertically.
+    shifts = [
+        abs(kp2[m.trainIdx].pt[0] - kp1[m.queryIdx].pt[0])
+        for m in good
+        if abs(kp2[m.trainIdx].pt[1] - kp1[m.queryIdx].pt[1]) < 0.05 * before.shape[0]
+    ]
+    if len(shifts) < MIN_PARALLAX_MATCHES:
+        return float("nan"), len(shifts)
+    return float(np.median(shifts)), len(shifts)
+
+
+def detect_wall_by_parallax(
+    robot: Robot, camera: Camera, step_m: float, pitch: float = DEFAULT_HEAD_PITCH
+) -> ParallaxWall:
+    """Find the nearer side wall by motion parallax, returning to the start pose.
+
+    The robot takes a picture to its left and right, walks ``step_m`` forward, takes both
+    again, and walks back. The side whose features shift more is nearer. When one side has
+    too few matches (a blank or very distant view), the side with matches is taken; when
+    neither has, the paper's keypoint count on a forward image decides.
+
+    Args:
+        robot: The robot, standing where the survey will start.
+        camera: The camera subscription to use.
+        step_m: How far to step forward, m (the survey step is a good choice).
+        pitch: Head pitch for the pictures, rad.
+
+    Returns:
+        The detected side with the measured shifts.
+
+    Raises:
+        MotionError: The probe step failed (the caller stops the robot).
+    """
+    yaws = {"left": math.pi / 2, "right": -math.pi / 2}
+    before = {}
+    for name, yaw in yaws.items():
+        look(robot, yaw, pitch)
+        before[name] = camera.frame().gray()
+    if not robot.motion.moveTo(step_m, 0.0, 0.0):
+        raise MotionError(f"the nearest-wall probe could not step {step_m:.2f} m forward")
+    shifts: dict[str, tuple[float, int]] = {}
+    for name in ("left", "right"):
+        look(robot, yaws[name], pitch)
+        shifts[name] = feature_shift(before[name], camera.frame().gray())
+    if not robot.motion.moveTo(-step_m, 0.0, 0.0):
+        raise MotionError(f"the nearest-wall probe could not step {step_m:.2f} m back")
+    (ls, lm), (rs, rm) = shifts["left"], shifts["right"]
+    if math.isnan(ls) and math.isnan(rs):
+        side: Side = detect_nearest_wall(robot, camera, pitch).side
+    elif math.isnan(ls):
+        side = "right"
+    elif math.isnan(rs):
+        side = "left"
+    else:
+        side = "left" if ls > rs else "right"
+    return ParallaxWall(side, yaws[side], ls, rs, lm, rm)
 
 
 def nearest_side_in_room(size: tuple[float, float], start: tuple[float, float, float]) -> WallSide:

@@ -17,7 +17,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from naoloc.behaviours.camera import DEFAULT_HEAD_PITCH, Camera, look, stand
-from naoloc.behaviours.nearest_wall import WallSide, detect_nearest_wall, nearest_side_in_room
+from naoloc.behaviours.nearest_wall import (
+    ParallaxWall,
+    WallSide,
+    detect_nearest_wall,
+    detect_wall_by_parallax,
+)
 from naoloc.config import Config
 from naoloc.errors import MotionError
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
@@ -58,9 +63,9 @@ class SurveyResult:
         path_m: Distance walked according to odometry, m.
         wall_s: Wall-clock seconds of the survey.
         head_yaw: HeadYaw kept while walking, rad.
-        wall: The nearest-wall detection (always run, used only when nothing overrides it).
-        yaw_source: Where the head yaw came from: "detector", "config", "caller" or
-            "room layout".
+        wall: The paper's nearest-wall detection (always run and recorded; not steered by).
+        parallax: The parallax detection that chose the side, when nothing overrode it.
+        yaw_source: Where the head yaw came from: "parallax", "config" or "caller".
         meta: The meta handed to the start hook.
     """
 
@@ -70,7 +75,8 @@ class SurveyResult:
     wall_s: float = 0.0
     head_yaw: float = 0.0
     wall: WallSide | None = None
-    yaw_source: str = "detector"
+    parallax: ParallaxWall | None = None
+    yaw_source: str = "parallax"
     meta: dict[str, Any] = field(default_factory=dict)
 
 
@@ -145,11 +151,11 @@ def survey(
 ) -> SurveyResult:
     """Walk ``cfg.survey.laps`` closed laps and record a picture after each step.
 
-    The robot stands up, runs the nearest-wall detector and turns its head to a wall:
-    ``cfg.survey.head_yaw_rad`` if set, else ``head_yaw`` if given, else on a simulated
-    backend the side of the nearer wall in the configured room (the detector's image cue is
-    weak and a wrong side walks the robot into a wall), else the detector's side. Then it
-    records the origin and walks. Motion is stopped on every
+    The robot stands up, runs the paper's nearest-wall detector (recorded) and turns its
+    head to a wall: ``cfg.survey.head_yaw_rad`` if set, else ``head_yaw`` if given, else the
+    side the parallax detector finds (the paper's image cue is weak, and a wrong side walks
+    the robot into a wall; the probe steps forward and back, so the start pose is kept).
+    Then it records the origin and walks. Motion is stopped on every
     exit path (an exception or Ctrl-C included); frames already handed to ``on_frame``
     stay with the caller.
 
@@ -186,19 +192,21 @@ def survey(
             elif head_yaw is not None:
                 yaw = head_yaw
                 result.yaw_source = "caller"
-            elif cfg.robot.backend != "naoqi":  # a simulated room the config describes
-                yaw = nearest_side_in_room(cfg.world.room.size_m, cfg.start_pose()).head_yaw
-                result.yaw_source = "room layout"
             else:
-                yaw = result.wall.head_yaw
-                result.yaw_source = "detector"
+                result.parallax = detect_wall_by_parallax(
+                    robot, camera, cfg.survey.step_m, head_pitch
+                )
+                yaw = result.parallax.head_yaw
+                result.yaw_source = "parallax"
             yaw, pitch = look(robot, yaw, head_pitch)
             result.head_yaw = yaw
             turn = -math.copysign(math.pi / 2, yaw) if yaw != 0 else math.pi / 2
             origin = pose_of(robot.motion, True)
             command_origin = pose_of(robot.motion, False)
             probe = camera.info(camera.frame())
-            result.meta = _meta(robot, cfg, origin, probe, yaw, pitch, turn, result.wall)
+            result.meta = _meta(
+                robot, cfg, origin, probe, yaw, pitch, turn, result.wall, result.parallax
+            )
             result.meta["head_yaw_source"] = result.yaw_source
             if on_start is not None:
                 on_start(result.meta)
@@ -230,6 +238,7 @@ def _meta(
     pitch: float,
     turn: float,
     wall: WallSide | None,
+    parallax: ParallaxWall | None = None,
 ) -> dict[str, Any]:
     sides = cfg.survey_sides()
     meta: dict[str, Any] = {
@@ -253,7 +262,19 @@ def _meta(
         if wall is None
         else {"side": wall.side, "left": wall.left, "right": wall.right},
     }
+    if parallax is not None:
+        meta["parallax"] = {
+            "side": parallax.side,
+            "left_shift_px": _finite_or_none(parallax.left_shift_px),
+            "right_shift_px": _finite_or_none(parallax.right_shift_px),
+            "left_matches": parallax.left_matches,
+            "right_matches": parallax.right_matches,
+        }
     if robot.sim is not None:
         meta["origin_room_pose"] = list(robot.sim.true_pose())
         meta["room_size_m"] = list(robot.sim.room_size())
     return meta
+
+
+def _finite_or_none(value: float) -> float | None:
+    return value if math.isfinite(value) else None

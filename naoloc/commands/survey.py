@@ -98,13 +98,16 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     expected = frames_per_lap(sides, cfg.survey.step_m) * cfg.survey.laps
     with interruptible(), connect(cfg) as robot, Progress(expected, "survey") as bar:
         result, frames = record_survey(robot, cfg, output, bar)
-    wall = result.wall
+    wall, par = result.wall, result.parallax
     detected = ""
     if wall is not None:
-        detected = (
-            f"detector: nearest wall {wall.side} ({wall.left} vs {wall.right} keypoints), "
-            f"head yaw from the {result.yaw_source}, "
+        detected = f"paper's detector: {wall.side} ({wall.left} vs {wall.right} keypoints), "
+    if par is not None:
+        detected += (
+            f"parallax: {par.side} (left {par.left_shift_px:.0f} px, "
+            f"right {par.right_shift_px:.0f} px), "
         )
+    detected += f"head yaw from the {result.yaw_source}, "
     print(
         f"survey: {frames} frames in {result.laps} laps of {sides[0]:.2f} x {sides[1]:.2f} m, "
         f"{detected}{result.meta.get('direction', '?')} circuit, {result.path_m:.1f} m walked, "
