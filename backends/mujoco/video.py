@@ -40,7 +40,7 @@ select_gl(strict=False)
 mujoco: Any = importlib.import_module("mujoco")
 
 MAX_SIZE = RESOLUTIONS[k4VGA]  # the offscreen buffer of the room model (1280 x 960)
-HIDDEN_GROUPS = (3, 4, 5)  # head shell, collision shapes, removed posters
+HIDDEN_GROUPS = (2, 3, 4, 5)  # head shell, (unused), collision shapes, removed posters
 RENDER_PACKAGES = (
     "apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri (or libosmesa6), and set "
     "MUJOCO_GL=egl (or osmesa) before mujoco is first imported"
