@@ -140,6 +140,13 @@ def test_postures_stiffness_and_rest() -> None:
         motion.wakeUp()
         assert posture.getPosture() == "StandInit"
         assert motion.getAngles("LKneePitch", True)[0] == pytest.approx(0.716, abs=0.01)
+        # The head shell limits HeadPitch at large HeadYaw (NAOqi: -18.9..11.5 deg at 87.5 deg).
+        motion.angleInterpolationWithSpeed("Head", [math.radians(87.49), 0.5], 1.0)
+        yaw, pitch = motion.getAngles("Head", True)
+        assert math.degrees(yaw) == pytest.approx(87.49, abs=0.5)
+        assert math.degrees(pitch) == pytest.approx(11.46, abs=0.5)
+        motion.angleInterpolationWithSpeed("Head", [0.0, 0.5], 1.0)
+        assert motion.getAngles("HeadPitch", True)[0] == pytest.approx(0.5, abs=0.01)
         motion.setStiffnesses("Head", 0.0)
         motion.angleInterpolationWithSpeed("HeadYaw", 0.5, 1.0)
         assert abs(motion.getAngles("HeadYaw", True)[0]) < 0.01  # limp joints do not move

@@ -32,12 +32,12 @@ def create(cfg: Config) -> Robot:
         RenderError: No headless OpenGL (names the Debian packages to install).
         BackendError: The generated room does not compile.
     """
-    from naoloc.backends.mujoco.gl import missing_message, select_gl
+    from naoloc.backends.mujoco.gl import missing_message, probe, select_gl
 
     select_gl()
     try:
         importlib.import_module("OpenGL")
-        importlib.import_module("mujoco")
+        mujoco = importlib.import_module("mujoco")
     except ModuleNotFoundError as err:
         missing = (err.name or "mujoco").split(".")[0]
         raise DependencyNotInstalled(
@@ -45,6 +45,8 @@ def create(cfg: Config) -> Robot:
         ) from None
     except ImportError as err:  # e.g. the GL platform library cannot be loaded
         raise RenderError(f"{missing_message()} ({type(err).__name__}: {err})") from None
+
+    probe(mujoco)
 
     from naoloc.backends.mujoco.motion import MujocoMotion, MujocoPosture
     from naoloc.backends.mujoco.sim import Simulation

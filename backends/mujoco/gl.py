@@ -10,6 +10,7 @@ from __future__ import annotations
 import ctypes.util
 import os
 import sys
+from typing import Any
 
 from naoloc.errors import RenderError
 
@@ -23,6 +24,25 @@ def missing_message() -> str:
         "headless rendering needs EGL or OSMesa: "
         f"apt-get install {EGL_PACKAGES} (or {OSMESA_PACKAGES} with MUJOCO_GL=osmesa)"
     )
+
+
+def probe(mujoco: Any) -> None:
+    """Create and free a tiny OpenGL context, so that a machine that cannot render fails early.
+
+    Args:
+        mujoco: The imported mujoco module.
+
+    Raises:
+        RenderError: One line naming the packages to install.
+    """
+    try:
+        context = mujoco.GLContext(16, 16)
+        context.make_current()
+        context.free()
+    except Exception as err:  # GL failures come as many different exception types
+        why = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
+        backend = os.environ.get("MUJOCO_GL", "")
+        raise RenderError(f"{missing_message()}; MUJOCO_GL={backend} failed: {why}") from None
 
 
 def select_gl(strict: bool = True) -> str:

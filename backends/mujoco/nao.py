@@ -11,6 +11,8 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Final
 
+import numpy as np
+
 from naoloc.keyframe import TORSO_HEIGHT_STANDINIT
 
 MODEL_DIR: Final = Path(__file__).resolve().parent / "model"
@@ -23,6 +25,31 @@ TIBIA_LENGTH: Final = 0.1029
 FOOT_HEIGHT: Final = 0.04519
 
 ROBOT_RADIUS: Final = 0.15  # m, radius of the collision capsule around the body
+
+# NAOqi's head anti-collision limits: HeadPitch range (deg) as a function of HeadYaw (deg),
+# linearly interpolated ("Joints" documentation page, head section); at yaw 0 the range is
+# the joint's own (-38.5..29.5 deg).
+_HEAD_YAW_DEG = (-119.52, -87.49, -62.45, -51.74, -43.32, -27.85, 0.0,
+                 27.85, 43.32, 51.74, 62.45, 87.49, 119.52)  # fmt: skip
+_HEAD_PITCH_MIN_DEG = (-25.73, -18.91, -24.64, -27.50, -31.40, -38.50, -38.50,
+                       -38.50, -31.40, -27.50, -24.64, -18.91, -25.73)  # fmt: skip
+_HEAD_PITCH_MAX_DEG = (18.91, 11.46, 17.19, 18.91, 21.20, 24.18, 29.51,
+                       24.18, 21.20, 18.91, 17.19, 11.46, 18.91)  # fmt: skip
+
+
+def head_pitch_limits(head_yaw: float) -> tuple[float, float]:
+    """HeadPitch range (rad) allowed at a HeadYaw (rad): the head shell hits the shoulders.
+
+    Args:
+        head_yaw: HeadYaw in radians.
+
+    Returns:
+        ``(min, max)`` HeadPitch in radians.
+    """
+    yaw = math.degrees(head_yaw)
+    lo = float(np.interp(yaw, _HEAD_YAW_DEG, _HEAD_PITCH_MIN_DEG))
+    hi = float(np.interp(yaw, _HEAD_YAW_DEG, _HEAD_PITCH_MAX_DEG))
+    return math.radians(lo), math.radians(hi)
 
 
 def torso_height(hip_pitch: float, knee_pitch: float) -> float:

@@ -27,6 +27,7 @@ from naoloc.backends.mujoco.nao import (
     POSTURES,
     ROBOT_RADIUS,
     STANDING_POSTURES,
+    head_pitch_limits,
     torso_height,
 )
 from naoloc.backends.mujoco.room import RoomLayout, build_layout, room_mjcf, wall_point
@@ -151,6 +152,8 @@ class Simulation:
         self._lknee = self.joint_index["LKneePitch"]
         self._r_hyp = self.joint_index["RHipYawPitch"]
         self._l_hyp = self.joint_index["LHipYawPitch"]
+        self._head_yaw = self.joint_index["HeadYaw"]
+        self._head_pitch = self.joint_index["HeadPitch"]
         n = len(JOINT_NAMES)
         self.target = np.zeros(n)
         self.command = np.zeros(n)
@@ -197,6 +200,8 @@ class Simulation:
             self.rate[i] = self.max_speed[i] * fraction
         self.target[self._r_hyp] = self.target[self._l_hyp]
         self.rate[self._r_hyp] = self.rate[self._l_hyp]
+        lo, hi = head_pitch_limits(float(self.target[self._head_yaw]))
+        self.target[self._head_pitch] = min(hi, max(lo, float(self.target[self._head_pitch])))
 
     def joint_angles(self, names: list[str], use_sensors: bool) -> list[float]:
         """Joint angles in radians: measured (qpos) or commanded."""
@@ -278,6 +283,8 @@ class Simulation:
         dt = self.cycle_s
         step = self.rate * dt
         self.command += np.clip(self.target - self.command, -step, step)
+        lo, hi = head_pitch_limits(float(self.command[self._head_yaw]))  # the shell, on the way
+        self.command[self._head_pitch] = min(hi, max(lo, float(self.command[self._head_pitch])))
         self._write_joint_ctrl(self._gait_offsets(cmd, dt))
         vx, vy, wz = cmd
         ix, iy, iw = self._walk_ids
