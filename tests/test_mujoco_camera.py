@@ -148,8 +148,14 @@ def test_lights_and_posters_can_change_after_creation() -> None:
         removed = video.render_rgb(0, 320, 240).copy()
         assert removed.std() < base.std()
         sim.restore_poster(poster.name)
+        assert np.array_equal(video.render_rgb(0, 320, 240), base)
         sim.move_poster(poster.name, 0.3)
         moved = video.render_rgb(0, 320, 240)
         assert not np.array_equal(moved, base) and not np.array_equal(moved, removed)
         with pytest.raises(naoloc.errors.RobotError):
             sim.remove_poster("no_such_poster")
+    dim = {**SMALL, "world": {**SMALL["world"], "sim": {"light": 0.5}}}
+    with naoloc.connect(dim) as robot:  # world.sim.light applies from the start
+        sim, video = _parts(robot)
+        sim.teleport(3.0, poster.center[1], 0.0)
+        assert video.render_rgb(0, 320, 240).mean() < 0.8 * base.mean()

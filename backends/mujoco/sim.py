@@ -112,6 +112,7 @@ class Simulation:
             np.array(self.model.vis.headlight.ambient),
             np.array(self.model.vis.headlight.diffuse),
         )
+        self.set_light_scale(1.0)  # applies world.sim.light
         self._poster0 = {p.name: p for p in self.layout.posters}
         self.walk = WalkController(WalkLimits(), self.cycle_s)
         seed = cfg.world.sim.seed
