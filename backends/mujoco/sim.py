@@ -30,7 +30,7 @@ from naoloc.backends.mujoco.nao import (
     head_pitch_limits,
     torso_height,
 )
-from naoloc.backends.mujoco.room import RoomLayout, build_layout, room_mjcf, wall_point
+from naoloc.backends.mujoco.room import RoomLayout, build_layout, room_mjcf
 from naoloc.backends.mujoco.walk import WalkController, WalkLimits
 
 from naoloc.config import Config
@@ -114,6 +114,10 @@ class Simulation:
         )
         self.set_light_scale(1.0)  # applies world.sim.light
         self._poster0 = {p.name: p for p in self.layout.posters}
+        self._poster_pos0 = {
+            p.name: self.model.geom_pos[self._poster_geom(p.name)].copy()
+            for p in self.layout.posters
+        }
         self.walk = WalkController(WalkLimits(), self.cycle_s)
         seed = cfg.world.sim.seed
         self._odo_rng = np.random.default_rng([seed, cfg.world.odometry.seed, 0x0D0])
@@ -425,16 +429,15 @@ class Simulation:
         return int(mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, name))
 
     def move_poster(self, name: str, dx: float, dz: float = 0.0) -> None:
-        """Slide a poster ``dx`` m along its wall (and ``dz`` m up) from where it was built."""
+        """Slide a poster ``dx`` m along its wall (and ``dz`` m up) from where it was built.
+
+        Along the wall means +y on walls x0 and x1, +x on walls y0 and y1 (room frame).
+        """
         g = self._poster_geom(name)
-        p = self._poster0[name]
-        along = p.center[1] if p.wall in ("x0", "x1") else p.center[0]
-        depth = p.center[0] if p.wall == "x0" else p.center[1] if p.wall == "y0" else None
-        sx, sy = self.layout.size
-        if depth is None:
-            depth = sx - p.center[0] if p.wall == "x1" else sy - p.center[1]
-        x, y = wall_point(p.wall, along + dx, depth, self.layout.size)
-        self.model.geom_pos[g] = [x, y, p.center[2] + dz]
+        pos = self._poster_pos0[name].copy()
+        pos[1 if self._poster0[name].wall in ("x0", "x1") else 0] += dx
+        pos[2] += dz
+        self.model.geom_pos[g] = pos
 
     def remove_poster(self, name: str) -> None:
         """Take a poster off its wall (it is no longer rendered)."""
@@ -444,7 +447,7 @@ class Simulation:
         """Hang a removed or moved poster back where it was built."""
         g = self._poster_geom(name)
         self.model.geom_group[g] = 0
-        self.model.geom_pos[g] = self._poster0[name].center
+        self.model.geom_pos[g] = self._poster_pos0[name]
 
     def set_marker(self, x: float, y: float, z: float) -> None:
         """Show a small red sphere (radius 1 cm, unlit colour) at a room-frame point (m)."""
