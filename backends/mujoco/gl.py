@@ -8,6 +8,7 @@ same process. A value the user already set is respected.
 from __future__ import annotations
 
 import ctypes.util
+import importlib
 import os
 import sys
 from typing import Any
@@ -36,7 +37,7 @@ def probe(mujoco: Any) -> None:
         RenderError: One line naming the packages to install.
     """
     try:
-        context = mujoco.GLContext(16, 16)
+        context = mujoco.rendering.classic.gl_context.GLContext(16, 16)
         context.make_current()
         context.free()
     except Exception as err:  # GL failures come as many different exception types
@@ -77,4 +78,21 @@ def select_gl(strict: bool = True) -> str:
         os.environ["MUJOCO_GL"] = chosen
     if chosen in ("egl", "osmesa") and "OpenGL" not in sys.modules:
         os.environ["PYOPENGL_PLATFORM"] = chosen
+    _reresolve_late_import(chosen)
     return chosen
+
+
+def _reresolve_late_import(chosen: str) -> None:
+    """Let mujoco pick up ``chosen`` if it was imported before MUJOCO_GL was set.
+
+    mujoco resolves its GL context class once, when imported; imported with MUJOCO_GL unset
+    it tries GLFW, which fails headless before OpenGL is loaded. Re-running that module
+    (``mujoco.Renderer`` reads the class from it at construction) then picks the platform
+    chosen here. Nothing is done once PyOpenGL is loaded: its platform is fixed for good.
+    """
+    module = sys.modules.get("mujoco.rendering.classic.gl_context")
+    if module is None or getattr(module, "_MUJOCO_GL", chosen) == chosen:
+        return
+    if "OpenGL" in sys.modules:
+        return
+    importlib.reload(module)
