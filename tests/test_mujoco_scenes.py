@@ -8,6 +8,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+import cv2
 import numpy as np
 import pytest
 
@@ -144,6 +145,21 @@ def test_room_layout_posters_unique_and_furniture_clear_of_the_circuit(
     pairs = zip(layout.posters, again.posters, strict=True)
     assert all(np.array_equal(a.image, b.image) for a, b in pairs)
     assert [f.rect for f in layout.furniture] == [f.rect for f in again.furniture]
+
+
+def test_posters_from_a_folder_of_photographs(tmp_path: Path) -> None:
+    rng = np.random.default_rng(0)
+    for i in range(3):
+        photo = rng.integers(0, 256, (60 + i, 80, 3), dtype=np.uint8)
+        assert cv2.imwrite(str(tmp_path / f"photo_{i}.png"), photo)
+    (tmp_path / "notes.txt").write_text("not an image")
+    cfg = load_config({"world": {"room": {"posters_per_wall": 1, "poster_dir": str(tmp_path)}}})
+    posters = build_layout(cfg).posters
+    assert len(posters) == 4
+    firsts = {p.image.tobytes()[:30] for p in posters[:3]}
+    assert len(firsts) == 3  # each photograph used once before any repeats
+    with pytest.raises(naoloc.errors.ConfigError, match="poster_dir"):
+        build_layout(load_config({"world": {"room": {"poster_dir": str(tmp_path / "none")}}}))
 
 
 def test_missing_headless_gl_names_the_packages(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -8,6 +8,7 @@ Every image is ``(height, width, 3)`` uint8 RGB with row 0 at the top.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import cv2
@@ -159,17 +160,16 @@ def _text(img: np.ndarray, rng: np.random.Generator, lines: int, fscale: float) 
         y += th + max(4, th // 2)
 
 
-def photo_posters(folder: str, count: int, size: tuple[int, int], seed: int) -> list[np.ndarray]:
-    """Load ``count`` posters from a folder of photographs (reused in a seeded order if few).
+def photo_posters(folder: str, sizes: Sequence[tuple[int, int]], seed: int) -> list[np.ndarray]:
+    """Posters from a folder of photographs: a seeded order, each used once before any repeats.
 
     Args:
         folder: Directory with .png/.jpg/.jpeg/.bmp/.webp files.
-        count: Number of posters wanted.
-        size: ``(width, height)`` of each returned image in pixels.
+        sizes: ``(width, height)`` in pixels of each poster wanted.
         seed: Seed of the order in which photographs are assigned.
 
     Returns:
-        ``count`` RGB images of the given size.
+        One RGB image per size, resized to it.
 
     Raises:
         ConfigError: When the folder is missing, empty or holds an unreadable image.
@@ -179,15 +179,15 @@ def photo_posters(folder: str, count: int, size: tuple[int, int], seed: int) -> 
         raise ConfigError(f"world.room.poster_dir: {folder} is not a directory")
     files = sorted(p for p in path.iterdir() if p.suffix.lower() in _PHOTO_SUFFIXES)
     if not files:
-        raise ConfigError(
-            f"world.room.poster_dir: no images ({', '.join(_PHOTO_SUFFIXES)}) in {folder}"
-        )
-    order = np.random.default_rng(seed).permutation(max(count, len(files))) % len(files)
+        kinds = ", ".join(_PHOTO_SUFFIXES)
+        raise ConfigError(f"world.room.poster_dir: no images ({kinds}) in {folder}")
+    order = np.random.default_rng(seed).permutation(len(files))
     out = []
-    for k in order[:count]:
-        bgr = cv2.imread(str(files[int(k)]), cv2.IMREAD_COLOR)
+    for i, size in enumerate(sizes):
+        file = files[int(order[i % len(files)])]
+        bgr = cv2.imread(str(file), cv2.IMREAD_COLOR)
         if bgr is None:
-            raise ConfigError(f"world.room.poster_dir: cannot read image {files[int(k)]}")
+            raise ConfigError(f"world.room.poster_dir: cannot read image {file}")
         out.append(cv2.resize(bgr, size, interpolation=cv2.INTER_AREA)[..., ::-1].copy())
     return out
 

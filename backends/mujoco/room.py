@@ -161,10 +161,7 @@ def _place_posters(cfg: Config, rng: np.random.Generator) -> tuple[Poster, ...]:
             specs.append((wall, k, along, width, height, zc))
     if room.poster_dir is not None:
         sizes = [(tex_w, _tex_height(tex_w, w, h)) for _, _, _, w, h, _ in specs]
-        images = [
-            poster_images.photo_posters(room.poster_dir, 1, size, room.seed * 7919 + i)[0]
-            for i, size in enumerate(sizes)
-        ]
+        images = poster_images.photo_posters(room.poster_dir, sizes, room.seed)
     else:
         images = [
             poster_images.procedural_poster(tex_w, _tex_height(tex_w, w, h), rng)
