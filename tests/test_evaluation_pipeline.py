@@ -111,7 +111,8 @@ def test_evaluate_paper_protocol_writes_table3(tmp_path: Path) -> None:
     assert line["protocol"] == "paper" and line["n"] == 20
     summary = json.loads((tmp_path / "summary.json").read_text())
     truths = [row["truth"] for row in summary["positions"]]
-    assert truths == pytest.approx([[p.x, p.y] for p in PAPER_POSITIONS], abs=0.02)
+    for truth, pos in zip(truths, PAPER_POSITIONS, strict=True):
+        assert truth == pytest.approx([pos.x, pos.y], abs=0.02)
     assert [len(row["estimates"]) for row in summary["positions"]] == [5, 5, 5, 5]
     report = (tmp_path / "report.md").read_text()
     assert "## Table 3" in report and "(3.7, 1.7)" in report

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from naoloc.config import Config
-from naoloc.errors import BackendError, ConfigError
+from naoloc.errors import BackendError, ConfigError, MotionError
 from naoloc.evaluation import figures, report
 from naoloc.evaluation.plan import STUDIES, Plan, make_plan
 from naoloc.evaluation.protocols import (
@@ -142,6 +142,9 @@ def evaluate(
         for r in run_tasks(survey_task, survey_tasks, workers, "survey", progress=progress)
     }
     base = surveys["base"]
+    if "failed" in base:
+        raise MotionError(f"the survey failed: {base['failed']}")
+    failed = {k: f"survey failed: {v['failed']}" for k, v in surveys.items() if "failed" in v}
     origin: tuple[float, float, float] = tuple(base["meta"]["origin_room_pose"])  # type: ignore[assignment]
     room_size: tuple[float, float] = tuple(base["meta"]["room_size_m"])  # type: ignore[assignment]
 
@@ -150,6 +153,7 @@ def evaluate(
     map_tasks = [
         MapTask(name, surveys[survey]["dataset"], mc.model_dump(mode="json"), map_paths[name])
         for name, (survey, mc) in plan.maps.items()
+        if survey not in failed
     ]
     maps = {
         r["name"]: r for r in run_tasks(map_task, map_tasks, workers, "maps", progress=progress)
@@ -157,11 +161,15 @@ def evaluate(
 
     # 3. Test poses and localizations.
     poses = _test_poses(cfg, protocol, n, seed, origin, room_size)
-    chunks = _chunks(plan, cfg, base_dict, poses, origin, map_paths, workers, chunk_size)
+    skipped = {v.name: failed[plan.maps[v.map_name][0]] for v in plan.variants
+               if plan.maps[v.map_name][0] in failed}  # fmt: skip
+    runnable = Plan(plan.surveys, plan.maps, [v for v in plan.variants if v.name not in skipped],
+                    plan.robots)  # fmt: skip
+    chunks = _chunks(runnable, cfg, base_dict, poses, origin, map_paths, workers, chunk_size)
     results = run_tasks(localize_chunk, chunks, workers, "localize", progress=progress)
     flat = [rec for chunk in results for rec in chunk]
     records = [r for r in flat if "skipped" not in r]
-    skipped = {r["variant"]: r["skipped"] for r in flat if "skipped" in r}
+    skipped.update({r["variant"]: r["skipped"] for r in flat if "skipped" in r})
 
     # 4. Outputs.
     summary = _summary(
@@ -293,7 +301,7 @@ def _summary(
         "backend": cfg.robot.backend,
         "survey": _survey_table(surveys["base"], origin, room_size, cfg.survey.laps),
         "surveys": {
-            k: {kk: v[kk] for kk in ("frames", "laps", "path_m", "wall_s")}
+            k: {kk: v[kk] for kk in ("frames", "laps", "path_m", "wall_s", "failed") if kk in v}
             for k, v in surveys.items()
         },
         "maps": maps,

@@ -22,7 +22,7 @@ from typing import Any
 from naoloc.config import Config, MapConfig
 
 #: Odometry drift multipliers of the robustness study (x1 = the config's own drift).
-DRIFT_LEVELS: tuple[float, ...] = (0.0, 1.0, 4.0, 10.0)
+DRIFT_LEVELS: tuple[float, ...] = (0.0, 1.0, 2.0, 4.0)
 
 #: Room light scales of the robustness study (1 = as mapped).
 LIGHT_LEVELS: tuple[float, ...] = (0.5, 2.0)

@@ -28,7 +28,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from naoloc.errors import NaolocError, RobotError
+from naoloc.errors import MotionError, NaolocError, RobotError
 from naoloc.evaluation.protocols import EvalPose, room_to_map
 from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.progress import Progress
@@ -164,7 +164,8 @@ def survey_task(task: SurveyTask) -> dict[str, Any]:
     """Survey a room with the survey behaviour and write the dataset (runs in a worker).
 
     Returns:
-        ``{"name", "dataset", "frames", "laps", "path_m", "wall_s", "meta"}``.
+        ``{"name", "dataset", "frames", "laps", "path_m", "wall_s", "meta"}``, plus
+        ``"failed"`` (the reason) when a step failed.
     """
     from naoloc.behaviours.survey import survey
     from naoloc.dataset import DatasetWriter
@@ -185,11 +186,18 @@ def survey_task(task: SurveyTask) -> dict[str, Any]:
             assert writer is not None  # on_start runs first
             writer.write(keyframe, lap=lap, odometry=odometry)
 
+        failed = None
+        t0 = time.monotonic()
         try:
             result = survey(robot, _config(task.config), on_frame, on_start=on_start)
+        except MotionError as err:  # e.g. a drifting robot walked into furniture
+            failed = str(err)
         finally:
             if writer is not None:
                 writer.close()
+    if failed is not None:
+        return {"name": task.name, "dataset": str(path), "frames": 0, "laps": 0, "path_m": 0.0,
+                "wall_s": time.monotonic() - t0, "meta": meta_out, "failed": failed}  # fmt: skip
     return {
         "name": task.name,
         "dataset": str(path),
