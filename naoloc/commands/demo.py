@@ -80,6 +80,13 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     dataset, map_path = out / "survey.mcap", out / "map.npz"
     rows: list[dict[str, Any]] = []
     with interruptible(), connect(cfg) as robot:
+        room = cfg.world.room
+        print(
+            f"demo: backend {robot.backend}, room {room.size_m[0]:g} x {room.size_m[1]:g} m "
+            f"(seed {room.seed}), map {cfg.map.features} {cfg.map.neurons} neurons, "
+            f"localize mode {cfg.localize.mode}",
+            flush=True,
+        )
         with Progress(None, "survey") as bar:
             surveyed, frames = record_survey(robot, cfg, dataset, bar)
         print(
@@ -116,6 +123,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     errors = [r["error_m"] for r in rows if r["error_m"] is not None]
     headings = [r["heading_error_deg"] for r in rows if r["heading_error_deg"] is not None]
     summary = {
+        "backend": cfg.robot.backend,
         "frames": frames,
         "images": built["images"],
         "neurons": built["neurons"],
