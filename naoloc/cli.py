@@ -120,6 +120,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except NaolocError as err:
         print(f"naoloc {verb}: error: {err}", file=sys.stderr)
         return 1
+    except OSError as err:  # a path that cannot be read or written
+        where = f": {err.filename}" if err.filename else ""
+        print(f"naoloc {verb}: error: {err.strerror or err}{where}", file=sys.stderr)
+        return 1
     sys.stdout.write(json.dumps(result, separators=(", ", ": ")) + "\n")
     sys.stdout.flush()
     return 0

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -100,8 +101,10 @@ class DatasetWriter:
     """Write survey frames to an MCAP file as they are taken.
 
     Use as a context manager; the file is finished (summary written) on exit, also when an
-    exception or Ctrl-C ends the block. Should the process die anyway, every frame already
-    written stays readable.
+    exception or Ctrl-C ends the block. Frames go to ``PATH.part`` first, which replaces
+    ``PATH`` on close once at least one frame was written, so a run that fails before its
+    first frame never destroys an existing dataset. Should the process die anyway, every
+    frame already written stays readable in ``PATH.part``.
 
     Args:
         path: Output ``.mcap`` file (its folder is created).
@@ -128,13 +131,14 @@ class DatasetWriter:
         if image_format not in ("jpeg", "png"):
             raise DatasetError(f"image format must be jpeg or png, got {image_format!r}")
         self.path = Path(path)
+        self.part_path = self.path.with_name(self.path.name + ".part")
         self.frames = 0
         self._format = image_format
         self._quality = int(jpeg_quality)
         self._closed = False
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._file: IO[bytes] = open(self.path, "wb")  # noqa: SIM115 - closed in close()
+            self._file: IO[bytes] = open(self.part_path, "wb")  # noqa: SIM115 - see close()
         except OSError as err:
             raise DatasetError(f"{self.path}: cannot create: {err.strerror}") from None
         self._mcap = Writer(self._file, use_chunking=False, enable_crcs=True)
@@ -278,6 +282,10 @@ class DatasetWriter:
             self._mcap.finish()
         finally:
             self._file.close()
+            if self.frames > 0:
+                os.replace(self.part_path, self.path)
+            else:
+                self.part_path.unlink(missing_ok=True)
 
     def __enter__(self) -> DatasetWriter:
         return self

@@ -64,3 +64,13 @@ def test_usage_error_exits_2(capsys: pytest.CaptureFixture[str]) -> None:
 def test_at_rejects_non_finite() -> None:
     with pytest.raises(SystemExit):
         build_parser().parse_args(["localize", "-c", "x", "-m", "y", "--at", "nan", "0", "0"])
+
+
+def test_unwritable_output_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    cfg = tmp_path / "fake.yaml"
+    cfg.write_text("robot: {backend: fake}\n")
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    code = main(["survey", "-c", str(cfg), "-o", str(blocker / "s.mcap")])
+    err = capsys.readouterr().err.strip()
+    assert code == 1 and len(err.splitlines()) == 1 and "naoloc survey: error:" in err

@@ -96,11 +96,12 @@ def test_sigint_stops_survey_and_leaves_a_readable_dataset(tmp_path: Path) -> No
     try:
         deadline = time.monotonic() + 60
         frames = 0
+        part = out.with_name(out.name + ".part")  # frames go here until the survey ends
         while frames < 5 and time.monotonic() < deadline and proc.poll() is None:
             time.sleep(0.2)
-            if out.exists():
+            if part.exists():
                 try:
-                    frames = len(read_dataset(out).keyframes)
+                    frames = len(read_dataset(part).keyframes)
                 except Exception:
                     frames = 0
         assert proc.poll() is None, "the survey ended before it could be interrupted"
@@ -117,6 +118,7 @@ def test_sigint_stops_survey_and_leaves_a_readable_dataset(tmp_path: Path) -> No
     assert b"interrupted" in err and err.count(b"\n") == 1
     data = read_dataset(out)
     assert 5 <= len(data.keyframes) < 3 * 60
+    assert not part.exists()
 
 
 def test_build_map_refuses_a_foreign_file(

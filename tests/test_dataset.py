@@ -97,7 +97,7 @@ def test_foxglove_schemas_are_inside(tmp_path: Path) -> None:
 def test_writer_that_died_leaves_every_frame(tmp_path: Path) -> None:
     path = tmp_path / "s.mcap"
     _write(path, 4, finish=False)
-    data = read_dataset(path)
+    data = read_dataset(path.with_name("s.mcap.part"))
     assert not data.complete
     assert len(data.keyframes) == 4
 
@@ -105,7 +105,7 @@ def test_writer_that_died_leaves_every_frame(tmp_path: Path) -> None:
 def test_truncated_tail_keeps_the_whole_frames(tmp_path: Path) -> None:
     path = tmp_path / "s.mcap"
     _write(path, 4, finish=False)
-    raw = path.read_bytes()
+    raw = path.with_name("s.mcap.part").read_bytes()
     cut = tmp_path / "cut.mcap"
     cut.write_bytes(raw[: len(raw) - 300])  # inside the last frame's records
     data = read_dataset(cut)
@@ -150,9 +150,21 @@ def test_foreign_mcap_is_refused(tmp_path: Path) -> None:
 
 def test_empty_survey_says_no_frames(tmp_path: Path) -> None:
     path = tmp_path / "empty.mcap"
-    DatasetWriter(path, config={}, meta={}).close()
+    writer = DatasetWriter(path, config={}, meta={})
+    writer._file.flush()  # died before its first frame
     with pytest.raises(DatasetError, match="no frames"):
-        read_dataset(path)
+        read_dataset(writer.part_path)
+
+
+def test_a_run_without_frames_keeps_the_existing_dataset(tmp_path: Path) -> None:
+    path = tmp_path / "s.mcap"
+    _write(path, 3)
+    before = path.read_bytes()
+    DatasetWriter(path, config={}, meta={}).close()  # e.g. the robot failed at once
+    assert path.read_bytes() == before
+    assert not path.with_name("s.mcap.part").exists()
+    _write(path, 2)  # a run with frames replaces it
+    assert len(read_dataset(path).keyframes) == 2
 
 
 def test_garbled_record_is_a_dataset_error(tmp_path: Path) -> None:

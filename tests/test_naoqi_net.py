@@ -16,6 +16,7 @@ from naoloc.backends.naoqi.server import VirtualNaoqi
 from naoloc.backends.naoqi.testing import ServedProcess, served
 
 import naoloc
+from naoloc.dataset import read_dataset
 from naoloc.errors import ConnectionLost
 from naoloc.robot import Robot
 
@@ -88,7 +89,8 @@ def test_server_killed_mid_survey_ends_the_client_with_one_line_within_2s(
             text=True,
         )
         try:
-            started = _wait_for(lambda: dataset.exists() and dataset.stat().st_size > 20_000, 60)
+            part = dataset.with_name(dataset.name + ".part")  # written until the survey ends
+            started = _wait_for(lambda: part.exists() and part.stat().st_size > 20_000, 60)
             assert started, "the survey did not start writing frames"
             server.process.send_signal(signal.SIGKILL)
             killed = time.monotonic()
@@ -103,6 +105,7 @@ def test_server_killed_mid_survey_ends_the_client_with_one_line_within_2s(
     assert len(lines) == 1 and "Traceback" not in err, err
     assert "connection to NAOqi" in lines[0] and "lost" in lines[0]
     assert ended_after < 2.0, f"client noticed the dead server only after {ended_after:.2f} s"
+    assert read_dataset(dataset).keyframes  # the frames taken before the loss are kept
 
 
 _DRIVER = """

@@ -16,6 +16,7 @@ from __future__ import annotations
 import hashlib
 import io
 import json
+import os
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -123,9 +124,13 @@ def save_map(vmap: VisualMap, path: str | Path) -> None:
         data = map_bytes(vmap)
     except (TypeError, ValueError) as err:
         raise NaolocError(f"map metadata is not JSON-able: {err}") from None
+    target = Path(path)
+    tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
     try:
-        Path(path).write_bytes(data)
+        tmp.write_bytes(data)
+        os.replace(tmp, target)  # atomic: an existing map is never left half-written
     except OSError as err:
+        tmp.unlink(missing_ok=True)
         raise NaolocError(f"{path}: cannot write map file: {err.strerror or err}") from None
 
 
