@@ -6,7 +6,10 @@ Two ways to take the query pictures:
   turn the head to it and take one or two pictures of that wall.
 - ``scan`` (default for mode ``verified``): pictures at several head yaws across the
   head's range, optionally repeated after turning in place, so the map sees most of
-  the room around the robot. The robot never translates.
+  the room around the robot. When the map's answer is not confident (no PnP-verified pose
+  with enough inliers), the robot turns a quarter turn in place and sweeps again, up to
+  ``extra_turns`` times, and the map combines every picture so far by their odometry. The
+  robot never translates.
 
 Every query keeps its odometry pose, so :meth:`VisualMap.localize` can combine them; the
 estimate is the robot pose (FRAME_ROBOT origin) in the map frame when the last picture was
@@ -36,6 +39,9 @@ if TYPE_CHECKING:
 SCAN_YAWS: tuple[float, ...] = (-2.0, -1.0, 0.0, 1.0, 2.0)
 # Offset of the paper's second picture from the first, rad (toward the robot's front).
 PAPER_SECOND_OFFSET = 0.5
+# Turns in place (and sweeps) added while the estimate is not confident, and their angle, rad.
+EXTRA_TURNS = 3
+EXTRA_TURN_RAD = math.pi / 2
 
 
 @dataclass(frozen=True)
@@ -46,6 +52,7 @@ class Localization:
         estimate: The map's estimate (map frame) for the pose the robot stands at.
         queries: The pictures used (poses: raw FRAME_WORLD odometry).
         strategy: "scan" or "paper".
+        extra_turns: Quarter turns in place made because an estimate was not confident.
         truth: The true pose in the map frame, when a simulator and the map's
             origin_room_pose know it; else None.
         error_m: Distance from estimate to truth, m (None without truth).
@@ -60,6 +67,7 @@ class Localization:
     error_m: float | None
     heading_error_deg: float | None
     wall_s: float
+    extra_turns: int = 0
 
     def summary(self) -> dict[str, Any]:
         """JSON-able fields of CONTRACT.md's ``localize`` line."""
@@ -72,6 +80,7 @@ class Localization:
             "mode": est.mode,
             "strategy": self.strategy,
             "images": len(self.queries),
+            "extra_turns": self.extra_turns,
         }
         if self.truth is not None and self.error_m is not None:
             out["error_m"] = round(self.error_m, 4)
@@ -123,11 +132,20 @@ def scan_queries(
                 if not robot.motion.moveTo(0.0, 0.0, 2.0 * math.pi / turns):
                     raise MotionError("turning in place failed during the localization scan")
                 order.reverse()  # sweep back from where the head is
-            for yaw in order:
-                look(robot, yaw, pitch)
-                out.append(camera.keyframe()[0])
+            out += sweep(camera, order, pitch)
     finally:
         robot.motion.stopMove()
+    return out
+
+
+def sweep(
+    camera: Camera, yaws: Sequence[float], pitch: float = DEFAULT_HEAD_PITCH
+) -> list[Keyframe]:
+    """One picture at each head yaw (rad), in the given order; only the head moves."""
+    out: list[Keyframe] = []
+    for yaw in yaws:
+        look(camera.robot, yaw, pitch)
+        out.append(camera.keyframe()[0])
     return out
 
 
@@ -160,6 +178,7 @@ def localize(
     strategy: str | None = None,
     yaws: Sequence[float] = SCAN_YAWS,
     turns: int = 1,
+    extra_turns: int = EXTRA_TURNS,
     camera: Camera | None = None,
     on_step: Callable[[str], None] | None = None,
 ) -> Localization:
@@ -172,33 +191,58 @@ def localize(
         mode: "verified" or "paper"; default ``cfg.localize.mode``.
         strategy: "scan" or "paper"; default "paper" for mode paper, else "scan".
         yaws: Head yaws of a scan, rad.
-        turns: Body headings of a scan (1 = no turning in place).
+        turns: Body headings of the first scan (1 = no turning in place).
+        extra_turns: Scan strategy only: while the estimate's confidence is below
+            :data:`naoloc.mapping.localizer.CONFIDENT`, turn a quarter turn in place and sweep
+            again, at most this many times (0 = never).
         camera: An open camera subscription to reuse; one is opened otherwise.
         on_step: Called with a short note as the work advances (progress display).
 
     Returns:
-        The estimate, the queries, and the error against the truth on a simulator.
+        The estimate (for the pose at the last picture, where the robot stands), the queries,
+        and the error against the truth on a simulator.
+
+    Raises:
+        MotionError: A turn in place failed (the robot is stopped).
     """
+    from naoloc.mapping.localizer import CONFIDENT
+
     t0 = time.monotonic()
     mode = mode or cfg.localize.mode
     strategy = strategy or ("paper" if mode == "paper" else "scan")
     own = camera is None
     cam = camera if camera is not None else Camera(robot, cfg.camera, "naoloc_localize")
+    added = 0
     try:
         stand(robot)
         if strategy == "paper":
             queries = paper_queries(cam, cfg.localize.images)
         else:
             queries = scan_queries(cam, yaws, turns=turns)
+        if on_step is not None:
+            on_step(f"{len(queries)} pictures")
+        estimate = vmap.localize(queries, mode=mode)  # type: ignore[arg-type]
+        order = list(yaws) if turns % 2 == 0 else list(reversed(yaws))
+        while strategy == "scan" and estimate.confidence < CONFIDENT and added < extra_turns:
+            try:
+                if not robot.motion.moveTo(0.0, 0.0, EXTRA_TURN_RAD):
+                    raise MotionError("turning in place failed during the localization scan")
+                queries += sweep(cam, order)
+            finally:
+                robot.motion.stopMove()
+            order.reverse()  # sweep back from where the head is
+            added += 1
+            if on_step is not None:
+                on_step(f"turned in place, {len(queries)} pictures")
+            estimate = vmap.localize(queries, mode=mode)  # type: ignore[arg-type]
     finally:
         if own:
             cam.close()
-    if on_step is not None:
-        on_step(f"{len(queries)} pictures")
-    estimate = vmap.localize(queries, mode=mode)  # type: ignore[arg-type]
     truth = truth_in_map(robot, vmap.meta)
     error = heading = None
     if truth is not None:
         error = math.hypot(estimate.x - truth.x, estimate.y - truth.y)
         heading = math.degrees(abs(modulo2PI(estimate.theta - truth.theta)))
-    return Localization(estimate, queries, strategy, truth, error, heading, time.monotonic() - t0)
+    return Localization(
+        estimate, queries, strategy, truth, error, heading, time.monotonic() - t0, added
+    )

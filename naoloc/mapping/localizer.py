@@ -38,6 +38,14 @@ MIN_PNP_INLIERS = 10
 PNP_REPROJECTION_PX = 4.0
 CAMERA_HEIGHT_TOLERANCE_M = 0.3
 CONFIDENCE_SCALE = 25.0  # inliers at which confidence reaches 1 - 1/e
+#: A PnP estimate with at least this confidence (40 inliers) is "confident": behaviours may
+#: stop looking. Unverified fallbacks never reach it (capped at FALLBACK_MAX_CONFIDENCE).
+CONFIDENT = 1.0 - math.exp(-40.0 / CONFIDENCE_SCALE)
+FALLBACK_MAX_CONFIDENCE = 0.3
+#: Plausibility of a pose: no more than CLEARANCE_MAX_LANDMARKS landmarks (between the floor
+#: and 3 m up) closer than CLEARANCE_M to the robot's centre, which cannot stand in a wall.
+CLEARANCE_M = 0.25
+CLEARANCE_MAX_LANDMARKS = 4
 
 
 @dataclass(frozen=True)
@@ -90,11 +98,42 @@ def _no_estimate(vmap: VisualMap, mode: str, reason: str) -> Estimate:
     return Estimate(cx, cy, 0.0, 0.0, mode, {"method": "none", "reason": reason})
 
 
+def featured_neuron_poses(vmap: VisualMap) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Neuron poses (Algorithm 4, line 7) from the keyframes that have keypoints.
+
+    A keyframe without keypoints has an empty histogram that carries no place; a neuron that
+    wins only such keyframes carries no pose and must not win a query.
+
+    Returns:
+        ``posed`` (P,) neuron indices, their ``(P, 3)`` mean poses (map frame: m, m, rad)
+        and ``(P,)`` mean camera headings (rad).
+    """
+    has = np.diff(vmap.kp_offsets) > 0
+    win = vmap.winners[has]
+    k = vmap.gcs.size
+    count = np.bincount(win, minlength=k).astype(np.float64)
+    posed = np.flatnonzero(count > 0)
+    poses = vmap.keyframe_poses[has]
+    views = poses[:, 2] + vmap.keyframe_heads[has, 0]
+
+    def mean(v: np.ndarray) -> np.ndarray:
+        return np.bincount(win, weights=v, minlength=k)[posed] / count[posed]
+
+    def circ(a: np.ndarray) -> np.ndarray:
+        return np.arctan2(mean(np.sin(a)), mean(np.cos(a)))
+
+    out = np.column_stack([mean(poses[:, 0]), mean(poses[:, 1]), circ(poses[:, 2])])
+    return posed, out, circ(views)
+
+
 def localize_paper(
     vmap: VisualMap, feats: Sequence[Features], queries: Sequence[Keyframe]
 ) -> Estimate:
-    """Algorithm 5: mean pose of the winning neurons of the query histograms."""
-    posed = np.flatnonzero(np.isfinite(vmap.neuron_poses[:, 0]))
+    """Algorithm 5: mean pose of the winning neurons of the query histograms.
+
+    Only neurons that win keyframes with keypoints take part (:func:`featured_neuron_poses`).
+    """
+    posed, neuron_poses, neuron_views = featured_neuron_poses(vmap)
     usable = [i for i, f in enumerate(feats) if len(f) > 0]
     if not usable or posed.size == 0:
         return _no_estimate(vmap, "paper", "no features" if not usable else "no posed neuron")
@@ -105,11 +144,10 @@ def localize_paper(
         hist = vmap.vocabulary.histogram(feats[i].descriptors)
         d2 = np.sum((weights - hist[None, :]) ** 2, axis=1)
         j = int(np.argmin(d2))
-        n = int(posed[j])
-        winners.append(n)
-        xs.append(vmap.neuron_poses[n, 0])
-        ys.append(vmap.neuron_poses[n, 1])
-        theta_q = vmap.neuron_views[n] - queries[i].head_yaw
+        winners.append(int(posed[j]))
+        xs.append(neuron_poses[j, 0])
+        ys.append(neuron_poses[j, 1])
+        theta_q = neuron_views[j] - queries[i].head_yaw
         headings.append(theta_q + math.atan2(to_last[i][1, 0], to_last[i][0, 0]))
         closeness.append(max(0.0, 1.0 - math.sqrt(float(d2[j])) / math.sqrt(2.0)))
     conf = len(usable) / len(feats) * float(np.mean(closeness))
@@ -177,6 +215,58 @@ def _refine(pose: np.ndarray, mats: np.ndarray, pts: np.ndarray, px: np.ndarray)
         if np.abs(delta).max() < 1e-6:
             break
     return p
+
+
+def crowded_landmarks(vmap: VisualMap, x: float, y: float) -> int:
+    """Landmarks (0.05-3 m above the floor) closer than CLEARANCE_M to ``(x, y)`` (map frame).
+
+    A robot stands in free space: a pose with many landmarks within its body is a wrong one
+    (e.g. PnP on a repeated poster that puts the robot in a wall).
+    """
+    p = vmap.kp_points
+    near = (np.abs(p[:, 0] - x) < CLEARANCE_M) & (np.abs(p[:, 1] - y) < CLEARANCE_M)
+    q = p[near]
+    ok = (np.hypot(q[:, 0] - x, q[:, 1] - y) < CLEARANCE_M) & (q[:, 2] > 0.05) & (q[:, 2] < 3.0)
+    return int(ok.sum())
+
+
+def _best_plausible(
+    vmap: VisualMap,
+    hypotheses: list[np.ndarray],
+    mm: np.ndarray,
+    pts: np.ndarray,
+    px: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, int] | None:
+    """Refine hypotheses by inlier count, best first; the first plausible one wins.
+
+    Returns:
+        The refined last-robot pose, its inlier mask over all correspondences and the number
+        of implausible hypotheses passed over; None when no hypothesis reaches
+        MIN_PNP_INLIERS at a plausible pose.
+    """
+    scored = []
+    for h in hypotheses:
+        inl = _residuals(h, mm, pts, px) < PNP_REPROJECTION_PX
+        scored.append((int(inl.sum()), h, inl))
+    scored.sort(key=lambda t: -t[0])
+    rejected = 0
+    tried: list[np.ndarray] = []
+    for _n, pose, inl in scored:
+        if any(np.hypot(*(pose[:2] - t[:2])) < 0.05 for t in tried):
+            continue  # the same pose again (several queries agreeing)
+        tried.append(pose)
+        for _ in range(3):
+            if inl.sum() < 4:
+                break
+            pose = _refine(pose, mm[inl], pts[inl], px[inl])
+            inl = _residuals(pose, mm, pts, px) < PNP_REPROJECTION_PX
+        if int(inl.sum()) < MIN_PNP_INLIERS:
+            continue
+        if crowded_landmarks(vmap, float(pose[0]), float(pose[1])) > CLEARANCE_MAX_LANDMARKS:
+            rejected += 1
+            continue
+        return pose, inl, rejected
+    return None
 
 
 def localize_verified(
@@ -254,30 +344,23 @@ def localize_verified(
         pts = np.concatenate(corr.points)
         px = np.concatenate(corr.pixels)
         mm = np.concatenate(mats)
-        best_pose, best_inl = hypotheses[0], np.zeros(0, bool)
-        for h in hypotheses:
-            h_inl = _residuals(h, mm, pts, px) < PNP_REPROJECTION_PX
-            if h_inl.sum() > best_inl.sum():
-                best_pose, best_inl = h, h_inl
-        pose = best_pose
-        for _ in range(3):
-            if best_inl.sum() < 4:
-                break
-            pose = _refine(pose, mm[best_inl], pts[best_inl], px[best_inl])
-            best_inl = _residuals(pose, mm, pts, px) < PNP_REPROJECTION_PX
-        n_inl = int(best_inl.sum())
-        if n_inl >= MIN_PNP_INLIERS:
+        found = _best_plausible(vmap, hypotheses, mm, pts, px)
+        if found is not None:
+            pose, inl, rejected = found
+            n_inl = int(inl.sum())
             qs = np.concatenate(corr.query)
             details.update(
                 method="pnp",
                 inliers=n_inl,
                 correspondences=int(pts.shape[0]),
-                inliers_per_query=[int((best_inl & (qs == qi)).sum()) for qi in usable],
+                inliers_per_query=[int((inl & (qs == qi)).sum()) for qi in usable],
+                implausible_rejected=rejected,
             )
             conf = 1.0 - math.exp(-n_inl / CONFIDENCE_SCALE)
             return Estimate(
                 float(pose[0]), float(pose[1]), modulo2PI(float(pose[2])), conf, "verified", details
             )
+        details["implausible_rejected"] = len(hypotheses)
     return _fallback(vmap, feats, queries, kf_votes, to_last, details)
 
 
@@ -336,7 +419,7 @@ def _fallback(
         return Estimate(est.x, est.y, est.theta, 0.0, "verified", {**details, **est.details})
     w = np.asarray(ws)
     details.update(method="keyframes", inliers=int(w.sum()))
-    conf = 0.4 * (1.0 - math.exp(-float(w.max()) / CONFIDENCE_SCALE))
+    conf = FALLBACK_MAX_CONFIDENCE * (1.0 - math.exp(-float(w.max()) / CONFIDENCE_SCALE))
     return Estimate(
         float(np.average(xs, weights=w)),
         float(np.average(ys, weights=w)),
