@@ -3,10 +3,18 @@
 Odometry drifts (scale, heading bias, noise), so the survey's second lap does not land on
 the first and the map blurs. Here each keyframe's triangulated landmarks (from temporally
 adjacent keyframes only, where odometry is locally exact enough) are matched from
-keyframes of other laps that look alike (TF-IDF retrieval); PnP gives the relative pose
-between the two keyframes. Odometry edges plus these loop-closure edges are then solved
-by Gauss-Newton on (x, y, theta) per keyframe with the first keyframe held fixed, which
-keeps the map frame (the odometry frame at the survey start).
+keyframes of other laps that look alike (TF-IDF retrieval) and, after a first solution,
+from keyframes whose cameras look at the same place; PnP gives the relative pose between
+the two keyframes. Odometry edges plus these loop-closure edges are then solved by
+Gauss-Newton on (x, y, theta) per keyframe with the first keyframe held fixed, which keeps
+the map frame (the odometry frame at the survey start).
+
+The odometry model follows how a walking robot drifts: a heading bias proportional to the
+distance walked (a systematic curve, estimated as one unknown of the graph, rad/m), heading
+noise that grows with the square root of the angle turned (corners), and small position
+noise per step. Loop closures get a robust (Huber) loss, and closures that still disagree
+with the solution are dropped. A pure scale error of odometry is not observable from the
+images (the landmarks are triangulated with the same odometry), so it stays in the map.
 
 Frames: all poses are robot poses in the map frame (m, rad).
 """
@@ -33,11 +41,55 @@ from naoloc.mapping.vocabulary import dbow_scores
 LOCAL_WINDOW = 3  # keyframes either side used to triangulate a keyframe's landmarks
 LOOP_MIN_GAP = 6  # keyframes closer in time than this are tied by odometry only
 LOOP_CANDIDATES = 3  # retrieval candidates per keyframe
+GEOMETRIC_CANDIDATES = 3  # candidates per keyframe from the first solution's camera poses
 LOOP_MIN_INLIERS = 15
-SIGMA_ODO_XY = (0.01, 0.03)  # m: constant, per metre travelled
-SIGMA_ODO_TH = (0.005, 0.02, 0.01)  # rad: constant, per rad turned, per metre travelled
-SIGMA_LOOP_XY = 0.03  # m
-SIGMA_LOOP_TH = 0.01  # rad
+# Odometry noise per edge: sigma_xy = c + k * d (m); sigma_theta = c + k * sqrt(|turn|) + k' d.
+SIGMA_ODO_XY = (0.002, 0.01)  # m: constant, per metre travelled
+SIGMA_ODO_TH = (0.001, 0.012, 0.002)  # rad: constant, per sqrt(rad) turned, per metre travelled
+LOOP_REPROJECTION_PX = 3.0
+LOOP_PIXEL_SIGMA = 1.0  # px: least pixel noise of a loop-closure match
+LOOP_EFFECTIVE_MATCHES = 20  # matches counted at most (their landmark errors correlate)
+HUBER_K = 2.0  # loop residuals beyond this many sigmas get a linear (Huber) loss
+SIGMA_BIAS_PRIOR = 0.05  # rad/m: weak prior of the heading bias around 0
+OUTLIER_CHI2 = 16.0  # loop closures with a larger chi-square after solving are dropped
+
+
+@dataclass(frozen=True)
+class Edge:
+    """One pose-graph constraint: the pose of keyframe b measured in keyframe a's frame.
+
+    Attributes:
+        a: Index of the reference keyframe.
+        b: Index of the measured keyframe.
+        z: ``(3,)`` measured pose of b in a's robot frame (m, m, rad).
+        info: ``(3, 3)`` information matrix (inverse covariance) of ``z``.
+        odometry: True for an odometry edge: its heading is corrected by the estimated
+            heading bias times ``dist``.
+        dist: Distance walked between a and b (m), for the heading bias.
+    """
+
+    a: int
+    b: int
+    z: np.ndarray
+    info: np.ndarray
+    odometry: bool = False
+    dist: float = 0.0
+
+
+@dataclass(frozen=True)
+class GraphSolution:
+    """Result of :func:`solve_pose_graph`.
+
+    Attributes:
+        poses: ``(N, 3)`` optimised poses (map frame).
+        heading_bias: Estimated odometry heading bias (rad per metre walked); 0 when not
+            estimated.
+        iterations: Gauss-Newton iterations run.
+    """
+
+    poses: np.ndarray
+    heading_bias: float
+    iterations: int
 
 
 @dataclass(frozen=True)
@@ -48,11 +100,13 @@ class RefinedPoses:
         poses: ``(N, 3)`` refined keyframe poses (map frame).
         loops: Loop-closure edges kept.
         shift_m: Largest position change from the odometry poses, metres.
+        heading_bias: Estimated odometry heading bias, rad per metre walked.
     """
 
     poses: np.ndarray
     loops: int
     shift_m: float
+    heading_bias: float = 0.0
 
 
 def _v2t(p: np.ndarray) -> np.ndarray:
@@ -64,68 +118,327 @@ def _t2v(t: np.ndarray) -> np.ndarray:
     return np.array([t[0, 2], t[1, 2], math.atan2(t[1, 0], t[0, 0])])
 
 
-def _relative(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def relative(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Pose ``b`` expressed in the frame of pose ``a`` (both ``(3,)``, same frame)."""
     return _t2v(np.linalg.inv(_v2t(a)) @ _v2t(b))
 
 
+def _edge_terms(
+    x: np.ndarray, edges: Sequence[Edge], bias: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Residuals and Jacobians of all edges at once.
+
+    Returns:
+        ``r`` (E, 3) residuals (b's pose error in the measured frame), ``ja`` and ``jb``
+        (E, 3, 3) Jacobians w.r.t. poses a and b, ``jbias`` (E,) d r_theta / d bias.
+    """
+    ia = np.array([e.a for e in edges], np.int64)
+    ib = np.array([e.b for e in edges], np.int64)
+    z = np.stack([e.z for e in edges])
+    jbias = np.array([e.dist if e.odometry else 0.0 for e in edges])
+    zth = z[:, 2] - bias * jbias
+    ca, sa = np.cos(x[ia, 2]), np.sin(x[ia, 2])
+    cz, sz = np.cos(zth), np.sin(zth)
+    dt = x[ib, :2] - x[ia, :2]
+    # p = R_a^T dt (b's position in a's frame) and its derivative by theta_a.
+    p = np.stack([ca * dt[:, 0] + sa * dt[:, 1], -sa * dt[:, 0] + ca * dt[:, 1]], axis=1)
+    dp = np.stack([-sa * dt[:, 0] + ca * dt[:, 1], -ca * dt[:, 0] - sa * dt[:, 1]], axis=1)
+    q = p - z[:, :2]
+    r = np.empty((len(edges), 3))
+    r[:, 0] = cz * q[:, 0] + sz * q[:, 1]
+    r[:, 1] = -sz * q[:, 0] + cz * q[:, 1]
+    r[:, 2] = np.remainder(x[ib, 2] - x[ia, 2] - zth + np.pi, 2.0 * np.pi) - np.pi
+    # R_z^T R_a^T, a 2x2 rotation by -(theta_a + z_theta).
+    cc, ss = np.cos(x[ia, 2] + zth), np.sin(x[ia, 2] + zth)
+    rot = np.stack([np.stack([cc, ss], 1), np.stack([-ss, cc], 1)], 1)
+    jb = np.zeros((len(edges), 3, 3))
+    jb[:, :2, :2] = rot
+    jb[:, 2, 2] = 1.0
+    ja = -jb
+    ja[:, 0, 2] = cz * dp[:, 0] + sz * dp[:, 1]
+    ja[:, 1, 2] = -sz * dp[:, 0] + cz * dp[:, 1]
+    return r, ja, jb, jbias
+
+
+def _huber_weights(chi2: np.ndarray, k: float) -> np.ndarray:
+    """IRLS weights of the Huber loss for residuals of squared Mahalanobis norm ``chi2``."""
+    m = np.sqrt(np.maximum(chi2, 0.0))
+    return np.where(m <= k, 1.0, k / np.maximum(m, 1e-12))
+
+
 def solve_pose_graph(
-    init: np.ndarray, edges: Sequence[tuple[int, int, np.ndarray, np.ndarray]], iterations: int = 10
-) -> np.ndarray:
+    init: np.ndarray,
+    edges: Sequence[Edge],
+    iterations: int = 15,
+    *,
+    estimate_bias: bool = False,
+    huber_k: float | None = None,
+) -> GraphSolution:
     """Gauss-Newton on a 2-D pose graph, node 0 fixed.
 
     Args:
-        init: ``(N, 3)`` initial poses.
-        edges: ``(a, b, z, info)``: measured pose of b in a's frame and its 3x3 information.
+        init: ``(N, 3)`` initial poses (map frame).
+        edges: The constraints.
         iterations: Gauss-Newton iterations at most.
+        estimate_bias: Also estimate one odometry heading bias (rad/m) shared by the
+            odometry edges (a weak prior keeps it near 0 when unobservable).
+        huber_k: Huber threshold (in sigmas) for the non-odometry edges; None: least squares.
 
     Returns:
-        ``(N, 3)`` optimised poses.
+        The optimised poses and heading bias.
     """
     x = init.astype(np.float64).copy()
     n = x.shape[0]
-    for _ in range(iterations):
-        h = np.zeros((3 * n, 3 * n))
-        g = np.zeros(3 * n)
-        for a, b, z, info in edges:
-            ca, sa = math.cos(x[a, 2]), math.sin(x[a, 2])
-            rat = np.array([[ca, sa], [-sa, ca]])  # R_a^T
-            drat = np.array([[-sa, ca], [-ca, -sa]])  # d R_a^T / d theta_a
-            cz, sz = math.cos(z[2]), math.sin(z[2])
-            rzt = np.array([[cz, sz], [-sz, cz]])
-            dt = x[b, :2] - x[a, :2]
-            e = np.empty(3)
-            e[:2] = rzt @ (rat @ dt - z[:2])
-            e[2] = math.remainder(x[b, 2] - x[a, 2] - z[2], 2.0 * math.pi)
-            ja = np.zeros((3, 3))
-            ja[:2, :2] = -rzt @ rat
-            ja[:2, 2] = rzt @ drat @ dt
-            ja[2, 2] = -1.0
-            jb = np.zeros((3, 3))
-            jb[:2, :2] = rzt @ rat
-            jb[2, 2] = 1.0
-            ia, ib = slice(3 * a, 3 * a + 3), slice(3 * b, 3 * b + 3)
-            h[ia, ia] += ja.T @ info @ ja
-            h[ia, ib] += ja.T @ info @ jb
-            h[ib, ia] += jb.T @ info @ ja
-            h[ib, ib] += jb.T @ info @ jb
-            g[ia] += ja.T @ info @ e
-            g[ib] += jb.T @ info @ e
+    if not edges:
+        return GraphSolution(x, 0.0, 0)
+    ia = np.array([e.a for e in edges], np.int64)
+    ib = np.array([e.b for e in edges], np.int64)
+    info0 = np.stack([e.info for e in edges])
+    loop = np.array([not e.odometry for e in edges])
+    dim = 3 * n + 1
+    bias = 0.0
+    done = 0
+    for it in range(1, iterations + 1):
+        done = it
+        r, ja, jb, jbias = _edge_terms(x, edges, bias)
+        info = info0
+        if huber_k is not None:
+            chi2 = np.einsum("ei,eij,ej->e", r, info0, r)
+            w = np.where(loop, _huber_weights(chi2, huber_k), 1.0)
+            info = info0 * w[:, None, None]
+        # Jacobian rows of every edge over [pose a | pose b | bias].
+        jfull = np.concatenate([ja, jb, np.zeros((len(edges), 3, 1))], axis=2)
+        jfull[:, 2, 6] = jbias if estimate_bias else 0.0
+        jti = np.einsum("eki,ekl->eil", jfull, info)  # J^T W, (E, 7, 3)
+        hb = np.einsum("eil,elj->eij", jti, jfull)  # (E, 7, 7)
+        gb = np.einsum("eil,el->ei", jti, r)  # (E, 7)
+        idx = np.concatenate(
+            [
+                3 * ia[:, None] + np.arange(3),
+                3 * ib[:, None] + np.arange(3),
+                np.full((len(edges), 1), dim - 1),
+            ],
+            axis=1,
+        )
+        h = np.zeros((dim, dim))
+        g = np.zeros(dim)
+        np.add.at(h, (idx[:, :, None], idx[:, None, :]), hb)
+        np.add.at(g, idx, gb)
+        h[-1, -1] += 1.0 / SIGMA_BIAS_PRIOR**2
+        g[-1] += bias / SIGMA_BIAS_PRIOR**2
         h[:3, :3] += np.eye(3) * 1e9  # hold node 0
         try:
-            dx = np.linalg.solve(h + np.eye(3 * n) * 1e-9, -g)
+            dx = np.linalg.solve(h + np.eye(dim) * 1e-9, -g)
         except np.linalg.LinAlgError:
             break
-        x += dx.reshape(n, 3)
+        x += dx[: 3 * n].reshape(n, 3)
+        if estimate_bias:
+            bias += float(dx[-1])
         if np.abs(dx).max() < 1e-7:
             break
-    return x
+    return GraphSolution(x, bias, done)
 
 
-def _odometry_info(z: np.ndarray) -> np.ndarray:
+def odometry_info(z: np.ndarray) -> np.ndarray:
+    """Information matrix of an odometry edge ``z`` (pose of b in a's frame)."""
     dist = math.hypot(z[0], z[1])
     sxy = SIGMA_ODO_XY[0] + SIGMA_ODO_XY[1] * dist
-    sth = SIGMA_ODO_TH[0] + SIGMA_ODO_TH[1] * abs(z[2]) + SIGMA_ODO_TH[2] * dist
+    sth = SIGMA_ODO_TH[0] + SIGMA_ODO_TH[1] * math.sqrt(abs(z[2])) + SIGMA_ODO_TH[2] * dist
     return np.diag([1 / sxy**2, 1 / sxy**2, 1 / sth**2])
+
+
+def odometry_edges(poses: np.ndarray) -> list[Edge]:
+    """Edges between consecutive keyframes from their odometry poses."""
+    out = []
+    for i in range(poses.shape[0] - 1):
+        z = relative(poses[i], poses[i + 1])
+        out.append(Edge(i, i + 1, z, odometry_info(z), True, math.hypot(z[0], z[1])))
+    return out
+
+
+@dataclass
+class _LoopContext:
+    """What loop-closure detection needs, computed once."""
+
+    poses: np.ndarray
+    heads: np.ndarray
+    xy: Sequence[np.ndarray]
+    desc: Sequence[np.ndarray]
+    intrinsics: Sequence[np.ndarray]
+    cam_index: Sequence[int]
+    points: np.ndarray  # (M, 3) local landmarks, map frame of the odometry poses
+    offsets: np.ndarray
+    matcher: object
+
+
+def _loop_edge(ctx: _LoopContext, i: int, j: int) -> Edge | None:
+    """Relative pose of keyframe j in keyframe i's frame by PnP on i's local landmarks."""
+    import cv2
+
+    m = ratio_matches(ctx.matcher, ctx.desc[j], ctx.desc[i])
+    if m.shape[0] < LOOP_MIN_INLIERS:
+        return None
+    obj_map = ctx.points[ctx.offsets[i] : ctx.offsets[i + 1]][m[:, 1]]
+    ok_pts = np.isfinite(obj_map[:, 0])
+    if ok_pts.sum() < LOOP_MIN_INLIERS:
+        return None
+    t_ri_map = np.linalg.inv(robot_matrix(*ctx.poses[i]))
+    obj = obj_map[ok_pts] @ t_ri_map[:3, :3].T + t_ri_map[:3, 3]
+    img = ctx.xy[j][m[ok_pts, 0]].astype(np.float64)
+    try:
+        ok, rvec, tvec, inl = cv2.solvePnPRansac(
+            obj,
+            img,
+            ctx.intrinsics[j],
+            None,
+            iterationsCount=200,
+            reprojectionError=3.0,
+            confidence=0.999,
+            flags=cv2.SOLVEPNP_SQPNP,
+        )
+    except cv2.error:
+        return None
+    if not ok or inl is None or len(inl) < LOOP_MIN_INLIERS:
+        return None
+    rot, _ = cv2.Rodrigues(rvec)
+    t_cam_ri = np.eye(4)
+    t_cam_ri[:3, :3], t_cam_ri[:3, 3] = rot, tvec.ravel()
+    c_j = camera_in_robot(float(ctx.heads[j, 0]), float(ctx.heads[j, 1]), ctx.cam_index[j])
+    t_ri_rj = np.linalg.inv(t_cam_ri) @ np.linalg.inv(c_j)
+    if abs(t_ri_rj[2, 3]) > 0.1:  # both robots stand on the same floor
+        return None
+    sel = np.asarray(inl).ravel()
+    fit = planar_pnp(np.array(planar_pose(t_ri_rj)), obj[sel], img[sel], ctx.intrinsics[j], c_j)
+    if fit is None:
+        return None
+    return Edge(i, j, fit[0], fit[1])
+
+
+def _project_planar(
+    z: np.ndarray, obj: np.ndarray, kmat: np.ndarray, c_j: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Pixels and depths of points ``obj`` (robot-i frame) seen from robot pose ``z``."""
+    t_cam = np.linalg.inv(robot_matrix(*z) @ c_j)
+    pc = obj @ t_cam[:3, :3].T + t_cam[:3, 3]
+    h = pc @ kmat.T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return h[:, :2] / h[:, 2:3], pc[:, 2]
+
+
+def _compose_local(z: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """``z (+) d``: the pose ``z`` moved by ``d`` expressed in its own frame."""
+    c, s = math.cos(z[2]), math.sin(z[2])
+    return np.array([z[0] + c * d[0] - s * d[1], z[1] + s * d[0] + c * d[1], z[2] + d[2]])
+
+
+def planar_pnp(
+    z0: np.ndarray, obj: np.ndarray, img: np.ndarray, kmat: np.ndarray, c_j: np.ndarray
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """Planar (x, y, theta) pose from 3-D to 2-D matches, and its information matrix.
+
+    Gauss-Newton on the reprojection error with the camera height and pitch fixed by the
+    head (``c_j``); points beyond LOOP_REPROJECTION_PX are left out. The information is
+    ``J^T J / sigma^2`` of the pixel residuals, with the matches counted at most
+    LOOP_EFFECTIVE_MATCHES times (landmark errors are correlated) and the residual spread
+    taken when it is larger than LOOP_PIXEL_SIGMA.
+
+    Args:
+        z0: ``(3,)`` initial pose of the robot in the landmarks' frame (m, m, rad).
+        obj: ``(n, 3)`` points in that frame (m).
+        img: ``(n, 2)`` their pixels.
+        kmat: 3x3 camera matrix.
+        c_j: 4x4 camera-in-robot transform of the image.
+
+    Returns:
+        ``(z, info)`` (3-vector, 3x3), or None with too few consistent matches.
+    """
+    z = z0.astype(np.float64).copy()
+    keep = np.ones(obj.shape[0], bool)
+    jac = np.zeros((0, 3))
+    res = np.zeros(0)
+    for _ in range(5):
+        uv, depth = _project_planar(z, obj, kmat, c_j)
+        err = np.linalg.norm(uv - img, axis=1)
+        keep = np.isfinite(err) & (depth > 0.05) & (err < LOOP_REPROJECTION_PX)
+        if keep.sum() < LOOP_MIN_INLIERS:
+            return None
+        res = (uv[keep] - img[keep]).ravel()
+        jac = np.empty((res.size, 3))
+        for k in range(3):
+            d = np.zeros(3)
+            d[k] = 1e-5
+            uv_k, _ = _project_planar(_compose_local(z, d), obj[keep], kmat, c_j)
+            jac[:, k] = ((uv_k - img[keep]).ravel() - res) / 1e-5
+        step, *_ = np.linalg.lstsq(jac, -res, rcond=None)
+        z = _compose_local(z, step)
+        if np.abs(step).max() < 1e-7:
+            break
+    m = int(keep.sum())
+    sigma = max(LOOP_PIXEL_SIGMA, float(np.sqrt(np.mean(res**2))))
+    info = jac.T @ jac / sigma**2 * min(1.0, LOOP_EFFECTIVE_MATCHES / m)
+    if not np.isfinite(info).all():
+        return None
+    return z, info
+
+
+def _retrieval_pairs(histograms: np.ndarray) -> list[tuple[int, int]]:
+    """(landmark keyframe, query keyframe) pairs from TF-IDF retrieval, far apart in time."""
+    n = histograms.shape[0]
+    out = []
+    for j in range(n):
+        scores = dbow_scores(histograms[j], histograms)
+        scores[max(0, j - LOOP_MIN_GAP + 1) : j + LOOP_MIN_GAP] = -1.0
+        for i in np.argsort(-scores, kind="stable")[:LOOP_CANDIDATES].tolist():
+            if scores[i] > 0:
+                out.append((int(i), j))
+    return out
+
+
+def _geometric_pairs(cams: np.ndarray) -> list[tuple[int, int]]:
+    """Pairs far apart in time whose cameras (of a first solution) see the same place.
+
+    Each camera's look-at point 1.5 m ahead on its optical axis is compared; the closest
+    ones with views within 45 degrees pair up.
+    """
+    n = cams.shape[0]
+    look = cams[:, :3, 3] + 1.5 * cams[:, :3, 2]
+    views = cams[:, :3, 2]
+    dist = np.linalg.norm(look[:, None, :] - look[None, :, :], axis=2)
+    ok = (views @ views.T) > math.cos(math.radians(45.0))
+    idx = np.arange(n)
+    ok &= np.abs(idx[:, None] - idx[None, :]) >= LOOP_MIN_GAP
+    dist[~ok] = np.inf
+    out = []
+    for j in range(n):
+        for i in np.argsort(dist[j], kind="stable")[:GEOMETRIC_CANDIDATES].tolist():
+            if math.isfinite(dist[j, i]) and dist[j, i] < 1.0:
+                out.append((int(i), j))
+    return out
+
+
+def _cameras(poses: np.ndarray, heads: np.ndarray, cam_index: Sequence[int]) -> np.ndarray:
+    return np.stack(
+        [
+            camera_matrix_in_map(poses[i], heads[i, 0], heads[i, 1], cam_index[i])
+            for i in range(poses.shape[0])
+        ]
+    )
+
+
+def _solve_robust(
+    init: np.ndarray, odo: list[Edge], loops: list[Edge]
+) -> tuple[GraphSolution, list[Edge]]:
+    """Robust solve, drop loop closures that still disagree, solve again."""
+    sol = solve_pose_graph(init, odo + loops, estimate_bias=True, huber_k=HUBER_K)
+    kept = []
+    for e in loops:
+        r = relative(sol.poses[e.a], sol.poses[e.b]) - e.z
+        r[2] = math.remainder(r[2], 2.0 * math.pi)
+        if float(r @ e.info @ r) < OUTLIER_CHI2:
+            kept.append(e)
+    if len(kept) < len(loops):
+        sol = solve_pose_graph(init, odo + kept, estimate_bias=True, huber_k=HUBER_K)
+    return sol, kept
 
 
 def refine_poses(
@@ -153,77 +466,35 @@ def refine_poses(
     Returns:
         The refined poses (the odometry poses when no loop closure is found).
     """
-    import cv2
-
     n = poses.shape[0]
-    cams = np.stack(
-        [camera_matrix_in_map(poses[i], heads[i, 0], heads[i, 1], cam_index[i]) for i in range(n)]
-    )
+    cams = _cameras(poses, heads, cam_index)
     local = [(i, j) for i in range(n) for j in range(i + 1, min(n, i + LOCAL_WINDOW + 1))]
     lm = triangulate(xy, desc, cams, intrinsics, binary, pairs=local)
     offsets = np.concatenate([[0], np.cumsum([a.shape[0] for a in xy])]).astype(np.int64)
-    matcher = hamming_matcher(binary)
-    edges: list[tuple[int, int, np.ndarray, np.ndarray]] = []
-    for i in range(n - 1):
-        z = _relative(poses[i], poses[i + 1])
-        edges.append((i, i + 1, z, _odometry_info(z)))
+    ctx = _LoopContext(
+        poses, heads, xy, desc, intrinsics, cam_index, lm.points, offsets, hamming_matcher(binary)
+    )
+    odo = odometry_edges(poses)
     tried: set[tuple[int, int]] = set()
-    loops = 0
-    for j in range(n):
-        scores = dbow_scores(histograms[j], histograms)
-        scores[max(0, j - LOOP_MIN_GAP + 1) : j + LOOP_MIN_GAP] = -1.0
-        for i in np.argsort(-scores, kind="stable")[:LOOP_CANDIDATES].tolist():
-            if scores[i] <= 0 or (min(i, j), max(i, j)) in tried:
+    loops: list[Edge] = []
+
+    def add(pairs: list[tuple[int, int]]) -> None:
+        for i, j in pairs:
+            key = (min(i, j), max(i, j))
+            if key in tried:
                 continue
-            tried.add((min(i, j), max(i, j)))
-            pts_i = lm.points[offsets[i] : offsets[i + 1]]
-            m = ratio_matches(matcher, desc[j], desc[i])
-            if m.shape[0] < LOOP_MIN_INLIERS:
-                continue
-            obj_map = pts_i[m[:, 1]]
-            ok_pts = np.isfinite(obj_map[:, 0])
-            if ok_pts.sum() < LOOP_MIN_INLIERS:
-                continue
-            t_ri_map = np.linalg.inv(robot_matrix(*poses[i]))
-            obj = obj_map[ok_pts] @ t_ri_map[:3, :3].T + t_ri_map[:3, 3]
-            img = xy[j][m[ok_pts, 0]].astype(np.float64)
-            try:
-                ok, rvec, tvec, inl = cv2.solvePnPRansac(
-                    obj,
-                    img,
-                    intrinsics[j],
-                    None,
-                    iterationsCount=200,
-                    reprojectionError=3.0,
-                    confidence=0.999,
-                    flags=cv2.SOLVEPNP_SQPNP,
-                )
-            except cv2.error:
-                continue
-            if not ok or inl is None or len(inl) < LOOP_MIN_INLIERS:
-                continue
-            rot, _ = cv2.Rodrigues(rvec)
-            t_cam_ri = np.eye(4)
-            t_cam_ri[:3, :3], t_cam_ri[:3, 3] = rot, tvec.ravel()
-            c_j = camera_in_robot(float(heads[j, 0]), float(heads[j, 1]), cam_index[j])
-            t_ri_rj = np.linalg.inv(t_cam_ri) @ np.linalg.inv(c_j)
-            if abs(t_ri_rj[2, 3]) > 0.1:  # both robots stand on the same floor
-                continue
-            z = np.array(planar_pose(t_ri_rj))
-            info = np.diag([1 / SIGMA_LOOP_XY**2, 1 / SIGMA_LOOP_XY**2, 1 / SIGMA_LOOP_TH**2])
-            edges.append((i, j, z, info))
-            loops += 1
-    if loops == 0:
+            tried.add(key)
+            edge = _loop_edge(ctx, i, j)
+            if edge is not None:
+                loops.append(edge)
+
+    add(_retrieval_pairs(histograms))
+    if not loops:
         return RefinedPoses(poses.copy(), 0, 0.0)
-    refined = solve_pose_graph(poses, edges)
-    # Drop loop closures that disagree with the solution (wrong matches), solve again.
-    kept = edges[: n - 1]
-    for a, b, z, info in edges[n - 1 :]:
-        e = _relative(refined[a], refined[b]) - z
-        e[2] = math.remainder(e[2], 2.0 * math.pi)
-        if float(e @ info @ e) < 9.0 * 3:
-            kept.append((a, b, z, info))
-    if len(kept) < len(edges):
-        refined = solve_pose_graph(poses, kept)
+    sol, kept = _solve_robust(poses, odo, loops)
+    # Second pass: pairs that look at the same place according to the first solution.
+    add(_geometric_pairs(_cameras(sol.poses, heads, cam_index)))
+    sol, kept = _solve_robust(sol.poses, odo, loops)
+    refined = sol.poses
     shift = float(np.max(np.hypot(*(refined[:, :2] - poses[:, :2]).T)))
-    return RefinedPoses(refined, len(kept) - (n - 1), shift)
+    return RefinedPoses(refined, len(kept), shift, sol.heading_bias)
