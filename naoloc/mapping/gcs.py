@@ -29,6 +29,8 @@ is recomputed from the weights.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import chain
+from typing import Any
 
 import numpy as np
 
@@ -154,15 +156,25 @@ class _IndexStream:
         return out
 
 
+def _pair_sq_dist(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Squared Euclidean distances between paired rows of ``a`` and ``b``."""
+    diff = a - b
+    return np.einsum("ij,ij->i", diff, diff)
+
+
 class _Trainer:
     """Mutable training state; see the module docstring for the algorithm.
 
-    All per-cell state lives in one array ``row`` so that a step touches it with a single
-    gather and a single scatter: ``[w (d) | sq (1)]`` in direct mode, and
-    ``[w (d) | sq (1) | m (n)]`` in Gram mode, where ``m[c, j] = |w_c|^2 - 2 w_c . x_j``
-    is the winner criterion for input ``j``. A step ``w <- (1 - e) w + e x_i`` changes both
-    ``sq`` and ``m`` by ``(1 - e) v + e t + beta`` with ``t`` the input's target row
-    (``0`` and ``-2 G[i]``) and ``beta = e^2 |x_i|^2 - e (1 - e) m[c, i]``.
+    Gram mode (few inputs): one array ``big`` holds, per cell row ``c < kmax``,
+    ``[w_c (d) | D[c] (n)]`` with ``D[c, j] = |w_c - x_j|^2``; row ``kmax`` is
+    ``[0 | 1]`` and row ``kmax + 1 + j`` is ``[x_j | Q[j]]`` with ``Q[j, l] = |x_j - x_l|^2``.
+    Unused cell rows hold ``D = inf`` so the winner of input ``i`` is the argmin of the
+    fixed column view ``big[:kmax, d + i]``. A step with learning rates ``e`` on the
+    rows ``idx`` is the single product ``K @ big[idx + [kmax, kmax + 1 + i]]`` with
+    ``K = [diag(1 - e) | -e (1 - e) D[idx, i] | e]`` (see the module docstring).
+
+    Direct mode (many inputs): ``big`` holds the weights only and a cached squared norm
+    per cell gives the winner from one matrix-vector product per step.
     """
 
     def __init__(self, x: np.ndarray, target: int, params: GCSParams, rng: np.random.Generator):
@@ -170,17 +182,24 @@ class _Trainer:
         self.x = x
         self.n, self.d = n, d
         self.p = params
-        self.gram_mode = n <= 2 * d + 64  # winner from cached dot products when inputs are few
+        self.gram_mode = n <= 2 * d + 64  # winner from cached distances when inputs are few
         self.gdiag = np.einsum("ij,ij->i", x, x)
         kmax = max(target, 3)
-        width = d + 1 + (n if self.gram_mode else 0)
-        self.row = np.zeros((kmax, width))
-        self.target_rows = np.zeros((n, width))
-        self.target_rows[:, :d] = x
+        self.kmax = kmax
         if self.gram_mode:
-            self.target_rows[:, d + 1 :] = -2.0 * (x @ x.T)
-        self.w = self.row[:, :d]
-        self.sq = self.row[:, d]
+            self.big = np.zeros((kmax + 1 + n, d + n))
+            self.big[:kmax, d:] = np.inf
+            self.big[kmax, d:] = 1.0
+            self.big[kmax + 1 :, :d] = x
+            q = self.gdiag[:, None] + self.gdiag[None, :] - 2.0 * (x @ x.T)
+            np.maximum(q, 0.0, out=q)
+            np.fill_diagonal(q, 0.0)
+            self.big[kmax + 1 :, d:] = q
+            self.cols = [self.big[:kmax, d + j] for j in range(n)]
+        else:
+            self.big = np.zeros((kmax, d))
+        self.w = self.big[:kmax, :d]
+        self.sq = np.zeros(kmax)  # |w_c|^2, maintained in direct mode only
         self.tau = np.zeros(kmax)
         self.inc = 1.0
         alpha = params.alpha if params.alpha is not None else 1.0 / (10.0 * kmax)
@@ -189,71 +208,107 @@ class _Trainer:
         scale = float(np.abs(x).max()) or 1.0
         self.w[:3] = x[start] + rng.normal(0.0, 1e-6 * scale, (3, d))  # distinct even on ties
         self.k = 3
-        self.tris: list[tuple[int, int, int]] = [(0, 1, 2)]
+        # Triangles keyed by their sorted cells, in creation order: (serial, oriented cells).
+        self.tris: dict[tuple[int, ...], tuple[int, tuple[int, int, int]]] = {}
+        self.serial = 0
+        self._add_tri((0, 1, 2))
         self.nbrs: list[set[int]] = [{1, 2}, {0, 2}, {0, 1}]
-        self.cache: dict[int, tuple[np.ndarray, ...]] = {}
+        self.cache: dict[int, tuple[Any, ...]] = {}
+        self.templates: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self.inserted = 0
         self.removed = 0
         self.refresh_rows(list(range(3)))
 
+    def _add_tri(self, t: tuple[int, int, int]) -> None:
+        self.tris[tuple(sorted(t))] = (self.serial, t)
+        self.serial += 1
+
+    def triangles(self) -> list[tuple[int, int, int]]:
+        """The complex's triangles in creation order."""
+        return [t for _, t in self.tris.values()]
+
     def refresh_rows(self, rows: list[int]) -> None:
-        """Recompute the cached norms (and dot products) of some cells from their weights."""
+        """Recompute the cached distances (or norms) of some cells from their weights."""
         ix = np.asarray(rows, dtype=np.int64)
         w = self.w[ix]
         sq = np.einsum("ij,ij->i", w, w)
-        self.sq[ix] = sq
         if self.gram_mode:
-            self.row[ix, self.d + 1 :] = sq[:, None] - 2.0 * (w @ self.x.T)
+            dist = sq[:, None] + self.gdiag[None, :] - 2.0 * (w @ self.x.T)
+            self.big[ix, self.d :] = np.maximum(dist, 0.0)
+        else:
+            self.sq[ix] = sq
 
-    def refresh(self) -> None:
-        """Recompute every cached value exactly (bounds floating-point drift)."""
-        self.refresh_rows(list(range(self.k)))
+    def _template(self, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per-size step matrix ``K`` (Fortran order), its free column and ``-e (1 - e)``."""
+        tpl = self.templates.get(m)
+        if tpl is None:
+            e = np.full(m, self.p.eps_n)
+            e[0] = self.p.eps_b
+            mat = np.zeros((m, m + 2), order="F")
+            mat[np.arange(m), np.arange(m)] = 1.0 - e
+            mat[:, m + 1] = e
+            tpl = (mat, mat[:, m], -(e * (1.0 - e)))
+            self.templates[m] = tpl
+        return tpl
 
-    def _entry(self, s: int) -> tuple[np.ndarray, ...]:
-        idx = np.array([s, *sorted(self.nbrs[s])], dtype=np.int64)
-        e = np.full(idx.size, self.p.eps_n)
-        e[0] = self.p.eps_b
-        ent = (idx, (1.0 - e)[:, None], e[:, None], e**2, e * (1.0 - e))
+    def _entry(self, s: int) -> tuple[Any, ...]:
+        """Cached step data of winner ``s`` (valid until its neighbourhood changes)."""
+        cells = [s, *sorted(self.nbrs[s])]
+        m = len(cells)
+        if self.gram_mode:
+            ix = np.array([*cells, self.kmax, self.kmax + 1], dtype=np.int64)
+            mat, col, neom = self._template(m)
+            ent: tuple[Any, ...] = (ix[:m], ix, mat, col, neom, m)
+        else:
+            e = np.full((m, 1), self.p.eps_n)
+            e[0] = self.p.eps_b
+            ent = (np.array(cells, dtype=np.int64), 1.0 - e, e)
         self.cache[s] = ent
         return ent
 
     def adapt(self, order: np.ndarray) -> None:
         """Present the inputs ``order`` one by one (the hot loop)."""
-        row, trg, gdiag, tau, x = self.row, self.target_rows, self.gdiag, self.tau, self.x
-        cache, k, inc, grow, d = self.cache, self.k, self.inc, self.grow, self.d
         if self.gram_mode:
-            crit = row[:k, d + 1 :]
-            for i in order.tolist():
-                s = int(crit[:, i].argmin())
-                ent = cache.get(s)
-                if ent is None:
-                    ent = self._entry(s)
-                idx, om, e, e2, eom = ent
-                r = row.take(idx, 0)
-                beta = e2 * gdiag[i] - eom * r[:, d + 1 + i]
-                r *= om
-                r += e * trg[i]
-                r[:, d:] += beta[:, None]
-                row[idx] = r
-                tau[s] += inc
-                inc *= grow
+            self._adapt_gram(order)
         else:
-            w, sq = row[:k, :d], row[:k, d]
-            for i in order.tolist():
-                xi = x[i]
-                s = int(np.argmin(sq - 2.0 * (w @ xi)))
-                ent = cache.get(s)
-                if ent is None:
-                    ent = self._entry(s)
-                idx, om, e, e2, eom = ent
-                r = row.take(idx, 0)
-                beta = e2 * gdiag[i] - eom * (r[:, d] - 2.0 * (r[:, :d] @ xi))
-                r *= om
-                r += e * trg[i]
-                r[:, d] += beta
-                row[idx] = r
-                tau[s] += inc
-                inc *= grow
+            self._adapt_direct(order)
+
+    def _adapt_gram(self, order: np.ndarray) -> None:
+        big, cols, tau, cache = self.big, self.cols, self.tau, self.cache
+        inc, grow, d, toff = self.inc, self.grow, self.d, self.kmax + 1
+        multiply = np.multiply
+        for i in order.tolist():
+            s = int(cols[i].argmin())
+            ent = cache.get(s)
+            if ent is None:
+                ent = self._entry(s)
+            idx, ix, mat, col, neom, m = ent
+            ix[m + 1] = toff + i
+            z = big.take(ix, 0)
+            multiply(z[:m, d + i], neom, out=col)
+            big[idx] = mat @ z
+            tau[s] += inc
+            inc *= grow
+        self.inc = inc
+
+    def _adapt_direct(self, order: np.ndarray) -> None:
+        big, sq, x, tau, cache, k = self.big, self.sq, self.x, self.tau, self.cache, self.k
+        inc, grow = self.inc, self.grow
+        w, sqk = big[:k], sq[:k]
+        for i in order.tolist():
+            xi = x[i]
+            s = int(np.argmin(sqk - 2.0 * (w @ xi)))
+            ent = cache.get(s)
+            if ent is None:
+                ent = self._entry(s)
+            idx, om, e = ent
+            r = big.take(idx, 0)
+            r *= om
+            r += e * xi
+            big[idx] = r
+            sq[idx] = np.einsum("ij,ij->i", r, r)
+            tau[s] += inc
+            inc *= grow
         self.inc = inc
 
     def normalise_counters(self) -> None:
@@ -261,47 +316,63 @@ class _Trainer:
         self.tau[: self.k] /= self.inc
         self.inc = 1.0
 
-    def _log_mean_len(self, cells: list[int]) -> dict[int, float]:
-        out = {}
-        for c in cells:
-            nb = np.fromiter(self.nbrs[c], np.int64)
-            if nb.size == 0:
-                out[c] = -np.inf
-                continue
-            d2 = self.sq[nb] + self.sq[c] - 2.0 * (self.w[nb] @ self.w[c])
-            out[c] = float(np.log(max(float(np.sqrt(np.maximum(d2, 0.0)).mean()), 1e-300)))
+    def _log_mean_len(self, cells: list[int], nbrs: list[set[int]]) -> np.ndarray:
+        """Log of the mean edge length (input units) from ``cells[j]`` to ``nbrs[j]``.
+
+        One batched distance computation for all pairs; ``-inf`` where a set is empty.
+        """
+        owner: list[int] = []
+        src: list[int] = []
+        dst: list[int] = []
+        for j, (c, nb) in enumerate(zip(cells, nbrs, strict=True)):
+            owner += [j] * len(nb)
+            src += [c] * len(nb)
+            dst += nb
+        own = np.asarray(owner, dtype=np.int64)
+        w = self.w
+        length = np.sqrt(_pair_sq_dist(w[np.asarray(src)], w[np.asarray(dst)]))
+        count = np.bincount(own, minlength=len(cells))
+        mean = np.bincount(own, length, minlength=len(cells)) / np.maximum(count, 1)
+        out = np.log(np.maximum(mean, 1e-300))
+        out[count == 0] = -np.inf
         return out
 
     def insert(self) -> None:
         """Insert a cell between the most-signalled cell and its farthest neighbour."""
-        k, w, tau = self.k, self.w, self.tau
+        k, w, tau, nbrs = self.k, self.w, self.tau, self.nbrs
         q = int(np.argmax(tau[:k]))
-        nq = np.fromiter(sorted(self.nbrs[q]), np.int64)
-        d2 = self.sq[nq] - 2.0 * (w[nq] @ w[q])
-        f = int(nq[int(np.argmax(d2))])
-        hit = [t for t in self.tris if q in t and f in t]
-        xs = [next(v for v in t if v != q and v != f) for t in hit]
+        nq = np.fromiter(sorted(nbrs[q]), np.int64)
+        f = int(nq[int(np.argmax(_pair_sq_dist(w[nq], w[q][None, :])))])
+        hits = []
+        for xv in nbrs[q] & nbrs[f]:
+            key = tuple(sorted((q, f, xv)))
+            found = self.tris.get(key)
+            if found is not None:
+                hits.append((found[0], xv, key))
+        hits.sort()  # creation order of the split triangles
+        xs = [xv for _, xv, _ in hits]
         r = k
         around = [q, f, *xs]
-        old = self._log_mean_len(around)
         w[r] = 0.5 * (w[q] + w[f])
         self.refresh_rows([r])
-        hit_set = set(hit)
-        self.tris = [t for t in self.tris if t not in hit_set]
+        # Mean edge lengths around the split edge before and after the split, in one batch.
+        before = [nbrs[c] for c in around]
+        after = [(nbrs[q] - {f}) | {r}, (nbrs[f] - {q}) | {r}, *[nbrs[c] | {r} for c in xs]]
+        logs = self._log_mean_len(around + around, before + after)
+        old, new = logs[: len(around)], logs[len(around) :]
+        for _, _, key in hits:
+            del self.tris[key]
         for xv in xs:
-            self.tris += [(q, r, xv), (r, f, xv)]
-            self.nbrs[xv].add(r)
-        self.nbrs[q].discard(f)
-        self.nbrs[f].discard(q)
-        self.nbrs[q].add(r)
-        self.nbrs[f].add(r)
-        self.nbrs.append(set(around))
+            self._add_tri((q, r, xv))
+            self._add_tri((r, f, xv))
+        for c, nb in zip(around, after, strict=True):
+            nbrs[c] = nb
+        nbrs.append(set(around))
         self.k = k + 1
-        new = self._log_mean_len(around)
+        ratio = np.exp(np.minimum(0.0, self.p.volume_dim * (new - old)))
         given = 0.0
-        for c in around:
-            ratio = float(np.exp(min(0.0, self.p.volume_dim * (new[c] - old[c]))))
-            share = tau[c] * (1.0 - ratio)  # the part of c's region r takes over
+        for c, kept in zip(around, ratio.tolist(), strict=True):
+            share = float(tau[c]) * (1.0 - kept)  # the part of c's region r takes over
             tau[c] -= share
             given += share
         tau[r] = given
@@ -311,15 +382,12 @@ class _Trainer:
 
     def log_density(self) -> np.ndarray:
         """Log relative probability density ``log(h_c / (F_c / sum F))`` of every cell."""
-        k = self.k
-        pairs = [(a, b) for a in range(k) for b in self.nbrs[a] if a < b]
-        e = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
-        d2 = (
-            self.sq[e[:, 0]]
-            + self.sq[e[:, 1]]
-            - 2.0 * np.einsum("ij,ij->i", self.w[e[:, 0]], self.w[e[:, 1]])
-        )
-        length = np.sqrt(np.maximum(d2, 0.0))
+        k, kmax = self.k, self.kmax
+        t = np.fromiter(chain.from_iterable(self.tris), np.int64, 3 * len(self.tris))
+        t = t.reshape(-1, 3)  # keys: sorted cells, so every pair below is (low, high)
+        keys = np.unique(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [0, 2]]]) @ [kmax, 1])
+        e = np.stack([keys // kmax, keys % kmax], axis=1)
+        length = np.sqrt(_pair_sq_dist(self.w[e[:, 0]], self.w[e[:, 1]]))
         sums = np.bincount(e.ravel(), np.repeat(length, 2), minlength=k)
         degree = np.bincount(e.ravel(), minlength=k)
         log_mean = np.log(np.maximum(sums / np.maximum(degree, 1), 1e-300))
@@ -341,18 +409,23 @@ class _Trainer:
             return
         low = low[np.argsort(logp[low], kind="stable")][:max_remove]
         dead = set(low.tolist())
-        tris = [t for t in self.tris if not dead.intersection(t)]
+        tris = [t for t in self.triangles() if not dead.intersection(t)]
         alive = sorted({v for t in tris for v in t})
         if len(alive) < 3:
             return
         remap = {old: new for new, old in enumerate(alive)}
         keep = np.asarray(alive, dtype=np.int64)
         n_keep = keep.size
-        self.row[:n_keep] = self.row[keep]
+        self.big[:n_keep] = self.big[keep]
+        self.sq[:n_keep] = self.sq[keep]
         self.tau[:n_keep] = self.tau[keep]
-        self.tris = [(remap[a], remap[b], remap[c]) for a, b, c in tris]
+        if self.gram_mode:
+            self.big[n_keep : self.k, self.d :] = np.inf
+        self.tris = {}
         self.nbrs = [set() for _ in range(n_keep)]
-        for a, b, c in self.tris:
+        for t in tris:
+            a, b, c = remap[t[0]], remap[t[1]], remap[t[2]]
+            self._add_tri((a, b, c))
             self.nbrs[a].update((b, c))
             self.nbrs[b].update((a, c))
             self.nbrs[c].update((a, b))
@@ -409,11 +482,10 @@ def train_gcs(
             step = min(chunk, total - t)
             tr.adapt(stream.take(step))
             t += step
-    tr.refresh()
     k = tr.k
     return GCSNetwork(
         weights=tr.w[:k].copy(),
-        triangles=np.asarray(tr.tris, dtype=np.int64).reshape(-1, 3),
+        triangles=np.asarray(tr.triangles(), dtype=np.int64).reshape(-1, 3),
         inserted=tr.inserted,
         removed=tr.removed,
         steps=t,
