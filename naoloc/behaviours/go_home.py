@@ -1,9 +1,9 @@
 """Walk back to the map origin (where the survey started) using the map.
 
-Each round localizes (:func:`naoloc.behaviours.localize.localize`), then walks with
-``moveTo`` to the origin as seen from the estimate (the map origin in FRAME_ROBOT is the
-inverse of the estimated pose), and localizes again, until the estimate is within
-``go_home.tolerance_m`` of the origin or ``go_home.max_tries`` walks were made.
+Each round localizes (:func:`naoloc.behaviours.localize.localize`, which turns in place
+until it is confident), then walks with ``moveTo`` one leg (at most :data:`LEG_M`) toward
+the origin as seen from the estimate, and localizes again, until a confident estimate is
+within ``go_home.tolerance_m`` of the origin or ``go_home.max_tries`` walks were made.
 """
 
 from __future__ import annotations
@@ -18,7 +18,6 @@ import numpy as np
 from naoloc.behaviours.camera import Camera
 from naoloc.behaviours.localize import Localization, localize, truth_in_map
 from naoloc.config import Config
-from naoloc.errors import MotionError
 from naoloc.geometry import Pose2D, relative_pose
 from naoloc.robot import Robot, pose_of
 
@@ -64,6 +63,14 @@ class GoHomeResult:
         return out
 
 
+# Longest walk between two localizations, m: odometry stays good over a leg, and a fresh
+# estimate re-plans the rest. Without a confident estimate the leg is shorter.
+LEG_M = 2.0
+UNSURE_LEG_M = 0.5
+# With nothing recognised even after a full turn: step this far forward (m), then look again.
+LOST_STEP_M = 0.3
+
+
 def go_home(
     robot: Robot,
     vmap: VisualMap,
@@ -71,8 +78,9 @@ def go_home(
     *,
     on_round: Callable[[int, Localization], None] | None = None,
     turns: int = 1,
+    leg_m: float = LEG_M,
 ) -> GoHomeResult:
-    """Localize, walk to the map origin, and repeat until close enough or out of tries.
+    """Localize, walk a leg toward the map origin, and repeat until there or out of tries.
 
     Args:
         robot: The robot, anywhere in the mapped room.
@@ -80,18 +88,26 @@ def go_home(
         cfg: Config; uses ``go_home.tolerance_m``, ``go_home.max_tries``, ``localize`` and
             ``camera``.
         on_round: Called after each localization with the walk count so far and its result.
-        turns: Body headings of each localization scan (1 = no turning in place).
+        turns: Body headings of the first sweep of each localization (1 = no turning in
+            place; the localize behaviour adds quarter turns while it is not confident).
+        leg_m: Longest walk between two localizations, m.
 
     Returns:
         The final estimate, walks made, and the true error on a simulator.
 
-    A localization with confidence 0 (nothing recognised) is followed by a quarter turn in
-    place instead of a walk. A walk that fails (an obstacle) is retried after localizing
-    again along the survey circuit, which the robot is known to have walked.
+    Each round localizes (the robot turns in place until the map gives a confident, verified
+    estimate or it has looked all around). A confident estimate within the tolerance ends
+    the walk home. Otherwise the robot walks at most ``leg_m`` (``UNSURE_LEG_M`` when the
+    estimate is not confident) toward the origin and localizes again. A localization with
+    confidence 0 (nothing recognised all around) is followed by a short step forward. A walk
+    that fails (``moveTo`` returns False: an obstacle) is re-planned after localizing again
+    along the survey circuit, which the robot is known to have walked.
 
     Raises:
-        MotionError: Turning in place failed (the robot is stopped).
+        MotionError: A turn in place while localizing failed (the robot is stopped).
     """
+    from naoloc.mapping.localizer import CONFIDENT
+
     tolerance = cfg.go_home.tolerance_m
     rounds: list[Localization] = []
     tries = 0
@@ -105,25 +121,54 @@ def go_home(
                 if on_round is not None:
                     on_round(tries, loc)
                 est = loc.estimate
-                lost = est.confidence <= 0.0
-                if not lost and math.hypot(est.x, est.y) <= tolerance:
+                confident = est.confidence >= CONFIDENT
+                if confident and math.hypot(est.x, est.y) <= tolerance:
                     reached = True
                     break
                 if tries >= cfg.go_home.max_tries:
                     break
                 tries += 1
-                if lost:  # nothing recognised: look elsewhere by turning in place
-                    if not robot.motion.moveTo(0.0, 0.0, math.pi / 2):
-                        raise MotionError("turning in place failed while lost")
+                if est.confidence <= 0.0:  # nothing recognised all around: step elsewhere
+                    robot.motion.moveTo(LOST_STEP_M, 0.0, 0.0)  # False at an obstacle: fine
+                    robot.motion.stopMove()
                     continue
                 here = Pose2D(est.x, est.y, est.theta)
                 route = route_home(vmap, here) if blocked else straight_home(here)
-                blocked = not _follow(robot, here, route)
+                leg = truncate_route(here, route, leg_m if confident else UNSURE_LEG_M)
+                blocked = not _follow(robot, here, leg, ends_home=leg[-1] == route[-1])
         finally:
             robot.motion.stopMove()
     truth = truth_in_map(robot, vmap.meta)
     error = None if truth is None else math.hypot(truth.x, truth.y)
     return GoHomeResult(rounds[-1], tries, reached, rounds, truth, error)
+
+
+def truncate_route(here: Pose2D, route: list[Pose2D], length_m: float) -> list[Pose2D]:
+    """The first ``length_m`` metres of a route of map-frame waypoints starting at ``here``.
+
+    Args:
+        here: Where the robot stands (map frame).
+        route: Waypoints (map frame).
+        length_m: Path length to keep, m (> 0).
+
+    Returns:
+        The waypoints within that length; the last one is interpolated on its segment when the
+        route is longer. The route itself (same objects) when it is not longer.
+    """
+    out: list[Pose2D] = []
+    prev = here
+    left = length_m
+    for point in route:
+        seg = math.hypot(point.x - prev.x, point.y - prev.y)
+        if seg <= left:
+            out.append(point)
+            left -= seg
+            prev = point
+            continue
+        f = left / seg if seg > 0 else 0.0
+        out.append(Pose2D(prev.x + f * (point.x - prev.x), prev.y + f * (point.y - prev.y)))
+        return out
+    return out
 
 
 def straight_home(here: Pose2D, leg_m: float = 0.75) -> list[Pose2D]:
@@ -163,16 +208,19 @@ def route_home(vmap: VisualMap, here: Pose2D, spacing: int = 5) -> list[Pose2D]:
     return [Pose2D(float(x), float(y)) for x, y in kept] + [Pose2D()]
 
 
-def _follow(robot: Robot, start: Pose2D, route: list[Pose2D]) -> bool:
+def _follow(robot: Robot, start: Pose2D, route: list[Pose2D], *, ends_home: bool = True) -> bool:
     """Walk through map-frame waypoints by odometry from ``start``; False if a move failed.
 
-    Each waypoint is approached facing it; the last one (the origin) ends facing map +x.
+    Each waypoint is approached facing it; when ``ends_home``, the last one (the origin) ends
+    facing map +x.
     """
     odo0 = pose_of(robot.motion, True)
     for k, point in enumerate(route):
         here = start * relative_pose(odo0, pose_of(robot.motion, True))
-        last = k == len(route) - 1
+        last = ends_home and k == len(route) - 1
         heading = 0.0 if last else math.atan2(point.y - here.y, point.x - here.x)
+        if not last and math.hypot(point.x - here.x, point.y - here.y) < 1e-3:
+            continue
         move = relative_pose(here, Pose2D(point.x, point.y, heading))
         if not robot.motion.moveTo(move.x, move.y, move.theta):
             robot.motion.stopMove()
