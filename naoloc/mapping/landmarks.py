@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -83,10 +83,13 @@ class LandmarkSet:
         points: ``(n_total, 3)`` float64 map-frame position of each keypoint of every
             keyframe (rows concatenated in keyframe order); NaN where none was triangulated.
         pairs: Keyframe pairs that were matched.
+        matches: ``(K, 2)`` int64 row indices (into ``points``) of the keypoint pairs that
+            were triangulated; they link keypoints into tracks.
     """
 
     points: np.ndarray
     pairs: int
+    matches: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
 
 
 def select_pairs(cams: np.ndarray) -> list[tuple[int, int]]:
@@ -155,6 +158,7 @@ def triangulate(
     offsets = np.concatenate([[0], np.cumsum([a.shape[0] for a in xy])]).astype(np.int64)
     sums = np.zeros((int(offsets[-1]), 3))
     counts = np.zeros(int(offsets[-1]))
+    linked: list[np.ndarray] = []
     matcher = hamming_matcher(binary)
     pairs = select_pairs(cams) if pairs is None else list(pairs)
     projs = [_projection(intrinsics[i], cams[i]) for i in range(cams.shape[0])]
@@ -203,7 +207,9 @@ def triangulate(
             rows = offsets[kf] + m[good, col]
             np.add.at(sums, rows, pts[good])
             np.add.at(counts, rows, 1.0)
+        linked.append(np.stack([offsets[i] + m[good, 0], offsets[j] + m[good, 1]], axis=1))
     points = np.full_like(sums, np.nan)
     has = counts > 0
     points[has] = sums[has] / counts[has, None]
-    return LandmarkSet(points, len(pairs))
+    links = np.concatenate(linked).astype(np.int64) if linked else np.zeros((0, 2), np.int64)
+    return LandmarkSet(points, len(pairs), links)

@@ -45,7 +45,7 @@ GEOMETRIC_CANDIDATES = 3  # candidates per keyframe from the first solution's ca
 LOOP_MIN_INLIERS = 15
 # Odometry noise per edge: sigma_xy = c + k * d (m); sigma_theta = c + k * sqrt(|turn|) + k' d.
 SIGMA_ODO_XY = (0.002, 0.01)  # m: constant, per metre travelled
-SIGMA_ODO_TH = (0.001, 0.012, 0.002)  # rad: constant, per sqrt(rad) turned, per metre travelled
+SIGMA_ODO_TH = (0.001, 0.006, 0.002)  # rad: constant, per sqrt(rad) turned, per metre travelled
 LOOP_REPROJECTION_PX = 3.0
 LOOP_PIXEL_SIGMA = 1.0  # px: least pixel noise of a loop-closure match
 LOOP_EFFECTIVE_MATCHES = 20  # matches counted at most (their landmark errors correlate)
@@ -191,52 +191,81 @@ def solve_pose_graph(
     n = x.shape[0]
     if not edges:
         return GraphSolution(x, 0.0, 0)
-    ia = np.array([e.a for e in edges], np.int64)
-    ib = np.array([e.b for e in edges], np.int64)
-    info0 = np.stack([e.info for e in edges])
-    loop = np.array([not e.odometry for e in edges])
-    dim = 3 * n + 1
     bias = 0.0
     done = 0
     for it in range(1, iterations + 1):
         done = it
-        r, ja, jb, jbias = _edge_terms(x, edges, bias)
-        info = info0
-        if huber_k is not None:
-            chi2 = np.einsum("ei,eij,ej->e", r, info0, r)
-            w = np.where(loop, _huber_weights(chi2, huber_k), 1.0)
-            info = info0 * w[:, None, None]
-        # Jacobian rows of every edge over [pose a | pose b | bias].
-        jfull = np.concatenate([ja, jb, np.zeros((len(edges), 3, 1))], axis=2)
-        jfull[:, 2, 6] = jbias if estimate_bias else 0.0
-        jti = np.einsum("eki,ekl->eil", jfull, info)  # J^T W, (E, 7, 3)
-        hb = np.einsum("eil,elj->eij", jti, jfull)  # (E, 7, 7)
-        gb = np.einsum("eil,el->ei", jti, r)  # (E, 7)
-        idx = np.concatenate(
-            [
-                3 * ia[:, None] + np.arange(3),
-                3 * ib[:, None] + np.arange(3),
-                np.full((len(edges), 1), dim - 1),
-            ],
-            axis=1,
-        )
-        h = np.zeros((dim, dim))
-        g = np.zeros(dim)
-        np.add.at(h, (idx[:, :, None], idx[:, None, :]), hb)
-        np.add.at(g, idx, gb)
-        h[-1, -1] += 1.0 / SIGMA_BIAS_PRIOR**2
-        g[-1] += bias / SIGMA_BIAS_PRIOR**2
+        h, g = graph_system(x, edges, bias, estimate_bias=estimate_bias, huber_k=huber_k)
         h[:3, :3] += np.eye(3) * 1e9  # hold node 0
         try:
-            dx = np.linalg.solve(h + np.eye(dim) * 1e-9, -g)
+            dx = np.linalg.solve(h + np.eye(h.shape[0]) * 1e-9, -g)
         except np.linalg.LinAlgError:
             break
         x += dx[: 3 * n].reshape(n, 3)
-        if estimate_bias:
-            bias += float(dx[-1])
+        bias += float(dx[-1])
         if np.abs(dx).max() < 1e-7:
             break
     return GraphSolution(x, bias, done)
+
+
+def graph_system(
+    x: np.ndarray,
+    edges: Sequence[Edge],
+    bias: float,
+    *,
+    estimate_bias: bool = False,
+    huber_k: float | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Newton normal equations ``H dx = -g`` of the pose-graph edges.
+
+    The unknowns are the ``N`` poses (3 each, in order) and the heading bias (last);
+    the bias's weak prior is included; without ``estimate_bias`` its column is zero
+    except for the prior, so it stays at ``bias``. Node 0 is not held here.
+
+    Args:
+        x: ``(N, 3)`` current poses.
+        edges: The constraints.
+        bias: Current heading bias (rad/m).
+        estimate_bias: Let the odometry edges depend on the bias.
+        huber_k: Huber threshold (in sigmas) for the non-odometry edges; None: least squares.
+
+    Returns:
+        ``h`` ``(3N + 1, 3N + 1)`` and ``g`` ``(3N + 1,)``.
+    """
+    n = x.shape[0]
+    dim = 3 * n + 1
+    h = np.zeros((dim, dim))
+    g = np.zeros(dim)
+    h[-1, -1] += 1.0 / SIGMA_BIAS_PRIOR**2
+    g[-1] += bias / SIGMA_BIAS_PRIOR**2
+    if not edges:
+        return h, g
+    ia = np.array([e.a for e in edges], np.int64)
+    ib = np.array([e.b for e in edges], np.int64)
+    info = np.stack([e.info for e in edges])
+    r, ja, jb, jbias = _edge_terms(x, edges, bias)
+    if huber_k is not None:
+        loop = np.array([not e.odometry for e in edges])
+        chi2 = np.einsum("ei,eij,ej->e", r, info, r)
+        w = np.where(loop, _huber_weights(chi2, huber_k), 1.0)
+        info = info * w[:, None, None]
+    # Jacobian rows of every edge over [pose a | pose b | bias].
+    jfull = np.concatenate([ja, jb, np.zeros((len(edges), 3, 1))], axis=2)
+    jfull[:, 2, 6] = jbias if estimate_bias else 0.0
+    jti = np.einsum("eki,ekl->eil", jfull, info)  # J^T W, (E, 7, 3)
+    hb = np.einsum("eil,elj->eij", jti, jfull)  # (E, 7, 7)
+    gb = np.einsum("eil,el->ei", jti, r)  # (E, 7)
+    idx = np.concatenate(
+        [
+            3 * ia[:, None] + np.arange(3),
+            3 * ib[:, None] + np.arange(3),
+            np.full((len(edges), 1), dim - 1),
+        ],
+        axis=1,
+    )
+    np.add.at(h, (idx[:, :, None], idx[:, None, :]), hb)
+    np.add.at(g, idx, gb)
+    return h, g
 
 
 def odometry_info(z: np.ndarray) -> np.ndarray:
