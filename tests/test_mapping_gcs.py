@@ -6,7 +6,14 @@ import numpy as np
 import pytest
 
 from naoloc.errors import NaolocError
-from naoloc.mapping.gcs import GCSParams, complex_problems, train_gcs
+from naoloc.mapping.gcs import (
+    GCSParams,
+    _IndexStream,
+    _train,
+    _Trainer,
+    complex_problems,
+    train_gcs,
+)
 
 
 def _two_blobs(n: int, seed: int) -> np.ndarray:
@@ -71,3 +78,47 @@ def test_bad_inputs_raise_naoloc_errors() -> None:
 def test_identical_inputs_do_not_break_training() -> None:
     net = train_gcs(np.ones((20, 8)), 10, 5, seed=0)
     assert np.isfinite(net.weights).all() and net.size == 10
+
+
+def _histograms(n: int, seed: int) -> np.ndarray:
+    h = np.random.default_rng(seed).random((n, 64)) ** 6
+    return h / np.linalg.norm(h, axis=1, keepdims=True)
+
+
+def test_histograms_same_seed_same_network_bit_for_bit() -> None:
+    h = _histograms(50, 8)  # few inputs: the cached-distance (Gram) winner search
+    a = train_gcs(h, 20, 15, seed=1)
+    b = train_gcs(h, 20, 15, seed=1)
+    assert np.array_equal(a.weights, b.weights) and np.array_equal(a.triangles, b.triangles)
+    assert (a.inserted, a.removed, a.steps) == (b.inserted, b.removed, b.steps)
+
+
+@pytest.mark.parametrize("data", ["histograms", "plane"])
+def test_cached_and_direct_winner_search_train_the_same_network(data: str) -> None:
+    x = _histograms(60, 9) if data == "histograms" else _two_blobs(80, 3)
+    gram = _train(x, 30, 15, 2, GCSParams(), gram_mode=True)
+    direct = _train(x, 30, 15, 2, GCSParams(), gram_mode=False)
+    assert gram.removed > 0 and gram.inserted > 27
+    assert (gram.inserted, gram.removed) == (direct.inserted, direct.removed)
+    assert np.array_equal(gram.triangles, direct.triangles)
+    assert np.allclose(gram.weights, direct.weights, rtol=0.0, atol=1e-12)
+
+
+def test_cached_distances_follow_the_weights() -> None:
+    x = _histograms(40, 4)
+    rng = np.random.default_rng(0)
+    tr = _Trainer(x, 25, GCSParams(), rng, gram_mode=True)
+    stream = _IndexStream(x.shape[0], rng)
+    while tr.k < 25:
+        tr.adapt(stream.take(37))
+        tr.normalise_counters()
+        tr.insert()
+        if tr.inserted % 3 == 0:
+            tr.remove(2)
+    tr.adapt(stream.take(500))
+    assert tr.removed > 0
+    k, d = tr.k, x.shape[1]
+    exact = ((tr.w[:k, None, :] - x[None, :, :]) ** 2).sum(axis=2)
+    assert np.allclose(tr.big[:k, d:], exact, rtol=0.0, atol=1e-12)
+    assert np.isinf(tr.big[k : tr.kmax, d:]).all()  # free rows never win
+    assert complex_problems(np.asarray(tr.triangles()), k) == []

@@ -156,10 +156,19 @@ class _IndexStream:
         return out
 
 
-def _pair_sq_dist(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Squared Euclidean distances between paired rows of ``a`` and ``b``."""
-    diff = a - b
-    return np.einsum("ij,ij->i", diff, diff)
+def _pair_sq_dist(a: np.ndarray, b: np.ndarray, ia: np.ndarray, ib: np.ndarray) -> np.ndarray:
+    """Squared Euclidean distances between rows ``a[ia]`` and ``b[ib]`` (paired).
+
+    Works in blocks of a few dozen rows: large temporaries would cost more in page faults
+    than the arithmetic.
+    """
+    out = np.empty(ia.size)
+    step = max(1, 16384 // max(a.shape[1], 1))
+    for s in range(0, ia.size, step):
+        diff = a[ia[s : s + step]]  # not take(): it copies a non-contiguous view whole
+        diff -= b[ib[s : s + step]]
+        out[s : s + step] = np.einsum("ij,ij->i", diff, diff)
+    return out
 
 
 class _Trainer:
@@ -177,12 +186,20 @@ class _Trainer:
     per cell gives the winner from one matrix-vector product per step.
     """
 
-    def __init__(self, x: np.ndarray, target: int, params: GCSParams, rng: np.random.Generator):
+    def __init__(
+        self,
+        x: np.ndarray,
+        target: int,
+        params: GCSParams,
+        rng: np.random.Generator,
+        gram_mode: bool | None = None,
+    ):
         n, d = x.shape
         self.x = x
         self.n, self.d = n, d
         self.p = params
-        self.gram_mode = n <= 2 * d + 64  # winner from cached distances when inputs are few
+        # Winner from cached distances when the inputs are few (None: choose by size).
+        self.gram_mode = n <= 2 * d + 64 if gram_mode is None else gram_mode
         self.gdiag = np.einsum("ij,ij->i", x, x)
         kmax = max(target, 3)
         self.kmax = kmax
@@ -330,7 +347,7 @@ class _Trainer:
             dst += nb
         own = np.asarray(owner, dtype=np.int64)
         w = self.w
-        length = np.sqrt(_pair_sq_dist(w[np.asarray(src)], w[np.asarray(dst)]))
+        length = np.sqrt(_pair_sq_dist(w, w, np.asarray(src), np.asarray(dst)))
         count = np.bincount(own, minlength=len(cells))
         mean = np.bincount(own, length, minlength=len(cells)) / np.maximum(count, 1)
         out = np.log(np.maximum(mean, 1e-300))
@@ -342,7 +359,7 @@ class _Trainer:
         k, w, tau, nbrs = self.k, self.w, self.tau, self.nbrs
         q = int(np.argmax(tau[:k]))
         nq = np.fromiter(sorted(nbrs[q]), np.int64)
-        f = int(nq[int(np.argmax(_pair_sq_dist(w[nq], w[q][None, :])))])
+        f = int(nq[int(np.argmax(_pair_sq_dist(w, w, nq, np.full_like(nq, q))))])
         hits = []
         for xv in nbrs[q] & nbrs[f]:
             key = tuple(sorted((q, f, xv)))
@@ -384,10 +401,10 @@ class _Trainer:
         """Log relative probability density ``log(h_c / (F_c / sum F))`` of every cell."""
         k, kmax = self.k, self.kmax
         t = np.fromiter(chain.from_iterable(self.tris), np.int64, 3 * len(self.tris))
-        t = t.reshape(-1, 3)  # keys: sorted cells, so every pair below is (low, high)
-        keys = np.unique(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [0, 2]]]) @ [kmax, 1])
+        a, b, c = t[0::3], t[1::3], t[2::3]  # keys hold sorted cells: a < b < c
+        keys = np.unique(np.concatenate([a * kmax + b, b * kmax + c, a * kmax + c]))
         e = np.stack([keys // kmax, keys % kmax], axis=1)
-        length = np.sqrt(_pair_sq_dist(self.w[e[:, 0]], self.w[e[:, 1]]))
+        length = np.sqrt(_pair_sq_dist(self.w, self.w, e[:, 0], e[:, 1]))
         sums = np.bincount(e.ravel(), np.repeat(length, 2), minlength=k)
         degree = np.bincount(e.ravel(), minlength=k)
         log_mean = np.log(np.maximum(sums / np.maximum(degree, 1), 1e-300))
@@ -452,14 +469,25 @@ def train_gcs(
     Raises:
         NaolocError: When there is no data or the target is below 3.
     """
-    p = params or GCSParams()
+    return _train(data, target, epochs, seed, params or GCSParams(), None)
+
+
+def _train(
+    data: np.ndarray,
+    target: int,
+    epochs: int,
+    seed: int,
+    p: GCSParams,
+    gram_mode: bool | None,
+) -> GCSNetwork:
+    """:func:`train_gcs` with the winner search forced to Gram or direct mode (tests)."""
     x = np.ascontiguousarray(data, dtype=np.float64)
     if x.ndim != 2 or x.shape[0] == 0:
         raise NaolocError(f"GCS needs a non-empty 2-D array of inputs, got shape {x.shape}")
     if target < 3:
         raise NaolocError(f"GCS target size must be at least 3, got {target}")
     rng = np.random.default_rng(seed)
-    tr = _Trainer(x, target, p, rng)
+    tr = _Trainer(x, target, p, rng, gram_mode)
     stream = _IndexStream(x.shape[0], rng)
     total = int(epochs) * x.shape[0]
     grow_end = int(p.grow_fraction * total)
