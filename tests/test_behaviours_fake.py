@@ -216,3 +216,94 @@ def test_go_home_gives_up_after_max_tries() -> None:
     assert result.tries == cfg.go_home.max_tries
     assert len(result.rounds) == cfg.go_home.max_tries + 1
     assert result.error_m == pytest.approx(0.3, abs=0.1)
+
+
+class UnsureMap(TruthMap):
+    """A truth double whose confidence follows a script (one value per call, last repeats)."""
+
+    def __init__(self, robot: Robot, origin_room: Pose2D, confidences: Sequence[float]) -> None:
+        super().__init__(robot, origin_room, (0.0, 0.0))
+        self.confidences = list(confidences)
+
+    def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> _Estimate:
+        est = super().localize(queries, mode)
+        conf = self.confidences[min(len(self.calls), len(self.confidences)) - 1]
+        return _Estimate(est.x, est.y, est.theta, conf, mode)
+
+
+@pytest.mark.parametrize(
+    ("confidences", "calls", "turned"),
+    [((0.3, 0.5, 0.99), [5, 10, 15], 2), ((0.2,), [5, 10, 15, 20], 3), ((0.99,), [5], 0)],
+)
+def test_localize_turns_in_place_until_confident(
+    confidences: tuple[float, ...], calls: list[int], turned: int
+) -> None:
+    cfg = small_cfg()
+    with connect(cfg) as robot:
+        sim = robot.sim
+        assert sim is not None
+        origin = Pose2D.from_list(sim.true_pose())
+        sim.teleport(1.5, 1.4, 0.3)
+        vmap = UnsureMap(robot, origin, confidences)
+        loc = localize(robot, vmap, cfg)  # type: ignore[arg-type]
+        after = Pose2D.from_list(sim.true_pose())
+        assert not robot.motion.moveIsActive()
+    assert vmap.calls == calls
+    assert loc.extra_turns == turned and loc.summary()["extra_turns"] == turned
+    assert math.hypot(after.x - 1.5, after.y - 1.4) < 0.05  # turned, never translated
+    assert abs(naoloc_modulo(after.theta - 0.3 - turned * math.pi / 2)) < 0.1
+    # The estimate is for where the robot stands at the last picture.
+    assert loc.truth is not None and loc.truth.distance(relative_pose(origin, after)) < 1e-9
+    bodies = {round(q.pose.theta, 1) for q in loc.queries}
+    assert len(bodies) == turned + 1
+
+
+def naoloc_modulo(angle: float) -> float:
+    """Angle wrapped into (-pi, pi]."""
+    from naoloc.geometry import modulo2PI
+
+    return modulo2PI(angle)
+
+
+def test_go_home_keeps_to_the_circuit_after_a_blocked_walk() -> None:
+    cfg = small_cfg()
+    with connect(cfg) as robot:
+        sim = robot.sim
+        assert sim is not None
+        origin = Pose2D.from_list(sim.true_pose())
+        sim.teleport(2.2, 2.1, -2.0)
+        real_move = robot.motion.moveTo
+        moves: list[tuple[float, ...]] = []
+
+        def first_walk_blocked(*args: Any, **kwargs: Any) -> bool:
+            moves.append(tuple(float(a) for a in args))
+            if len(moves) == 1:
+                return False  # an obstacle on the straight line home
+            return bool(real_move(*args, **kwargs))
+
+        robot.motion.moveTo = first_walk_blocked  # type: ignore[method-assign]
+        vmap = TruthMap(robot, origin, (0.0, 0.0))
+        # The survey circuit of small_cfg (map frame), which route_home follows.
+        side = [0.5, 1.0, 1.5]
+        circuit = [(v, 0.0) for v in side] + [(1.5, v) for v in side]
+        circuit += [(1.5 - v, 1.5) for v in side] + [(0.0, 1.5 - v) for v in side]
+        vmap.keyframe_poses = np.array([(x, y, 0.0) for x, y in circuit])  # type: ignore[attr-defined]
+        result = go_home(robot, vmap, cfg, leg_m=5.0)  # type: ignore[arg-type]
+    assert result.reached and result.error_m is not None and result.error_m < 0.15
+    assert result.tries >= 2
+    # After the block the robot walked the survey circuit: many short moves, not one.
+    assert len(moves) > 3
+
+
+def test_go_home_steps_when_nothing_is_recognised() -> None:
+    cfg = small_cfg()
+    with connect(cfg) as robot:
+        sim = robot.sim
+        assert sim is not None
+        origin = Pose2D.from_list(sim.true_pose())
+        sim.teleport(1.5, 1.5, 0.0)
+        vmap = UnsureMap(robot, origin, (0.0, 0.0, 0.0, 0.0, 0.99))
+        result = go_home(robot, vmap, cfg)  # type: ignore[arg-type]
+    # Lost all around (4 sweeps), one step forward, then a confident estimate leads home.
+    assert vmap.calls[:5] == [5, 10, 15, 20, 5]
+    assert result.reached and result.error_m is not None and result.error_m < 0.15

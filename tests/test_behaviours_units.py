@@ -78,3 +78,19 @@ def test_nearest_side_from_the_room_layout() -> None:
     assert nearest_side_in_room((6.0, 6.0), (1.0, 5.0, 0.0)).side == "left"
     assert nearest_side_in_room((6.0, 6.0), (1.0, 1.0, math.pi / 2)).side == "left"
     assert nearest_side_in_room((4.0, 3.0), (3.5, 0.5, math.pi)).side == "left"
+
+
+def test_truncate_route_keeps_the_first_metres() -> None:
+    from naoloc.behaviours.go_home import straight_home, truncate_route
+    from naoloc.geometry import Pose2D
+
+    here = Pose2D(3.0, 4.0, 1.0)
+    route = straight_home(here)  # 5 m to the origin
+    leg = truncate_route(here, route, 2.0)
+    assert math.hypot(leg[-1].x - 3.0, leg[-1].y - 4.0) == pytest.approx(2.0)
+    assert leg[-1].x == pytest.approx(3.0 * 0.6) and leg[-1].y == pytest.approx(4.0 * 0.6)
+    assert truncate_route(here, route, 9.0) == route
+    # Along a bent route the length follows the path, not the straight line.
+    bent = [Pose2D(1.0, 0.0), Pose2D(1.0, 1.0), Pose2D(0.0, 1.0)]
+    cut = truncate_route(Pose2D(), bent, 1.5)
+    assert (cut[-1].x, cut[-1].y) == pytest.approx((1.0, 0.5))

@@ -99,3 +99,71 @@ def test_two_queries_use_relative_odometry(
     assert est.details["method"] in ("pnp", "keyframes")
     assert math.hypot(est.x - truth.x, est.y - truth.y) < 0.5
     assert 0.0 < est.confidence <= 1.0
+
+
+def test_paper_mode_ignores_neurons_of_featureless_keyframes(room_map: VisualMap) -> None:
+    """A neuron that wins only keyframes without keypoints carries no pose and never wins."""
+    import dataclasses
+
+    from naoloc.mapping.features import Features
+    from naoloc.mapping.localizer import featured_neuron_poses, localize_paper
+
+    # Keyframe 0 loses its keypoints (to keyframe 1) and is the only image of a new neuron
+    # whose weight equals the query's histogram, so it would win the query.
+    offsets = room_map.kp_offsets.copy()
+    offsets[1] = offsets[0]
+    query = Keyframe(np.zeros((240, 320), np.uint8), Pose2D())
+    # The query's features: keyframe 5's keypoints.
+    lo, hi = int(room_map.kp_offsets[5]), int(room_map.kp_offsets[6])
+    feats = [Features(room_map.kp_xy[lo:hi], room_map.kp_desc[lo:hi], np.ones(hi - lo, np.float32))]
+    hist = room_map.vocabulary.histogram(feats[0].descriptors)
+    weights = np.vstack([room_map.gcs.weights, hist[None, :]])
+    winners = room_map.winners.copy()
+    winners[0] = weights.shape[0] - 1
+    # As Algorithm 4 computes it from all the images it wins: keyframe 0's pose.
+    kf0 = room_map.keyframe_poses[0]
+    vmap = dataclasses.replace(
+        room_map,
+        kp_offsets=offsets,
+        winners=winners,
+        neuron_poses=np.vstack([room_map.neuron_poses, kf0[None, :]]),
+        neuron_views=np.append(room_map.neuron_views, kf0[2] + room_map.keyframe_heads[0, 0]),
+        gcs=dataclasses.replace(room_map.gcs, weights=weights),
+    )
+    posed, poses, _views = featured_neuron_poses(vmap)
+    assert weights.shape[0] - 1 not in posed.tolist()
+    assert np.isfinite(poses).all()
+    est = localize_paper(vmap, feats, [query])
+    assert weights.shape[0] - 1 not in est.details["neurons"]
+    # Without the exclusion the fake neuron would have won: it is the nearest weight.
+    assert int(vmap.gcs.winners(hist)[0]) == weights.shape[0] - 1
+
+
+def test_poses_inside_landmarks_are_implausible(room_map: VisualMap) -> None:
+    from naoloc.mapping.localizer import CLEARANCE_MAX_LANDMARKS, crowded_landmarks
+
+    kf = room_map.refined_poses
+    free = [crowded_landmarks(room_map, float(x), float(y)) for x, y, _t in kf]
+    assert max(free) <= CLEARANCE_MAX_LANDMARKS  # the survey walked there
+    pts = room_map.kp_points[np.isfinite(room_map.kp_points[:, 0])]
+    on_wall = pts[(pts[:, 2] > 0.5) & (pts[:, 2] < 2.0)]
+    crowded = [crowded_landmarks(room_map, float(p[0]), float(p[1])) for p in on_wall[:20]]
+    assert np.median(crowded) > CLEARANCE_MAX_LANDMARKS  # standing in the wall
+
+
+def test_fallback_is_never_confident(
+    world: tuple[Config, list[Keyframe], list], room_map: VisualMap
+) -> None:
+    import dataclasses
+
+    from naoloc.mapping.localizer import CONFIDENT, FALLBACK_MAX_CONFIDENCE
+
+    _cfg, _survey, trials = world
+    queries, _truth = trials[0]
+    assert room_map.localize(queries).confidence >= CONFIDENT  # verified by PnP
+    # Without landmarks nothing can be verified by PnP: the keyframe fallback answers,
+    # below the confidence that lets a behaviour stop looking.
+    blind = dataclasses.replace(room_map, kp_points=np.full_like(room_map.kp_points, np.nan))
+    est = blind.localize(queries)
+    assert est.details["method"] == "keyframes"
+    assert 0.0 < est.confidence <= FALLBACK_MAX_CONFIDENCE < CONFIDENT

@@ -99,9 +99,9 @@ def go_home(
     estimate or it has looked all around). A confident estimate within the tolerance ends
     the walk home. Otherwise the robot walks at most ``leg_m`` (``UNSURE_LEG_M`` when the
     estimate is not confident) toward the origin and localizes again. A localization with
-    confidence 0 (nothing recognised all around) is followed by a short step forward. A walk
-    that fails (``moveTo`` returns False: an obstacle) is re-planned after localizing again
-    along the survey circuit, which the robot is known to have walked.
+    confidence 0 (nothing recognised all around) is followed by a short step forward. After a
+    walk that fails (``moveTo`` returns False: an obstacle) the robot localizes again and
+    keeps to the survey circuit, which it is known to have walked, in legs of ``2 * leg_m``.
 
     Raises:
         MotionError: A turn in place while localizing failed (the robot is stopped).
@@ -133,9 +133,15 @@ def go_home(
                     robot.motion.stopMove()
                     continue
                 here = Pose2D(est.x, est.y, est.theta)
-                route = route_home(vmap, here) if blocked else straight_home(here)
-                leg = truncate_route(here, route, leg_m if confident else UNSURE_LEG_M)
-                blocked = not _follow(robot, here, leg, ends_home=leg[-1] == route[-1])
+                if blocked:  # along the circuit, which is free, as far as odometry holds
+                    route = route_home(vmap, here)
+                    length = 2.0 * leg_m if confident else UNSURE_LEG_M
+                else:
+                    route = straight_home(here)
+                    length = leg_m if confident else UNSURE_LEG_M
+                leg = truncate_route(here, route, length)
+                # Once the straight line was blocked, keep to the circuit from then on.
+                blocked = not _follow(robot, here, leg, ends_home=leg[-1] == route[-1]) or blocked
         finally:
             robot.motion.stopMove()
     truth = truth_in_map(robot, vmap.meta)
