@@ -98,10 +98,12 @@ def go_home(
     Each round localizes (the robot turns in place until the map gives a confident, verified
     estimate or it has looked all around). A confident estimate within the tolerance ends
     the walk home. Otherwise the robot walks at most ``leg_m`` (``UNSURE_LEG_M`` when the
-    estimate is not confident) toward the origin and localizes again. A localization with
-    confidence 0 (nothing recognised all around) is followed by a short step forward. After a
-    walk that fails (``moveTo`` returns False: an obstacle) the robot localizes again and
-    keeps to the survey circuit, which it is known to have walked, in legs of ``2 * leg_m``.
+    estimate is not confident) toward the origin and localizes again. When a localization is
+    not confident but an earlier one was, that earlier estimate carried forward by odometry
+    is used instead. A localization with confidence 0 (nothing recognised all around) and
+    no earlier confident one is followed by a short step forward. After a walk that fails
+    (``moveTo`` returns False: an obstacle) the robot localizes again and keeps to the survey
+    circuit, which it is known to have walked, in legs of ``2 * leg_m``.
 
     Raises:
         MotionError: A turn in place while localizing failed (the robot is stopped).
@@ -113,6 +115,7 @@ def go_home(
     tries = 0
     reached = False
     blocked = False
+    anchor: tuple[Pose2D, Pose2D] | None = None  # last confident estimate, odometry then
     with Camera(robot, cfg.camera, "naoloc_go_home") as camera:
         try:
             while True:
@@ -121,18 +124,27 @@ def go_home(
                 if on_round is not None:
                     on_round(tries, loc)
                 est = loc.estimate
+                odometry = pose_of(robot.motion, True)
                 confident = est.confidence >= CONFIDENT
+                if confident:
+                    anchor = (Pose2D(est.x, est.y, est.theta), odometry)
                 if confident and math.hypot(est.x, est.y) <= tolerance:
                     reached = True
                     break
                 if tries >= cfg.go_home.max_tries:
                     break
                 tries += 1
-                if est.confidence <= 0.0:  # nothing recognised all around: step elsewhere
+                if anchor is not None and not confident:
+                    # Not recognised here (e.g. mid-room, far from every survey view): the
+                    # last confident estimate carried by odometry is the better guess.
+                    here = anchor[0] * relative_pose(anchor[1], odometry)
+                    confident = True
+                elif est.confidence <= 0.0:  # nothing recognised all around: step elsewhere
                     robot.motion.moveTo(LOST_STEP_M, 0.0, 0.0)  # False at an obstacle: fine
                     robot.motion.stopMove()
                     continue
-                here = Pose2D(est.x, est.y, est.theta)
+                else:
+                    here = Pose2D(est.x, est.y, est.theta)
                 if blocked:  # along the circuit, which is free, as far as odometry holds
                     route = route_home(vmap, here)
                     length = 2.0 * leg_m if confident else UNSURE_LEG_M
