@@ -19,11 +19,17 @@ volumes use the complex's own dimension (``volume_dim``, 2) and densities are co
 in log space relative to the mean (``p = h_c / (F_c / sum F)``), so they stay finite and
 removal keeps working for any input dimension.
 
-Speed: one float64 weight array, cached squared norms, and a maintained matrix of
-cell-to-input dot products ``dots[c, j] = w_c . x_j``. A step ``w <- w + e (x_i - w)``
-changes it by ``e (G[i] - dots[c])`` with the Gram matrix ``G = X X^T``, so finding the
-winner costs O(cells) and an update O(inputs) per moved cell; no distance to all cells
-is recomputed from the weights.
+Speed (few inputs, "Gram mode"): every cell keeps, next to its weights, its squared
+distance to every input, ``D[c, j] = |w_c - x_j|^2``. A step ``w' = (1 - e) w + e x_i``
+changes that row exactly by the polarisation identity
+
+    ``D'[c, j] = (1 - e) D[c, j] + e Q[i, j] - e (1 - e) D[c, i]``,  ``Q[i, j] = |x_i - x_j|^2``,
+
+so the winner of input ``i`` is the argmin of one column and a step touches only the
+winner's and its neighbours' rows, O(inputs + dimension) each, as one small matrix
+product (see :class:`_Trainer`). Everything stays float64, and deterministic:
+same seed, same network, bit for bit. Many inputs ("direct mode"): one matrix-vector
+product per step against cached squared norms.
 """
 
 from __future__ import annotations
