@@ -68,7 +68,7 @@ class GoHomeResult:
 LEG_M = 2.0
 UNSURE_LEG_M = 0.5
 # With nothing recognised even after a full turn: step this far forward (m), then look again.
-LOST_STEP_M = 0.3
+LOST_STEP_M = 1.0
 
 
 def go_home(
