@@ -162,17 +162,17 @@ class _IndexStream:
         return out
 
 
-def _pair_sq_dist(a: np.ndarray, b: np.ndarray, ia: np.ndarray, ib: np.ndarray) -> np.ndarray:
-    """Squared Euclidean distances between rows ``a[ia]`` and ``b[ib]`` (paired).
+def _pair_sq_dist(w: np.ndarray, ia: np.ndarray, ib: np.ndarray) -> np.ndarray:
+    """Squared Euclidean distances between the paired rows ``w[ia]`` and ``w[ib]``.
 
     Works in blocks of a few dozen rows: large temporaries would cost more in page faults
     than the arithmetic.
     """
     out = np.empty(ia.size)
-    step = max(1, 16384 // max(a.shape[1], 1))
+    step = max(1, 16384 // max(w.shape[1], 1))
     for s in range(0, ia.size, step):
-        diff = a[ia[s : s + step]]  # not take(): it copies a non-contiguous view whole
-        diff -= b[ib[s : s + step]]
+        diff = w[ia[s : s + step]]  # not take(): it copies a non-contiguous view whole
+        diff -= w[ib[s : s + step]]
         out[s : s + step] = np.einsum("ij,ij->i", diff, diff)
     return out
 
@@ -353,7 +353,7 @@ class _Trainer:
             dst += nb
         own = np.asarray(owner, dtype=np.int64)
         w = self.w
-        length = np.sqrt(_pair_sq_dist(w, w, np.asarray(src), np.asarray(dst)))
+        length = np.sqrt(_pair_sq_dist(w, np.asarray(src), np.asarray(dst)))
         count = np.bincount(own, minlength=len(cells))
         mean = np.bincount(own, length, minlength=len(cells)) / np.maximum(count, 1)
         out = np.log(np.maximum(mean, 1e-300))
@@ -365,7 +365,7 @@ class _Trainer:
         k, w, tau, nbrs = self.k, self.w, self.tau, self.nbrs
         q = int(np.argmax(tau[:k]))
         nq = np.fromiter(sorted(nbrs[q]), np.int64)
-        f = int(nq[int(np.argmax(_pair_sq_dist(w, w, nq, np.full_like(nq, q))))])
+        f = int(nq[int(np.argmax(_pair_sq_dist(w, nq, np.full_like(nq, q))))])
         hits = []
         for xv in nbrs[q] & nbrs[f]:
             key = tuple(sorted((q, f, xv)))
@@ -410,7 +410,7 @@ class _Trainer:
         a, b, c = t[0::3], t[1::3], t[2::3]  # keys hold sorted cells: a < b < c
         keys = np.unique(np.concatenate([a * kmax + b, b * kmax + c, a * kmax + c]))
         e = np.stack([keys // kmax, keys % kmax], axis=1)
-        length = np.sqrt(_pair_sq_dist(self.w, self.w, e[:, 0], e[:, 1]))
+        length = np.sqrt(_pair_sq_dist(self.w, e[:, 0], e[:, 1]))
         sums = np.bincount(e.ravel(), np.repeat(length, 2), minlength=k)
         degree = np.bincount(e.ravel(), minlength=k)
         log_mean = np.log(np.maximum(sums / np.maximum(degree, 1), 1e-300))
