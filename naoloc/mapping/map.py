@@ -19,6 +19,7 @@ import numpy as np
 from naoloc.config import MapConfig
 from naoloc.errors import DatasetError, NaolocError
 from naoloc.keyframe import CameraInfo, Keyframe
+from naoloc.mapping.bundle import bundle_adjust, tracks_from_links
 from naoloc.mapping.features import FeatureExtractor, Features
 from naoloc.mapping.gcs import GCSNetwork, train_gcs
 from naoloc.mapping.landmarks import camera_matrix_in_map, triangulate
@@ -28,6 +29,7 @@ from naoloc.mapping.vocabulary import Vocabulary, train_vocabulary
 
 ProgressFn = Callable[[str, int, int], None]
 MODES = ("verified", "paper")
+MIN_LONG_TRACKS = 50  # bundle adjustment without loop edges needs this many lap-tying tracks
 
 
 @dataclass(eq=False)
@@ -45,8 +47,9 @@ class VisualMap:
         neuron_views: ``(K,)`` mean camera heading (rad, map frame) of those keyframes; NaN
             when none.
         keyframe_poses: ``(N, 3)`` odometry poses of the keyframes (map frame).
-        refined_poses: ``(N, 3)`` keyframe poses after the visual loop-closure refinement
-            (naoloc.mapping.posegraph); landmarks and the verified mode use these.
+        refined_poses: ``(N, 3)`` keyframe poses after the visual loop-closure pose graph
+            (naoloc.mapping.posegraph) and bundle adjustment (naoloc.mapping.bundle);
+            landmarks and the verified mode use these.
         keyframe_heads: ``(N, 2)`` HeadYaw, HeadPitch (rad) of the keyframes.
         keyframe_cameras: ``(N, 5)`` width, height (px), hfov, vfov (rad), camera index.
         histograms: ``(N, V)`` L2-normalised TF-IDF histograms of the keyframes.
@@ -163,6 +166,16 @@ def _neuron_poses(
     return out, view
 
 
+def _cameras(poses: np.ndarray, heads: np.ndarray, cam_index: Sequence[int]) -> np.ndarray:
+    """``(N, 4, 4)`` ``T_map_cam`` of keyframes with robot poses ``poses`` (map frame)."""
+    return np.stack(
+        [
+            camera_matrix_in_map(poses[i], heads[i, 0], heads[i, 1], cam_index[i])
+            for i in range(poses.shape[0])
+        ]
+    )
+
+
 def build_map(
     keyframes: Sequence[Keyframe],
     cfg: MapConfig,
@@ -215,17 +228,25 @@ def build_map(
     neuron_poses, neuron_views = _neuron_poses(winners, poses, poses[:, 2] + heads[:, 0], gcs.size)
     xys, descs = [f.xy for f in feats], [f.descriptors for f in feats]
     kmats = [c.matrix() for c in cams_info]
-    refined = refine_poses(
-        poses, heads, xys, descs, kmats, [c.index for c in cams_info], hists, extractor.binary
-    )
+    cam_index = [c.index for c in cams_info]
+    refined = refine_poses(poses, heads, xys, descs, kmats, cam_index, hists, extractor.binary)
     report("poses", 1, 1)
-    cams = np.stack(
-        [
-            camera_matrix_in_map(refined.poses[i], heads[i, 0], heads[i, 1], c.index)
-            for i, c in enumerate(cams_info)
-        ]
-    )
-    lm = triangulate(xys, descs, cams, kmats, extractor.binary)
+    # Landmarks from the pose-graph poses link keypoints into tracks; bundle adjustment
+    # refines the poses with them; the landmarks are then triangulated from those poses.
+    lm = triangulate(xys, descs, _cameras(refined.poses, heads, cam_index), kmats, extractor.binary)
+    kp_xy = np.concatenate(xys)
+    kp_frame = np.repeat(np.arange(n), [len(f) for f in feats])
+    tracks = tracks_from_links(kp_xy.shape[0], lm.matches)
+    odometry = [e for e in refined.edges if e.odometry]
+    args = (refined.poses, heads, cam_index, kmats, kp_xy, kp_frame, tracks, lm.points)
+    # Odometry edges only: the loop closures' relative poses carry the errors of their
+    # odometry-triangulated landmarks (measured: they make the result worse), and tracks
+    # seen from both laps tie the laps. Without enough such tracks the loops are kept.
+    adjusted = bundle_adjust(*args, odometry, refined.heading_bias)
+    if adjusted.long_tracks < MIN_LONG_TRACKS and len(refined.edges) > len(odometry):
+        adjusted = bundle_adjust(*args, list(refined.edges), refined.heading_bias)
+    final_poses = adjusted.poses
+    lm = triangulate(xys, descs, _cameras(final_poses, heads, cam_index), kmats, extractor.binary)
     report("landmarks", 1, 1)
     t4 = time.perf_counter()
     offsets = np.concatenate([[0], np.cumsum([len(f) for f in feats])]).astype(np.int64)
@@ -238,14 +259,20 @@ def build_map(
     }
     return VisualMap(
         config=cfg,
-        meta={**dict(meta or {}), "loop_closures": refined.loops},
+        meta={
+            **dict(meta or {}),
+            "loop_closures": refined.loops,
+            "heading_bias_rad_per_m": round(adjusted.heading_bias, 6),
+            "bundle_tracks": adjusted.tracks,
+            "bundle_rms_px": round(adjusted.rms_px, 3),
+        },
         feature_params=extractor.params(),
         vocabulary=vocab,
         gcs=gcs,
         neuron_poses=neuron_poses,
         neuron_views=neuron_views,
         keyframe_poses=poses,
-        refined_poses=refined.poses,
+        refined_poses=final_poses,
         keyframe_heads=heads,
         keyframe_cameras=cameras,
         histograms=hists,

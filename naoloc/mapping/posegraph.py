@@ -101,12 +101,14 @@ class RefinedPoses:
         loops: Loop-closure edges kept.
         shift_m: Largest position change from the odometry poses, metres.
         heading_bias: Estimated odometry heading bias, rad per metre walked.
+        edges: The odometry edges and the loop closures kept.
     """
 
     poses: np.ndarray
     loops: int
     shift_m: float
     heading_bias: float = 0.0
+    edges: tuple[Edge, ...] = ()
 
 
 def _v2t(p: np.ndarray) -> np.ndarray:
@@ -519,11 +521,11 @@ def refine_poses(
 
     add(_retrieval_pairs(histograms))
     if not loops:
-        return RefinedPoses(poses.copy(), 0, 0.0)
+        return RefinedPoses(poses.copy(), 0, 0.0, 0.0, tuple(odo))
     sol, kept = _solve_robust(poses, odo, loops)
     # Second pass: pairs that look at the same place according to the first solution.
     add(_geometric_pairs(_cameras(sol.poses, heads, cam_index)))
     sol, kept = _solve_robust(sol.poses, odo, loops)
     refined = sol.poses
     shift = float(np.max(np.hypot(*(refined[:, :2] - poses[:, :2]).T)))
-    return RefinedPoses(refined, len(kept), shift, sol.heading_bias)
+    return RefinedPoses(refined, len(kept), shift, sol.heading_bias, tuple(odo + kept))
