@@ -69,6 +69,7 @@ LEG_M = 2.0
 UNSURE_LEG_M = 0.5
 # With nothing recognised even after a full turn: step this far forward (m), then look again.
 LOST_STEP_M = 1.0
+MAX_LOST_STEPS = 4  # exploring steps when nothing is recognised; they are not walks home
 
 
 def go_home(
@@ -101,7 +102,8 @@ def go_home(
     estimate is not confident) toward the origin and localizes again. When a localization is
     not confident but an earlier one was, that earlier estimate carried forward by odometry
     is used instead. A localization with confidence 0 (nothing recognised all around) and
-    no earlier confident one is followed by a short step forward. After a walk that fails
+    no earlier confident one is followed by a short step forward; up to ``MAX_LOST_STEPS`` of
+    those do not count as walks. After a walk that fails
     (``moveTo`` returns False: an obstacle) the robot localizes again and keeps to the survey
     circuit, which it is known to have walked, in legs of ``2 * leg_m``.
 
@@ -113,6 +115,7 @@ def go_home(
     tolerance = cfg.go_home.tolerance_m
     rounds: list[Localization] = []
     tries = 0
+    lost_steps = 0
     reached = False
     blocked = False
     anchor: tuple[Pose2D, Pose2D] | None = None  # last confident estimate, odometry then
@@ -133,6 +136,13 @@ def go_home(
                     break
                 if tries >= cfg.go_home.max_tries:
                     break
+                if anchor is None and est.confidence <= 0.0 and lost_steps < MAX_LOST_STEPS:
+                    # Nothing recognised all around and no earlier fix: explore a little
+                    # (mid-room, far from every survey view) without using up a walk home.
+                    lost_steps += 1
+                    robot.motion.moveTo(LOST_STEP_M, 0.0, 0.0)  # False at an obstacle: fine
+                    robot.motion.stopMove()
+                    continue
                 tries += 1
                 if anchor is not None and not confident:
                     # Not recognised here (e.g. mid-room, far from every survey view): the
