@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from naoloc.keyframe import camera_in_robot
-from naoloc.mapping.posegraph import Edge, graph_system
+from naoloc.mapping.posegraph import Edge, graph_cost, graph_system
 
 PIXEL_SIGMA = 1.0  # px
 HUBER_PX = 2.0  # px: reprojection errors beyond this get a linear loss
@@ -204,7 +204,7 @@ def bundle_adjust(
         e = np.linalg.norm(r, axis=1) / PIXEL_SIGMA
         e = np.where(z > 0.05, e, MAX_ERROR_PX)
         rho = np.where(e <= HUBER_PX, e**2, 2 * HUBER_PX * e - HUBER_PX**2)
-        return float(rho.sum()) + _graph_cost(xx, edges, bb)
+        return float(rho.sum()) + graph_cost(xx, edges, bb)
 
     cost = total_cost(x, pts, bias)
     for _ in range(iterations):
@@ -284,15 +284,3 @@ def bundle_adjust(
     if not (np.isfinite(x).all() and np.isfinite(bias)):
         return BundleResult(poses.copy(), heading_bias, n_pts, 0, float("nan"), long_tracks)
     return BundleResult(x, bias, n_pts, int(active.sum()), rms, long_tracks)
-
-
-def _graph_cost(x: np.ndarray, edges: Sequence[Edge], bias: float) -> float:
-    """Sum of squared Mahalanobis residuals of the edges plus the bias prior."""
-    from naoloc.mapping.posegraph import SIGMA_BIAS_PRIOR, _edge_terms
-
-    cost = (bias / SIGMA_BIAS_PRIOR) ** 2
-    if edges:
-        r, _, _, _ = _edge_terms(x, edges, bias)
-        info = np.stack([e.info for e in edges])
-        cost += float(np.einsum("ei,eij,ej->", r, info, r))
-    return cost

@@ -210,6 +210,19 @@ def solve_pose_graph(
     return GraphSolution(x, bias, done)
 
 
+def graph_cost(x: np.ndarray, edges: Sequence[Edge], bias: float) -> float:
+    """Sum of the edges' squared Mahalanobis residuals plus the heading bias prior.
+
+    Twice the cost whose gradient :func:`graph_system` returns (same edges, no Huber).
+    """
+    cost = (bias / SIGMA_BIAS_PRIOR) ** 2
+    if edges:
+        r, _, _, _ = _edge_terms(x, edges, bias)
+        info = np.stack([e.info for e in edges])
+        cost += float(np.einsum("ei,eij,ej->", r, info, r))
+    return cost
+
+
 def graph_system(
     x: np.ndarray,
     edges: Sequence[Edge],
