@@ -249,3 +249,24 @@ def test_refine_and_bundle_adjust_beat_odometry(scene: Scene) -> None:
     scaled[:, :2] = scaled[0, :2] + (scaled[:, :2] - scaled[0, :2]) / 1.01
     assert ba_err[1] < graph_err[1]
     assert _errors(scaled, scene.truth)[0] < 0.6 * graph_err[0]
+
+
+def test_long_tracks_count_only_tracks_that_tie_the_laps(scene: Scene) -> None:
+    n = scene.truth.shape[0]
+    k = [CAM.matrix()] * n
+    heads = np.tile(np.array(HEAD), (n, 1))
+    cams = np.stack([camera_matrix_in_map(p, *HEAD, 0) for p in scene.truth])
+    lm = triangulate(scene.xy, scene.desc, cams, k, True)
+    kp_xy = np.concatenate(scene.xy)
+    frame = np.repeat(np.arange(n), [len(a) for a in scene.xy])
+    lap = frame // 80
+    same_lap = lm.matches[lap[lm.matches[:, 0]] == lap[lm.matches[:, 1]]]
+    edges = odometry_edges(scene.truth)
+    both = bundle_adjust(scene.truth, heads, [0] * n, k, kp_xy, frame,
+                         tracks_from_links(kp_xy.shape[0], lm.matches), lm.points, edges,
+                         iterations=1, long_gap=40)  # fmt: skip
+    within = bundle_adjust(scene.truth, heads, [0] * n, k, kp_xy, frame,
+                           tracks_from_links(kp_xy.shape[0], same_lap), lm.points, edges,
+                           iterations=1, long_gap=40)  # fmt: skip
+    assert both.long_tracks > 100
+    assert within.long_tracks < 0.1 * both.long_tracks

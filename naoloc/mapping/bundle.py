@@ -40,8 +40,8 @@ class BundleResult:
         tracks: Tracks (3-D points) used.
         observations: Pixel observations used at the end.
         rms_px: Root-mean-square reprojection error of those observations at the end.
-        long_tracks: Tracks seen by keyframes at least LONG_TRACK_GAP captures apart (they
-            tie the laps together).
+        long_tracks: Tracks seen by keyframes at least ``long_gap`` captures apart (with
+            about half a lap, they tie the laps together).
     """
 
     poses: np.ndarray
@@ -144,6 +144,7 @@ def bundle_adjust(
     edges: Sequence[Edge],
     heading_bias: float = 0.0,
     iterations: int = 6,
+    long_gap: int = LONG_TRACK_GAP,
 ) -> BundleResult:
     """Refine keyframe poses, track points and the heading bias together (module doc).
 
@@ -160,6 +161,7 @@ def bundle_adjust(
         edges: Pose-graph edges (odometry edges carry the heading bias).
         heading_bias: Initial heading bias (rad/m).
         iterations: Levenberg-Marquardt iterations at most.
+        long_gap: Capture-index span that makes a track count in ``long_tracks``.
 
     Returns:
         The refined poses; the input poses when there is nothing to adjust.
@@ -184,7 +186,7 @@ def bundle_adjust(
     hi = np.zeros(n_pts, np.int64)
     np.minimum.at(lo, tr, kf)
     np.maximum.at(hi, tr, kf)
-    long_tracks = int(np.sum(hi - lo >= LONG_TRACK_GAP))
+    long_tracks = int(np.sum(hi - lo >= long_gap))
     pts = np.zeros((n_pts, 3))
     np.add.at(pts, tr, points[rows])
     pts /= np.bincount(tr, minlength=n_pts)[:, None]

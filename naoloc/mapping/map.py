@@ -241,10 +241,13 @@ def build_map(
     args = (refined.poses, heads, cam_index, kmats, kp_xy, kp_frame, tracks, lm.points)
     # Odometry edges only: the loop closures' relative poses carry the errors of their
     # odometry-triangulated landmarks (measured: they make the result worse), and tracks
-    # seen from both laps tie the laps. Without enough such tracks the loops are kept.
-    adjusted = bundle_adjust(*args, odometry, refined.heading_bias)
-    if adjusted.long_tracks < MIN_LONG_TRACKS and len(refined.edges) > len(odometry):
-        adjusted = bundle_adjust(*args, list(refined.edges), refined.heading_bias)
+    # seen from both laps (spanning half the loop-closure gap) tie the laps. Without
+    # enough such tracks the loops are kept.
+    loop_gaps = [abs(e.b - e.a) for e in refined.edges if not e.odometry]
+    gap = int(np.median(loop_gaps)) // 2 if loop_gaps else n
+    adjusted = bundle_adjust(*args, odometry, refined.heading_bias, long_gap=gap)
+    if adjusted.long_tracks < MIN_LONG_TRACKS and loop_gaps:
+        adjusted = bundle_adjust(*args, list(refined.edges), refined.heading_bias, long_gap=gap)
     final_poses = adjusted.poses
     lm = triangulate(xys, descs, _cameras(final_poses, heads, cam_index), kmats, extractor.binary)
     report("landmarks", 1, 1)
@@ -264,6 +267,7 @@ def build_map(
             "loop_closures": refined.loops,
             "heading_bias_rad_per_m": round(adjusted.heading_bias, 6),
             "bundle_tracks": adjusted.tracks,
+            "bundle_long_tracks": adjusted.long_tracks,
             "bundle_rms_px": round(adjusted.rms_px, 3),
         },
         feature_params=extractor.params(),
