@@ -73,11 +73,12 @@ class Camera:
         self._closed = False
 
     def frame(self) -> Frame:
-        """The latest image as a :class:`~naoloc.image.Frame`."""
-        try:
-            return frame_from_naoqi(self.robot.video.getImageRemote(self.handle))
-        finally:
-            self.robot.video.releaseImage(self.handle)
+        """The latest image as a :class:`~naoloc.image.Frame`.
+
+        No ``releaseImage`` follows: NAOqi's releaseImage frees buffers locked by
+        getImageLocal, and getImageRemote locks none (one remote call saved per picture).
+        """
+        return frame_from_naoqi(self.robot.video.getImageRemote(self.handle))
 
     def info(self, frame: Frame) -> CameraInfo:
         """The camera model of ``frame`` (size from the frame, FOV from ALVideoDevice)."""

@@ -115,28 +115,24 @@ def frames_per_lap(sides: tuple[float, float], step: float) -> int:
     return 2 * (max(1, round(sides[0] / step)) + max(1, round(sides[1] / step)))
 
 
-def walk_to(robot: Robot, origin: Pose2D, target: Pose2D) -> Pose2D:
+def walk_to(robot: Robot, target: Pose2D, here: Pose2D) -> None:
     """``moveTo`` the map-frame ``target`` from where odometry says the robot is.
 
     Args:
         robot: The robot.
-        origin: FRAME_WORLD odometry pose of the map origin.
         target: Target pose in the map frame.
-
-    Returns:
-        The odometry pose in the map frame after the move.
+        here: The robot's odometry pose in the map frame now (the caller read it after the
+            previous step; the robot has stood still since).
 
     Raises:
         MotionError: ``moveTo`` reports failure.
     """
-    here = relative_pose(origin, pose_of(robot.motion, True))
     move = relative_pose(here, target)
     if not robot.motion.moveTo(move.x, move.y, move.theta):
         raise MotionError(
             f"moveTo({move.x:.2f}, {move.y:.2f}, {move.theta:.2f}) failed on the way to "
             f"({target.x:.2f}, {target.y:.2f}) in the map frame"
         )
-    return relative_pose(origin, pose_of(robot.motion, True))
 
 
 def survey(
@@ -213,16 +209,19 @@ def survey(
             here = Pose2D()
             for point in circuit(sides, cfg.survey.step_m, cfg.survey.laps, turn):
                 before = here
-                here = walk_to(robot, origin, point.pose)
-                result.path_m += before.distance(here)
-                if point.picture:
+                walk_to(robot, point.pose, here)
+                if point.picture:  # the keyframe's odometry reading is where the robot is
                     keyframe, odometry = camera.keyframe(origin, command_origin)
+                    here = keyframe.pose
                     on_frame(keyframe, point.lap, odometry)
                     result.frames += 1
                     if progress is not None:
                         progress(1)
-                elif point.closes_lap:
-                    result.laps = point.lap + 1
+                else:
+                    here = relative_pose(origin, pose_of(robot.motion, True))
+                    if point.closes_lap:
+                        result.laps = point.lap + 1
+                result.path_m += before.distance(here)
     finally:
         robot.motion.stopMove()
         result.wall_s = time.monotonic() - t0

@@ -317,6 +317,9 @@ def localize_verified(
         corr.query.append(np.full(len(q_idx), qi))
         mats.append(np.repeat(m_q[None], len(q_idx), axis=0))
         try:
+            # OpenCV's RANSAC draws from a process-wide RNG: seed it per call so a query gives
+            # the same answer whatever ran before it (in-process, served, or in a worker).
+            cv2.setRNGSeed(int(vmap.config.seed) + qi)
             ok, rvec, tvec, inl = cv2.solvePnPRansac(
                 obj,
                 img,
@@ -384,6 +387,7 @@ def _fallback(
         b = vmap.kp_xy[lo + m[:, 1]].astype(np.float64)
         mask: Any = None
         try:
+            cv2.setRNGSeed(int(vmap.config.seed) + qi)
             _f, mask = cv2.findFundamentalMat(a, b, cv2.FM_RANSAC, 3.0, 0.99)
         except cv2.error:
             mask = None

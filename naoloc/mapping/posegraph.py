@@ -330,6 +330,7 @@ def _loop_edge(ctx: _LoopContext, i: int, j: int) -> Edge | None:
     obj = obj_map[ok_pts] @ t_ri_map[:3, :3].T + t_ri_map[:3, 3]
     img = ctx.xy[j][m[ok_pts, 0]].astype(np.float64)
     try:
+        cv2.setRNGSeed(i * 100003 + j)  # reproducible RANSAC whatever ran before (see localizer)
         ok, rvec, tvec, inl = cv2.solvePnPRansac(
             obj,
             img,
