@@ -167,3 +167,24 @@ def test_fallback_is_never_confident(
     est = blind.localize(queries)
     assert est.details["method"] == "keyframes"
     assert 0.0 < est.confidence <= FALLBACK_MAX_CONFIDENCE < CONFIDENT
+
+
+def test_an_empty_histogram_is_no_evidence() -> None:
+    from naoloc.mapping.vocabulary import dbow_scores
+
+    db = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
+    scores = dbow_scores(np.array([1.0, 0.0, 0.0]), db)
+    assert scores[0] == 0.0  # the formula alone would give it 0.5, more than row 1
+    assert scores[1] == pytest.approx(0.5) and scores[2] == 0.0
+    assert not np.any(dbow_scores(np.zeros(3), db))
+
+
+def test_ratio_matches_are_one_to_one() -> None:
+    from naoloc.mapping.landmarks import hamming_matcher, ratio_matches
+
+    rng = np.random.default_rng(0)
+    train = rng.integers(0, 256, (2, 61), dtype=np.uint8)
+    query = np.repeat(train[:1], 30, axis=0)  # thirty copies of one train descriptor
+    query[1:, 0] ^= 1  # all but the first one bit away
+    m = ratio_matches(hamming_matcher(True), query, train)
+    assert m.tolist() == [[0, 0]]

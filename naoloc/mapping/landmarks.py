@@ -63,15 +63,21 @@ def hamming_matcher(binary: bool) -> object:
 def ratio_matches(
     matcher: object, query: np.ndarray, train: np.ndarray, ratio: float = RATIO_TEST
 ) -> np.ndarray:
-    """Lowe-ratio-tested nearest-neighbour matches ``(m, 2)``: query index, train index."""
+    """Lowe-ratio-tested nearest-neighbour matches ``(m, 2)``: query index, train index.
+
+    One-to-one: when several query keypoints pick the same train keypoint, only the closest
+    is kept (a train image with few keypoints otherwise "matches" a whole query image).
+    """
     if query.shape[0] == 0 or train.shape[0] < 2:
         return np.zeros((0, 2), np.int64)
     knn = matcher.knnMatch(query, train, k=2)  # type: ignore[attr-defined]
-    pairs = [
-        (m[0].queryIdx, m[0].trainIdx)
-        for m in knn
-        if len(m) == 2 and m[0].distance < ratio * m[1].distance
-    ]
+    best: dict[int, tuple[float, int]] = {}
+    for m in knn:
+        if len(m) == 2 and m[0].distance < ratio * m[1].distance:
+            held = best.get(m[0].trainIdx)
+            if held is None or m[0].distance < held[0]:
+                best[m[0].trainIdx] = (m[0].distance, m[0].queryIdx)
+    pairs = sorted((q, t) for t, (_d, q) in best.items())
     return np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
 
 

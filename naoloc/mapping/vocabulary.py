@@ -93,10 +93,18 @@ def l1_normalise(v: np.ndarray) -> np.ndarray:
 
 
 def dbow_scores(query: np.ndarray, database: np.ndarray) -> np.ndarray:
-    """DBoW2 L1 scores ``1 - 0.5 |q/|q|_1 - d/|d|_1|_1`` in [0, 1] of one query against rows."""
+    """DBoW2 L1 scores ``1 - 0.5 |q/|q|_1 - d/|d|_1|_1`` in [0, 1] of one query against rows.
+
+    An empty histogram (an image without keypoints) is no evidence of anything: it scores 0,
+    not the 0.5 the formula would give it (which beat most true matches).
+    """
     q = l1_normalise(query)
     d = l1_normalise(database)
-    return 1.0 - 0.5 * np.abs(d - q[None, :]).sum(axis=1)
+    scores = 1.0 - 0.5 * np.abs(d - q[None, :]).sum(axis=1)
+    if not np.any(q):
+        return np.zeros(d.shape[0])
+    scores[~np.any(d, axis=1)] = 0.0
+    return scores
 
 
 def _init_centres(x: np.ndarray, k: int, rng: np.random.Generator) -> np.ndarray:
