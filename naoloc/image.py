@@ -61,8 +61,15 @@ class Frame:
         return to_bgr(self.pixels, self.colorspace)
 
 
-def _buffer_bytes(data: Any) -> bytes:
-    if isinstance(data, bytes | bytearray | memoryview):
+def frame_bytes(data: Any) -> bytes:
+    """Image bytes as any NAOqi sends them: ``bytes``, ``bytearray``, ``str`` (or an array).
+
+    Raises:
+        RobotError: For repr text (a server that sent bytes untyped) or another type.
+    """
+    if isinstance(data, bytes):
+        return data
+    if isinstance(data, bytearray | memoryview):
         return bytes(data)
     if isinstance(data, str):
         if data.startswith(("b'", 'b"')):
@@ -84,7 +91,7 @@ def frame_from_naoqi(value: Sequence[Any]) -> Frame:
     if value is None or len(value) < 12:
         raise RobotError("getImageRemote returned no image (is the camera subscribed?)")
     width, height, layers, colorspace = (int(v) for v in value[:4])
-    data = _buffer_bytes(value[6])
+    data = frame_bytes(value[6])
     expected = width * height * layers
     if width <= 0 or height <= 0 or layers <= 0 or len(data) != expected:
         raise RobotError(

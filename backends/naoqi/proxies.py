@@ -14,30 +14,12 @@ from naoloc.backends.naoqi.client import Link
 from naoloc.backends.naoqi.signatures import MOTION, POSTURE, SIM, VIDEO
 
 from naoloc.errors import RobotError
+from naoloc.image import frame_bytes
 from naoloc.robot import Angles, Names
 
 
 def _floats(value: Any) -> list[float]:
     return [float(v) for v in value]
-
-
-def frame_bytes(data: Any) -> bytes:
-    """Image bytes as sent by any NAOqi: ``bytes``, ``bytearray`` or ``str``.
-
-    Raises:
-        RobotError: For repr text (a server that sent bytes untyped) or another type.
-    """
-    if isinstance(data, bytes):
-        return data
-    if isinstance(data, bytearray | memoryview):
-        return bytes(data)
-    if isinstance(data, str):
-        if data.startswith(("b'", 'b"')):
-            raise RobotError(
-                "frame bytes arrived as repr text; the server must declare image buffers qi.Buffer"
-            )
-        return data.encode("latin-1")
-    raise RobotError(f"frame bytes have unexpected type {type(data).__name__}")
 
 
 class _Remote:
