@@ -24,8 +24,21 @@ if TYPE_CHECKING:
     from naoloc.mapping import Estimate, VisualMap
 
 
+def room_corners(origin_room_pose: Sequence[float], room_size: Sequence[float]) -> np.ndarray:
+    """The room's walls in the map frame as a closed ``(5, 2)`` polygon (m).
+
+    Args:
+        origin_room_pose: Pose of the map origin in the room frame ``[x, y, theta]``.
+        room_size: Inner room size ``[sx, sy]`` (m).
+    """
+    o = Pose2D.from_list(origin_room_pose)
+    sx, sy = float(room_size[0]), float(room_size[1])
+    corners = [(0.0, 0.0), (sx, 0.0), (sx, sy), (0.0, sy), (0.0, 0.0)]
+    return np.array([[p.x, p.y] for p in (relative_pose(o, Pose2D(x, y)) for x, y in corners)])
+
+
 def room_outline(meta: dict[str, Any]) -> np.ndarray | None:
-    """The room's corners in the map frame, ``(5, 2)`` closed polygon, or None if unknown.
+    """:func:`room_corners` from a map's or dataset's meta, or None when the room is unknown.
 
     Args:
         meta: Map or dataset meta with ``origin_room_pose`` ([x, y, theta], room frame)
@@ -34,22 +47,25 @@ def room_outline(meta: dict[str, Any]) -> np.ndarray | None:
     origin, size = meta.get("origin_room_pose"), meta.get("room_size_m")
     if origin is None or size is None:
         return None
-    o = Pose2D.from_list(origin)
-    sx, sy = float(size[0]), float(size[1])
-    corners = [(0.0, 0.0), (sx, 0.0), (sx, sy), (0.0, sy), (0.0, 0.0)]
-    return np.array([[p.x, p.y] for p in (relative_pose(o, Pose2D(x, y)) for x, y in corners)])
+    return room_corners(origin, size)
 
 
-def _figure(width: float, height: float) -> Any:
+def new_figure(width: float, height: float, dpi: int = 100) -> Any:
+    """A matplotlib Figure on its own Agg canvas (no pyplot, no global figure state)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(width, height), dpi=100)
+    fig = Figure(figsize=(width, height), dpi=dpi)
     FigureCanvasAgg(fig)
     return fig
 
 
-def _save(fig: Any, path: Path) -> Path:
+def save_figure(fig: Any, path: Path) -> Path:
+    """Write ``fig`` as PNG at ``path`` (creating its folder).
+
+    Raises:
+        NaolocError: The file cannot be written.
+    """
     path = Path(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -100,7 +116,7 @@ def plot_map(vmap: VisualMap, path: str | Path, title: str | None = None) -> Pat
     Returns:
         The path written.
     """
-    fig = _figure(7.0, 7.0)
+    fig = new_figure(7.0, 7.0)
     ax = fig.add_subplot(1, 1, 1)
     _draw_map(ax, vmap)
     ax.set_title(
@@ -110,7 +126,7 @@ def plot_map(vmap: VisualMap, path: str | Path, title: str | None = None) -> Pat
     )
     ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
-    return _save(fig, Path(path))
+    return save_figure(fig, Path(path))
 
 
 def plot_localization(
@@ -137,7 +153,7 @@ def plot_localization(
     """
     shown = list(queries)[:10]
     rows = 2 if shown else 1
-    fig = _figure(8.0, 8.0 + (1.6 if shown else 0.0))
+    fig = new_figure(8.0, 8.0 + (1.6 if shown else 0.0))
     grid = fig.add_gridspec(rows, max(1, len(shown)), height_ratios=[5, 1][:rows])
     ax = fig.add_subplot(grid[0, :])
     _draw_map(ax, vmap)
@@ -156,7 +172,7 @@ def plot_localization(
         sub.set_title(f"yaw {math.degrees(kf.head_yaw):.0f}°", fontsize=7)
         sub.axis("off")
     fig.tight_layout()
-    return _save(fig, Path(path))
+    return save_figure(fig, Path(path))
 
 
 def plot_estimates(
@@ -176,7 +192,7 @@ def plot_estimates(
     Returns:
         The path written.
     """
-    fig = _figure(7.0, 7.0)
+    fig = new_figure(7.0, 7.0)
     ax = fig.add_subplot(1, 1, 1)
     _draw_map(ax, vmap)
     for i, (est, truth) in enumerate(pairs):
@@ -189,4 +205,4 @@ def plot_estimates(
     ax.set_title(title or f"{len(pairs)} localizations")
     ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
-    return _save(fig, Path(path))
+    return save_figure(fig, Path(path))

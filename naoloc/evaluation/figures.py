@@ -1,8 +1,8 @@
 """PNG figures of an evaluation: the map (like the paper's Fig. 14), estimates vs truth (like
 Fig. 20) and the cumulative distribution of errors.
 
-Everything is drawn in the map frame (m). matplotlib is imported lazily with the Agg
-backend, so importing this module costs nothing and needs no display.
+Everything is drawn in the map frame (m). Figures come from :mod:`naoloc.plots` (their own
+Agg canvas, no pyplot), so importing this module costs nothing and needs no display.
 """
 
 from __future__ import annotations
@@ -14,15 +14,19 @@ from typing import Any
 import numpy as np
 
 from naoloc.evaluation.stats import cdf
+from naoloc.plots import new_figure, save_figure
+
+DPI = 110
 
 
-def _pyplot() -> Any:
-    import matplotlib
-
-    matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
-
-    return plt
+def _finish(ax: Any, title: str, legend_size: int, legend_loc: str) -> None:
+    """Title, equal aspect, map-frame axis labels, grid and legend of a map panel."""
+    ax.set_title(title, fontsize=10)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m, map frame)")
+    ax.set_ylabel("y (m)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=legend_size, loc=legend_loc)
 
 
 def _draw_room(ax: Any, room_polygon: np.ndarray | None) -> None:
@@ -43,14 +47,14 @@ def plot_maps(
         path: Output PNG.
         maps: ``(title, keyframe_poses (N, 3), neuron_poses (K, 3))`` per map, map frame (m);
             NaN neuron rows (neurons that win no image) are skipped.
-        room_polygon: ``(4, 2)`` wall corners in the map frame, or None.
+        room_polygon: Wall corners in the map frame (open or closed polygon), or None.
 
     Returns:
         ``path``.
     """
-    plt = _pyplot()
     count = max(1, len(maps))
-    fig, axes = plt.subplots(1, count, figsize=(4.2 * count, 4.4), squeeze=False)
+    fig = new_figure(4.2 * count, 4.4, DPI)
+    axes = fig.subplots(1, count, squeeze=False)
     for ax, (title, kf, neurons) in zip(axes[0], maps, strict=False):
         kf = np.asarray(kf, dtype=np.float64).reshape(-1, 3)
         nr = np.asarray(neurons, dtype=np.float64).reshape(-1, 3)
@@ -58,17 +62,9 @@ def plot_maps(
         _draw_room(ax, room_polygon)
         ax.plot(kf[:, 0], kf[:, 1], ".", color="0.75", ms=3, label=f"survey images ({len(kf)})")
         ax.plot(nr[:, 0], nr[:, 1], "o", color="tab:blue", ms=3.5, label=f"neurons ({len(nr)})")
-        ax.set_title(title, fontsize=10)
-        ax.set_aspect("equal")
-        ax.set_xlabel("x (m, map frame)")
-        ax.set_ylabel("y (m)")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="upper right")
+        _finish(ax, title, 7, "upper right")
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def plot_estimates(
@@ -84,14 +80,14 @@ def plot_estimates(
         path: Output PNG.
         records: Dicts with ``truth`` and ``estimate`` ([x, y, theta], map frame, m).
         title: Figure title.
-        room_polygon: ``(4, 2)`` wall corners in the map frame, or None.
+        room_polygon: Wall corners in the map frame (open or closed polygon), or None.
         survey_poses: ``(N, 3)`` survey poses to draw faintly, or None.
 
     Returns:
         ``path``.
     """
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(5.6, 5.6))
+    fig = new_figure(5.6, 5.6, DPI)
+    ax = fig.add_subplot(1, 1, 1)
     _draw_room(ax, room_polygon)
     if survey_poses is not None and len(survey_poses):
         sp = np.asarray(survey_poses, dtype=np.float64).reshape(-1, 3)
@@ -102,17 +98,9 @@ def plot_estimates(
         ax.plot([t[0], e[0]], [t[1], e[1]], "-", color="tab:red", lw=0.8, alpha=0.6)
     ax.plot(truth[:, 0], truth[:, 1], "o", color="tab:green", ms=5, label="truth")
     ax.plot(est[:, 0], est[:, 1], "x", color="tab:red", ms=5, label="estimate")
-    ax.set_title(title, fontsize=10)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x (m, map frame)")
-    ax.set_ylabel("y (m)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="upper right")
+    _finish(ax, title, 8, "upper right")
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def plot_cdf(path: Path, curves: Mapping[str, Sequence[float]], title: str) -> Path:
@@ -126,8 +114,8 @@ def plot_cdf(path: Path, curves: Mapping[str, Sequence[float]], title: str) -> P
     Returns:
         ``path``.
     """
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    fig = new_figure(6.4, 4.2, DPI)
+    ax = fig.add_subplot(1, 1, 1)
     top = 0.5
     for name, errors in curves.items():
         x, y = cdf(errors)
@@ -144,7 +132,4 @@ def plot_cdf(path: Path, curves: Mapping[str, Sequence[float]], title: str) -> P
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="lower right")
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)

@@ -34,7 +34,6 @@ from naoloc.evaluation.protocols import (
     EvalPose,
     lap_of,
     paper_poses,
-    room_to_map,
     sample_random_poses,
     wall_seen,
 )
@@ -391,13 +390,6 @@ def _survey_table(
     }
 
 
-def room_polygon(origin: tuple[float, float, float], room_size: tuple[float, float]) -> np.ndarray:
-    """The room's wall corners in the map frame, ``(4, 2)`` m."""
-    sx, sy = room_size
-    corners = [(0.0, 0.0), (sx, 0.0), (sx, sy), (0.0, sy)]
-    return np.array([room_to_map(origin, (x, y, 0.0)).to_list()[:2] for x, y in corners])
-
-
 def _write_outputs(
     outdir: Path,
     summary: dict[str, Any],
@@ -410,8 +402,9 @@ def _write_outputs(
     protocol: str,
 ) -> None:
     from naoloc.mapping import load_map
+    from naoloc.plots import room_corners
 
-    poly = room_polygon(origin, room_size)
+    poly = room_corners(origin, room_size)
     shown = [v.map_name for v in plan.variants if v.study == "paper" and v.mode == "paper"]
     shown = shown or [plan.main.map_name] + [
         v.map_name for v in plan.variants if v.name.startswith("neurons-") and v.mode == "paper"
