@@ -296,31 +296,33 @@ class FakeMotion:
 
     # -- joints ------------------------------------------------------------------------------
 
-    def setAngles(self, names: Names, angles: Angles, fractionMaxSpeed: float) -> None:
-        """Start moving joints toward angles (rad, clamped to limits); non-blocking."""
+    def _start_joints(
+        self, names: Names, angles: Angles, fraction: float, caller: str
+    ) -> list[str]:
+        """Validate and set joint targets; limb joints leave the named posture."""
         w = self._world
         w.check_open()
         joints = expand_joint_names(names)
-        fraction = _fraction(fractionMaxSpeed, "setAngles")
-        values = _as_floats(angles, len(joints), "setAngles")
-        w.set_joint_targets(dict(zip(joints, values, strict=True)), fraction)
+        speed = _fraction(fraction, caller)
+        values = _as_floats(angles, len(joints), caller)
+        w.set_joint_targets(dict(zip(joints, values, strict=True)), speed)
         if any(j.startswith(("L", "R")) for j in joints):
             w.posture = "Unknown"
-        w.tick()
+        return joints
+
+    def setAngles(self, names: Names, angles: Angles, fractionMaxSpeed: float) -> None:
+        """Start moving joints toward angles (rad, clamped to limits); non-blocking."""
+        self._start_joints(names, angles, fractionMaxSpeed, "setAngles")
+        self._world.tick()
 
     def angleInterpolationWithSpeed(
         self, names: Names, targetAngles: Angles, maxSpeedFraction: float
     ) -> None:
         """Move joints to angles (rad, clamped) at a fraction of max speed; blocking."""
+        caller = "angleInterpolationWithSpeed"
+        joints = self._start_joints(names, targetAngles, maxSpeedFraction, caller)
         w = self._world
-        w.check_open()
-        joints = expand_joint_names(names)
-        fraction = _fraction(maxSpeedFraction, "angleInterpolationWithSpeed")
-        values = _as_floats(targetAngles, len(joints), "angleInterpolationWithSpeed")
-        w.set_joint_targets(dict(zip(joints, values, strict=True)), fraction)
-        if any(j.startswith(("L", "R")) for j in joints):
-            w.posture = "Unknown"
-        w.run_until(lambda: w.joints_settled(joints), "angleInterpolationWithSpeed")
+        w.run_until(lambda: w.joints_settled(joints), caller)
         w.tick()
 
     def getAngles(self, names: Names, useSensors: bool) -> list[float]:
