@@ -82,6 +82,15 @@ def select_gl(strict: bool = True) -> str:
     return chosen
 
 
+def import_mujoco() -> Any:
+    """Choose the headless GL platform (not strict), then import and return ``mujoco``.
+
+    Imported by name so that type checkers never confuse it with this package's folder.
+    """
+    select_gl(strict=False)
+    return importlib.import_module("mujoco")
+
+
 def _reresolve_late_import(chosen: str) -> None:
     """Let mujoco pick up ``chosen`` if it was imported before MUJOCO_GL was set.
 

@@ -15,13 +15,12 @@ robustness experiments (lights, posters, a marker); see ``backends/mujoco/README
 
 from __future__ import annotations
 
-import importlib
 import math
 import time
 from typing import Any
 
 import numpy as np
-from naoloc.backends.mujoco.gl import select_gl
+from naoloc.backends.mujoco.gl import import_mujoco
 from naoloc.backends.mujoco.nao import (
     NAO_XML,
     POSTURES,
@@ -39,10 +38,8 @@ from naoloc.errors import BackendError, RobotError
 from naoloc.geometry import Pose2D, modulo2PI, pose2DInverse
 from naoloc.keyframe import TORSO_HEIGHT_STANDINIT
 
-# mujoco reads MUJOCO_GL when first imported: choose the headless platform first. Imported
-# by name so that type checkers never confuse it with this package's folder.
-select_gl(strict=False)
-mujoco: Any = importlib.import_module("mujoco")
+# mujoco reads MUJOCO_GL when first imported: import_mujoco chooses the platform first.
+mujoco: Any = import_mujoco()
 
 CAMERA_NAMES = ("CameraTop", "CameraBottom")
 _LEG_JOINTS = tuple(n for n in JOINT_NAMES if n[1:4] in ("Hip", "Kne", "Ank"))

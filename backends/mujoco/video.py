@@ -11,14 +11,13 @@ Gaussian noise, then a JPEG round trip, in that order; all off by default.
 from __future__ import annotations
 
 import contextlib
-import importlib
 import math
 from dataclasses import dataclass
 from typing import Any
 
 import cv2
 import numpy as np
-from naoloc.backends.mujoco.gl import select_gl
+from naoloc.backends.mujoco.gl import import_mujoco
 from naoloc.backends.mujoco.sim import CAMERA_NAMES, Simulation
 
 from naoloc.config import CameraRealismConfig
@@ -34,10 +33,8 @@ from naoloc.constants import (
 from naoloc.errors import HandleError, RenderError, RobotError
 from naoloc.image import from_rgb
 
-# mujoco reads MUJOCO_GL when first imported: choose the headless platform first. Imported
-# by name so that type checkers never confuse it with this package's folder.
-select_gl(strict=False)
-mujoco: Any = importlib.import_module("mujoco")
+# mujoco reads MUJOCO_GL when first imported: import_mujoco chooses the platform first.
+mujoco: Any = import_mujoco()
 
 MAX_SIZE = RESOLUTIONS[k4VGA]  # the offscreen buffer of the room model (1280 x 960)
 HIDDEN_GROUPS = (2, 3, 4, 5)  # head shell, (unused), collision shapes, removed posters
