@@ -99,11 +99,12 @@ def dbow_scores(query: np.ndarray, database: np.ndarray) -> np.ndarray:
     not the 0.5 the formula would give it (which beat most true matches).
     """
     q = l1_normalise(query)
-    d = l1_normalise(database)
-    scores = 1.0 - 0.5 * np.abs(d - q[None, :]).sum(axis=1)
     if not np.any(q):
-        return np.zeros(d.shape[0])
-    scores[~np.any(d, axis=1)] = 0.0
+        return np.zeros(database.shape[0])
+    norms = np.abs(database).sum(axis=1)
+    d = np.divide(database, norms[:, None], out=np.zeros(database.shape), where=norms[:, None] > 0)
+    scores = 1.0 - 0.5 * np.abs(d - q[None, :]).sum(axis=1)
+    scores[norms == 0] = 0.0
     return scores
 
 
