@@ -8,25 +8,19 @@ import numpy as np
 import pytest
 
 import naoloc
-from naoloc.config import Config, MapConfig, load_config
+from naoloc.behaviours.camera import Camera, look
+from naoloc.config import CameraConfig, Config, MapConfig, load_config
 from naoloc.geometry import Pose2D, relative_pose
-from naoloc.image import frame_from_naoqi
-from naoloc.keyframe import CameraInfo, Keyframe
+from naoloc.keyframe import Keyframe
 from naoloc.mapping import VisualMap, build_map
-from naoloc.robot import Robot
 
 PITCH = -0.2
 
 
-def _shot(robot: Robot, handle: str, yaw: float) -> Keyframe:
-    robot.motion.angleInterpolationWithSpeed(["HeadYaw", "HeadPitch"], [yaw, PITCH], 0.5)
-    frame = frame_from_naoqi(robot.video.getImageRemote(handle))
-    head_yaw, head_pitch = robot.motion.getAngles(["HeadYaw", "HeadPitch"], True)
-    cam = CameraInfo(
-        frame.width, frame.height, robot.video.getHorizontalFOV(0), robot.video.getVerticalFOV(0)
-    )
-    pose = Pose2D.from_list(robot.motion.getRobotPosition(True))
-    return Keyframe(frame.bgr(), pose, head_yaw, head_pitch, cam)
+def _shot(camera: Camera, yaw: float) -> Keyframe:
+    """A picture with the head at ``yaw`` (rad), pose from raw odometry (FRAME_WORLD)."""
+    look(camera.robot, yaw, PITCH)
+    return camera.keyframe()[0]
 
 
 @pytest.fixture(scope="module")
@@ -48,11 +42,11 @@ def world() -> tuple[Config, list[Keyframe], list[tuple[list[Keyframe], Pose2D]]
         assert robot.sim is not None
         robot.motion.wakeUp()
         robot.posture.goToPosture("StandInit", 0.5)
-        handle = robot.video.subscribeCamera("test", 0, 1, 11, 30)
+        camera = Camera(robot, CameraConfig(), "test")
         for _lap in range(2):
             for side in (sx, sy, sx, sy):
                 for _ in range(round(side / 0.2)):
-                    survey.append(_shot(robot, handle, -math.pi / 2))
+                    survey.append(_shot(camera, -math.pi / 2))
                     robot.motion.moveTo(0.2, 0.0, 0.0)
                 robot.motion.moveTo(0.0, 0.0, math.pi / 2)
         while len(trials) < 8:
@@ -60,7 +54,7 @@ def world() -> tuple[Config, list[Keyframe], list[tuple[list[Keyframe], Pose2D]]
             if not 0.6 <= min(x, y, 4.0 - x, 4.0 - y) <= 1.4:
                 continue
             robot.sim.teleport(float(x), float(y), float(rng.uniform(-math.pi, math.pi)))
-            queries = [_shot(robot, handle, yaw) for yaw in (-2.0, -1.0, 0.0, 1.0, 2.0)]
+            queries = [_shot(camera, yaw) for yaw in (-2.0, -1.0, 0.0, 1.0, 2.0)]
             trials.append((queries, relative_pose(start, Pose2D(*robot.sim.true_pose()))))
     return cfg, survey, trials
 

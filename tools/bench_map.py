@@ -28,28 +28,22 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 import naoloc  # noqa: E402
-from naoloc.config import MapConfig, load_config  # noqa: E402
+from naoloc.behaviours.camera import Camera, look  # noqa: E402
+from naoloc.config import CameraConfig, MapConfig, load_config  # noqa: E402
 from naoloc.geometry import Pose2D, relative_pose  # noqa: E402
-from naoloc.image import frame_from_naoqi  # noqa: E402
-from naoloc.keyframe import CameraInfo, Keyframe  # noqa: E402
+from naoloc.keyframe import Keyframe  # noqa: E402
 from naoloc.mapping import build_map  # noqa: E402
 from naoloc.mapping.gcs import train_gcs  # noqa: E402
-from naoloc.robot import Robot  # noqa: E402
 
 PAPER_TABLE2 = {100: (4.063, 72), 200: (14.287, 111), 300: (33.347, 132)}
 PITCH = -0.2
 SCAN_YAWS = (-2.0, -1.0, 0.0, 1.0, 2.0)
 
 
-def _shot(robot: Robot, handle: str, yaw: float) -> Keyframe:
-    robot.motion.angleInterpolationWithSpeed(["HeadYaw", "HeadPitch"], [yaw, PITCH], 0.5)
-    frame = frame_from_naoqi(robot.video.getImageRemote(handle))
-    head_yaw, head_pitch = robot.motion.getAngles(["HeadYaw", "HeadPitch"], True)
-    cam = CameraInfo(
-        frame.width, frame.height, robot.video.getHorizontalFOV(0), robot.video.getVerticalFOV(0)
-    )
-    pose = Pose2D.from_list(robot.motion.getRobotPosition(True))
-    return Keyframe(frame.bgr(), pose, head_yaw, head_pitch, cam)
+def _shot(camera: Camera, yaw: float) -> Keyframe:
+    """A picture with the head at ``yaw`` (rad), pose from raw odometry (FRAME_WORLD)."""
+    look(camera.robot, yaw, PITCH)
+    return camera.keyframe()[0]
 
 
 def collect(seed: int, trials: int) -> tuple[list[Keyframe], list[tuple[list[Keyframe], Pose2D]]]:
@@ -65,12 +59,12 @@ def collect(seed: int, trials: int) -> tuple[list[Keyframe], list[tuple[list[Key
         assert robot.sim is not None
         robot.motion.wakeUp()
         robot.posture.goToPosture("StandInit", 0.5)
-        handle = robot.video.subscribeCamera("bench", 0, 1, 11, 30)
+        camera = Camera(robot, CameraConfig(), "bench")
         while len(survey) < 164:
             for side in (sx, sy, sx, sy):
                 for _ in range(round(side / 0.2)):
                     if len(survey) < 164:
-                        survey.append(_shot(robot, handle, -math.pi / 2))
+                        survey.append(_shot(camera, -math.pi / 2))
                     robot.motion.moveTo(0.2, 0.0, 0.0)
                 robot.motion.moveTo(0.0, 0.0, math.pi / 2)
         while len(scans) < trials:
@@ -78,7 +72,7 @@ def collect(seed: int, trials: int) -> tuple[list[Keyframe], list[tuple[list[Key
             if not 0.6 <= min(x, y, room_x - x, room_y - y) <= 1.4:
                 continue
             robot.sim.teleport(float(x), float(y), float(rng.uniform(-math.pi, math.pi)))
-            queries = [_shot(robot, handle, yaw) for yaw in SCAN_YAWS]
+            queries = [_shot(camera, yaw) for yaw in SCAN_YAWS]
             scans.append((queries, relative_pose(start, Pose2D(*robot.sim.true_pose()))))
     return survey, scans
 
