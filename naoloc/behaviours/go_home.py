@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from naoloc.behaviours.camera import Camera
-from naoloc.behaviours.localize import Localization, localize, truth_in_map
+from naoloc.behaviours.localize import Localization, estimate_fields, localize, truth_in_map
 from naoloc.config import Config
 from naoloc.geometry import Pose2D, relative_pose
 from naoloc.robot import Robot, pose_of
@@ -47,12 +47,8 @@ class GoHomeResult:
 
     def summary(self) -> dict[str, Any]:
         """JSON-able fields of CONTRACT.md's ``go-home`` line."""
-        est = self.final.estimate
         out: dict[str, Any] = {
-            "x": round(est.x, 4),
-            "y": round(est.y, 4),
-            "theta": round(est.theta, 4),
-            "confidence": round(float(est.confidence), 4),
+            **estimate_fields(self.final.estimate),
             "tries": self.tries,
             "reached": self.reached,
             "estimates": [[round(r.estimate.x, 3), round(r.estimate.y, 3)] for r in self.rounds],

@@ -44,6 +44,16 @@ EXTRA_TURNS = 3
 EXTRA_TURN_RAD = math.pi / 2
 
 
+def estimate_fields(est: Estimate) -> dict[str, float]:
+    """The pose and confidence of an estimate as the CLI's JSON lines give them (map frame)."""
+    return {
+        "x": round(est.x, 4),
+        "y": round(est.y, 4),
+        "theta": round(est.theta, 4),
+        "confidence": round(float(est.confidence), 4),
+    }
+
+
 @dataclass(frozen=True)
 class Localization:
     """One localization and what it was made from.
@@ -73,10 +83,7 @@ class Localization:
         """JSON-able fields of CONTRACT.md's ``localize`` line."""
         est = self.estimate
         out: dict[str, Any] = {
-            "x": round(est.x, 4),
-            "y": round(est.y, 4),
-            "theta": round(est.theta, 4),
-            "confidence": round(float(est.confidence), 4),
+            **estimate_fields(est),
             "mode": est.mode,
             "strategy": self.strategy,
             "images": len(self.queries),
