@@ -167,45 +167,27 @@ def survey_task(task: SurveyTask) -> dict[str, Any]:
         ``{"name", "dataset", "frames", "laps", "path_m", "wall_s", "meta"}``, plus
         ``"failed"`` (the reason) when a step failed.
     """
-    from naoloc.behaviours.survey import survey
-    from naoloc.dataset import DatasetWriter
+    from naoloc.commands.survey import record_survey
     from naoloc.registry import connect
 
     path = Path(task.dataset_path)
+    t0 = time.monotonic()
     with connect(task.config) as robot:
         _require_sim(robot)
-        writer: DatasetWriter | None = None
-        meta_out: dict[str, Any] = {}
-
-        def on_start(meta: dict[str, Any]) -> None:
-            nonlocal writer
-            meta_out.update(meta)
-            writer = DatasetWriter(path, config=task.config, meta=meta)
-
-        def on_frame(keyframe: Any, lap: int, odometry: Pose2D) -> None:
-            assert writer is not None  # on_start runs first
-            writer.write(keyframe, lap=lap, odometry=odometry)
-
-        failed = None
-        t0 = time.monotonic()
         try:
-            result = survey(robot, _config(task.config), on_frame, on_start=on_start)
+            result, frames = record_survey(robot, _config(task.config), path)
         except MotionError as err:  # e.g. a drifting robot walked into furniture
-            failed = str(err)
-        finally:
-            if writer is not None:
-                writer.close()
-    if failed is not None:
-        return {"name": task.name, "dataset": str(path), "frames": 0, "laps": 0, "path_m": 0.0,
-                "wall_s": time.monotonic() - t0, "meta": meta_out, "failed": failed}  # fmt: skip
+            return {"name": task.name, "dataset": str(path), "frames": 0, "laps": 0,
+                    "path_m": 0.0, "wall_s": time.monotonic() - t0, "meta": {},
+                    "failed": str(err)}  # fmt: skip
     return {
         "name": task.name,
         "dataset": str(path),
-        "frames": result.frames,
+        "frames": frames,
         "laps": result.laps,
         "path_m": result.path_m,
         "wall_s": result.wall_s,
-        "meta": meta_out,
+        "meta": result.meta,
     }
 
 
