@@ -84,7 +84,9 @@ def test_survey_json_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) ->
 
 
 def test_sigint_stops_survey_and_leaves_a_readable_dataset(tmp_path: Path) -> None:
-    cfg = _cfg(tmp_path, survey={"laps": 3, "step_m": 0.1, "wall_offset_m": 0.75})
+    # 20 laps (1200 frames, about 13 s): the interrupt after 5 frames can never race the
+    # survey's own end, even when this test's polling lags on a loaded machine.
+    cfg = _cfg(tmp_path, survey={"laps": 20, "step_m": 0.1, "wall_offset_m": 0.75})
     out = tmp_path / "int.mcap"
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     proc = subprocess.Popen(
@@ -113,11 +115,11 @@ def test_sigint_stops_survey_and_leaves_a_readable_dataset(tmp_path: Path) -> No
         if proc.poll() is None:
             proc.kill()
             proc.wait()
-    assert elapsed < 2.0
-    assert proc.returncode == 130
+    assert elapsed < 2.0, err
+    assert proc.returncode == 130, err
     assert b"interrupted" in err and err.count(b"\n") == 1
     data = read_dataset(out)
-    assert 5 <= len(data.keyframes) < 3 * 60
+    assert 5 <= len(data.keyframes) < 20 * 60
     assert not part.exists()
 
 
