@@ -2,7 +2,8 @@
 
 Each verb lives in ``naoloc.commands.<verb>`` and returns a JSON-able dict that is
 printed as the single last line of stdout. Errors are one line on stderr and a
-non-zero exit: 1 for a naoloc error, 2 for bad usage, 130 for Ctrl-C.
+non-zero exit: 1 for a naoloc error, 2 for bad usage, 3 when ``localize`` recognised
+nothing (its JSON line is still printed, with null pose fields), 130 for Ctrl-C.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from typing import Any
 
 from naoloc import __version__
 from naoloc.config import Config, load_config
-from naoloc.errors import NaolocError, NotBuiltError
+from naoloc.errors import NaolocError, NoEstimate, NotBuiltError
 
 VERBS: dict[str, str] = {
     "survey": "Algorithm 3: walk closed laps, record images and odometry poses (MCAP)",
@@ -67,7 +68,7 @@ def build_parser() -> argparse.ArgumentParser:
         )  # fmt: skip
         p.add_argument("--png", type=Path, default=None, help="write a picture of the result")
     p = add("evaluate")
-    p.add_argument("--protocol", choices=("paper", "random"), default="random")
+    p.add_argument("--protocol", choices=("paper", "random", "anywhere"), default="random")
     p.add_argument("-n", type=int, default=40, help="test poses (random protocol)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
@@ -117,6 +118,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"naoloc {verb}: interrupted", file=sys.stderr)
         return 130
+    except NoEstimate as err:  # the result line still ends stdout, with no pose in it
+        sys.stdout.write(json.dumps(err.result, separators=(", ", ": ")) + "\n")
+        sys.stdout.flush()
+        print(f"naoloc {verb}: {err}", file=sys.stderr)
+        return err.exit_code
     except NaolocError as err:
         print(f"naoloc {verb}: error: {err}", file=sys.stderr)
         return 1

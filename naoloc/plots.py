@@ -157,12 +157,16 @@ def plot_localization(
     grid = fig.add_gridspec(rows, max(1, len(shown)), height_ratios=[5, 1][:rows])
     ax = fig.add_subplot(grid[0, :])
     _draw_map(ax, vmap)
-    est = Pose2D(estimate.x, estimate.y, estimate.theta)
-    _arrow(ax, est, "tab:green", f"estimate (confidence {estimate.confidence:.2f})")
-    text = f"estimate ({est.x:.2f}, {est.y:.2f}) m"
+    if estimate.found:
+        est = Pose2D(estimate.x, estimate.y, estimate.theta)
+        _arrow(ax, est, "tab:green", f"estimate (confidence {estimate.confidence:.2f})")
+        text = f"estimate ({est.x:.2f}, {est.y:.2f}) m"
+    else:
+        text = "no estimate: nothing recognised"
     if truth is not None:
         _arrow(ax, truth, "black", "truth")
-        text += f", error {est.distance(truth):.2f} m"
+        if estimate.found:
+            text += f", error {est.distance(truth):.2f} m"
     ax.set_title(title or text)
     ax.legend(loc="best", fontsize=8)
     for i, kf in enumerate(shown):

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +22,7 @@ from naoloc.config import Config, load_config
 from naoloc.dataset import read_dataset
 from naoloc.geometry import Pose2D, relative_pose
 from naoloc.keyframe import Keyframe
+from naoloc.mapping.localizer import Estimate
 from naoloc.robot import Robot
 
 pytest.importorskip("naoloc.backends.fake")
@@ -40,16 +40,6 @@ def small_cfg(**survey: Any) -> Config:
     )
 
 
-@dataclass(frozen=True)
-class _Estimate:
-    x: float
-    y: float
-    theta: float
-    confidence: float
-    mode: str
-    details: dict[str, Any] = field(default_factory=dict)
-
-
 class TruthMap:
     """A map double: the estimate is the true map-frame pose plus a fixed offset (m)."""
 
@@ -59,7 +49,7 @@ class TruthMap:
         self.offsets = offsets  # used in turn, one per call
         self.calls: list[int] = []
 
-    def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> _Estimate:
+    def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> Estimate:
         offset = self.offsets[len(self.calls) % len(self.offsets)]
         self.calls.append(len(queries))
         assert self.robot.sim is not None
@@ -67,7 +57,7 @@ class TruthMap:
             Pose2D.from_list(self.meta["origin_room_pose"]),
             Pose2D.from_list(self.robot.sim.true_pose()),
         )
-        return _Estimate(truth.x + offset[0], truth.y + offset[1], truth.theta, 1.0, mode)
+        return Estimate(truth.x + offset[0], truth.y + offset[1], truth.theta, 1.0, mode)
 
 
 def test_survey_walks_the_rectangle_and_records_each_step() -> None:
@@ -225,10 +215,10 @@ class UnsureMap(TruthMap):
         super().__init__(robot, origin_room, (0.0, 0.0))
         self.confidences = list(confidences)
 
-    def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> _Estimate:
+    def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> Estimate:
         est = super().localize(queries, mode)
         conf = self.confidences[min(len(self.calls), len(self.confidences)) - 1]
-        return _Estimate(est.x, est.y, est.theta, conf, mode)
+        return Estimate(est.x, est.y, est.theta, conf, mode)
 
 
 @pytest.mark.parametrize(

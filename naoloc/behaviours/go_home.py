@@ -51,7 +51,11 @@ class GoHomeResult:
             **estimate_fields(self.final.estimate),
             "tries": self.tries,
             "reached": self.reached,
-            "estimates": [[round(r.estimate.x, 3), round(r.estimate.y, 3)] for r in self.rounds],
+            "estimates": [
+                [round(r.estimate.x, 3), round(r.estimate.y, 3)]
+                for r in self.rounds
+                if r.estimate.found
+            ],
         }
         if self.truth is not None and self.error_m is not None:
             out["error_m"] = round(self.error_m, 4)
@@ -124,7 +128,7 @@ def go_home(
                     on_round(tries, loc)
                 est = loc.estimate
                 odometry = pose_of(robot.motion, True)
-                confident = est.confidence >= CONFIDENT
+                confident = est.found and est.confidence >= CONFIDENT
                 if confident:
                     anchor = (Pose2D(est.x, est.y, est.theta), odometry)
                 if confident and math.hypot(est.x, est.y) <= tolerance:
@@ -132,7 +136,7 @@ def go_home(
                     break
                 if tries >= cfg.go_home.max_tries:
                     break
-                if anchor is None and est.confidence <= 0.0 and lost_steps < MAX_LOST_STEPS:
+                if anchor is None and not est.found and lost_steps < MAX_LOST_STEPS:
                     # Nothing recognised all around and no earlier fix: explore a little
                     # (mid-room, far from every survey view) without using up a walk home.
                     lost_steps += 1
@@ -145,7 +149,7 @@ def go_home(
                     # last confident estimate carried by odometry is the better guess.
                     here = anchor[0] * relative_pose(anchor[1], odometry)
                     confident = True
-                elif est.confidence <= 0.0:  # nothing recognised all around: step elsewhere
+                elif not est.found:  # nothing recognised all around: step elsewhere
                     robot.motion.moveTo(LOST_STEP_M, 0.0, 0.0)  # False at an obstacle: fine
                     robot.motion.stopMove()
                     continue

@@ -44,13 +44,20 @@ EXTRA_TURNS = 3
 EXTRA_TURN_RAD = math.pi / 2
 
 
-def estimate_fields(est: Estimate) -> dict[str, float]:
-    """The pose and confidence of an estimate as the CLI's JSON lines give them (map frame)."""
+def estimate_fields(est: Estimate) -> dict[str, float | str | None]:
+    """The pose, confidence and method of an estimate as the CLI's JSON lines give them.
+
+    Map frame. With nothing recognised the pose fields are None (JSON null), the confidence
+    0 and the method ``none``: never a made-up pose.
+    """
+    if not est.found:
+        return {"x": None, "y": None, "theta": None, "confidence": 0.0, "method": "none"}
     return {
         "x": round(est.x, 4),
         "y": round(est.y, 4),
         "theta": round(est.theta, 4),
         "confidence": round(float(est.confidence), 4),
+        "method": est.method,
     }
 
 
@@ -65,7 +72,8 @@ class Localization:
         extra_turns: Quarter turns in place made because an estimate was not confident.
         truth: The true pose in the map frame, when a simulator and the map's
             origin_room_pose know it; else None.
-        error_m: Distance from estimate to truth, m (None without truth).
+        error_m: Distance from estimate to truth, m (None without truth or without an
+            estimate).
         heading_error_deg: Wrapped heading difference, degrees (None without truth).
         wall_s: Wall-clock seconds spent (pictures and the map's work).
     """
@@ -89,10 +97,11 @@ class Localization:
             "images": len(self.queries),
             "extra_turns": self.extra_turns,
         }
-        if self.truth is not None and self.error_m is not None:
-            out["error_m"] = round(self.error_m, 4)
-            out["heading_error_deg"] = round(float(self.heading_error_deg or 0.0), 3)
+        if self.truth is not None:
             out["truth"] = [round(v, 4) for v in self.truth]
+            if self.error_m is not None:
+                out["error_m"] = round(self.error_m, 4)
+                out["heading_error_deg"] = round(float(self.heading_error_deg or 0.0), 3)
         return out
 
 
@@ -247,7 +256,7 @@ def localize(
             cam.close()
     truth = truth_in_map(robot, vmap.meta)
     error = heading = None
-    if truth is not None:
+    if truth is not None and estimate.found:
         error = math.hypot(estimate.x - truth.x, estimate.y - truth.y)
         heading = math.degrees(abs(modulo2PI(estimate.theta - truth.theta)))
     return Localization(

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from naoloc.config import Config
-from naoloc.errors import BackendError
+from naoloc.errors import BackendError, NoEstimate
 from naoloc.robot import Robot
 
 
@@ -45,16 +45,26 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
             loc = localize(robot, vmap, cfg, on_step=lambda note: bar.update(1, note))
     summary = loc.summary()
     est = loc.estimate
-    line = (
-        f"localize: ({est.x:.2f}, {est.y:.2f}, {est.theta:.2f}) in the map frame, "
-        f"confidence {est.confidence:.2f}, {len(loc.queries)} images ({loc.strategy})"
-    )
-    if loc.error_m is not None:
-        line += f"; error {loc.error_m:.2f} m, {loc.heading_error_deg:.1f} deg"
+    if est.found:
+        line = (
+            f"localize: ({est.x:.2f}, {est.y:.2f}, {est.theta:.2f}) in the map frame, "
+            f"confidence {est.confidence:.2f}, {len(loc.queries)} images ({loc.strategy})"
+        )
+        if loc.error_m is not None:
+            line += f"; error {loc.error_m:.2f} m, {loc.heading_error_deg:.1f} deg"
+    else:
+        reason = est.details.get("reason", "nothing recognised")
+        line = f"localize: no estimate ({reason}) from {len(loc.queries)} images"
     print(line)
     if png is not None:
         plot_localization(vmap, est, png, truth=loc.truth, queries=loc.queries)
         summary["png"] = str(png)
         print(f"localize: picture -> {png}")
     summary["localize_s"] = round(loc.wall_s, 3)
+    if not est.found:
+        raise NoEstimate(
+            f"no estimate: {est.details.get('reason', 'nothing recognised')} "
+            f"in {len(loc.queries)} images",
+            summary,
+        )
     return summary

@@ -34,7 +34,7 @@ from naoloc.evaluation.protocols import (
     EvalPose,
     lap_of,
     paper_poses,
-    sample_random_poses,
+    sample_protocol_poses,
     wall_seen,
 )
 from naoloc.evaluation.runner import (
@@ -118,8 +118,8 @@ def evaluate(
 
     t_start = time.monotonic()
     check_simulated(cfg)
-    if protocol not in ("paper", "random"):
-        raise ConfigError(f"unknown protocol {protocol!r}; valid: paper, random")
+    if protocol not in ("paper", "random", "anywhere"):
+        raise ConfigError(f"unknown protocol {protocol!r}; valid: paper, random, anywhere")
     if protocol == "paper" and tuple(round(s, 6) for s in cfg.survey_sides()) != PAPER_SQUARE_M:
         raise ConfigError(
             f"the paper protocol needs a 4 x 4 m survey square; this config walks "
@@ -198,6 +198,7 @@ _LINE_KEYS = (
     "median_heading_error_deg",
     "map_build_s",
     "localize_ms_median",
+    "no_estimate",
 )
 
 
@@ -216,7 +217,7 @@ def _test_poses(
     with connect(cfg) as robot:
         if robot.sim is None:
             raise BackendError(f"evaluate needs robot.sim; the {robot.backend} backend has none")
-        return sample_random_poses(n, seed, room_size, robot.sim.is_free)
+        return sample_protocol_poses(protocol, n, seed, room_size, robot.sim.is_free)
 
 
 def _chunks(
@@ -259,6 +260,8 @@ def _variant_summary(records: Sequence[dict[str, Any]]) -> dict[str, Any]:
     conf = [r["confidence"] for r in records if math.isfinite(r["confidence"])]
     out["confidence_median"] = json_float(float(np.median(conf))) if conf else None
     out["no_features"] = int(sum(1 for r in records if r["confidence"] == 0.0))
+    # A pose without an estimate is a miss (its error counts as infinite above), never a guess.
+    out["no_estimate"] = int(sum(1 for r in records if not math.isfinite(r["error_m"])))
     return out
 
 
@@ -290,6 +293,7 @@ def _summary(
         "median_heading_error_deg": main_stats["median_heading_error_deg"],
         "map_build_s": json_float(main_map["timings"].get("total_s", float("nan")), 3),
         "localize_ms_median": main_stats["localize_ms_median"],
+        "no_estimate": main_stats["no_estimate"],
         "positions": group_rows(by_variant[main.name]),
         "seed": seed,
         "workers": workers,
@@ -342,12 +346,17 @@ def _table3(by_variant: dict[str, list[dict[str, Any]]]) -> list[dict[str, Any]]
             mine = [r for r in recs if r["group"] == pos.number]
             if not mine:
                 continue
+            errors = [r["error_m"] if math.isfinite(r["error_m"]) else math.inf for r in mine]
             row["ours"][name] = {
                 "estimates": [
-                    [round(r["estimate"][0], 3), round(r["estimate"][1], 3)] for r in mine
+                    [round(r["estimate"][0], 3), round(r["estimate"][1], 3)]
+                    if math.isfinite(r["error_m"])
+                    else None
+                    for r in mine
                 ],
-                "mean_error_m": round(float(np.mean([r["error_m"] for r in mine])), 4),
-                "max_error_m": round(float(np.max([r["error_m"] for r in mine])), 4),
+                "mean_error_m": json_float(float(np.mean(errors))),
+                "max_error_m": json_float(float(np.max(errors))),
+                "no_estimate": sum(1 for e in errors if not math.isfinite(e)),
             }
         rows.append(row)
     return rows
