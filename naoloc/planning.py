@@ -13,6 +13,7 @@ from __future__ import annotations
 import heapq
 import itertools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -111,6 +112,28 @@ class FloorGrid:
                 src = blocked[max(0, -dr) : ny - max(0, dr), max(0, -dc) : nx - max(0, dc)]
                 grown[max(0, dr) : ny - max(0, -dr), max(0, dc) : nx - max(0, -dc)] |= src
         return np.asarray(~grown)
+
+    def bounds(self) -> tuple[float, float, float, float]:
+        """``(xmin, ymin, xmax, ymax)`` of the grid, map frame (m)."""
+        ny, nx = self.cells.shape
+        x0, y0 = self.origin
+        return (x0, y0, x0 + nx * self.resolution, y0 + ny * self.resolution)
+
+    def free_test(self) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+        """A vectorised ``free(xs, ys)``: passable cells (as of now), False off the grid."""
+        ok = self.passable()
+        ny, nx = ok.shape
+        x0, y0, res = self.origin[0], self.origin[1], self.resolution
+
+        def free(xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+            c = np.floor((np.asarray(xs) - x0) / res).astype(np.int64)
+            r = np.floor((np.asarray(ys) - y0) / res).astype(np.int64)
+            inside = (c >= 0) & (c < nx) & (r >= 0) & (r < ny)
+            out = np.zeros(c.shape, dtype=bool)
+            out[inside] = ok[r[inside], c[inside]]
+            return out
+
+        return free
 
     # ------------------------------------------------------------------ search
     def plan(self, start: Pose2D, goal: Pose2D) -> list[Pose2D]:

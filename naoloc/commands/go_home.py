@@ -18,7 +18,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     from naoloc.commands.localize import teleport_if_asked
     from naoloc.commands.survey import config_path_for, interruptible
     from naoloc.mapping import load_map
-    from naoloc.plots import plot_localization
+    from naoloc.plots import plot_go_home
     from naoloc.progress import Progress
     from naoloc.registry import connect
 
@@ -29,8 +29,11 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
 
     def report(tries: int, loc: Localization) -> None:
         est = loc.estimate
-        extra = "" if loc.error_m is None else f", error {loc.error_m:.2f} m"
         bar.update(1, f"walk {tries}")
+        if not est.found:
+            print(f"go-home: after {tries} walks: nothing recognised")
+            return
+        extra = "" if loc.error_m is None else f", error {loc.error_m:.2f} m"
         print(
             f"go-home: after {tries} walks: estimate ({est.x:.2f}, {est.y:.2f}, "
             f"{est.theta:.2f}), {math.hypot(est.x, est.y):.2f} m from home{extra}"
@@ -41,13 +44,17 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         teleport_if_asked(robot, args.at)
         result = go_home(robot, vmap, cfg, on_round=report)
     summary = result.summary()
-    verdict = "reached" if result.reached else "gave up after"
-    line = f"go-home: {verdict} {result.tries} walks"
+    verdict = "reached home after" if result.reached else "gave up after"
+    line = f"go-home: {verdict} {result.tries} walks, {result.path_m:.2f} m walked"
+    if result.reason:
+        line += f" ({result.reason})"
     if result.error_m is not None:
         line += f"; truly {result.error_m:.2f} m from the origin"
     print(line)
     if png is not None:
-        loc = result.final
-        plot_localization(vmap, loc.estimate, png, truth=loc.truth, queries=loc.queries)
+        plot_go_home(
+            vmap, result.trail, [r.estimate for r in result.rounds], png,
+            blocked=result.blocked_at, truth=result.truth, reached=result.reached,
+        )  # fmt: skip
         summary["png"] = str(png)
     return summary
