@@ -61,6 +61,24 @@ def estimate_fields(est: Estimate) -> dict[str, float | str | None]:
     }
 
 
+def estimate_covariance(est: Estimate) -> dict[str, Any]:
+    """The estimate's uncertainty as the JSON ``covariance`` (3 x 3 of x, y, theta).
+
+    The standard deviations are those the particle filter gives a fix
+    (:func:`naoloc.fusion.fix_from_confidence`: from the PnP inliers, or the confidence);
+    nothing when there is no estimate.
+    """
+    if not est.found:
+        return {}
+    from naoloc.fusion import fix_from_confidence
+
+    inliers = est.details.get("inliers") if est.method == "pnp" else None
+    fix = fix_from_confidence(est.pose(), est.confidence, inliers)
+    sxy, sth = fix.sigma_xy_m**2, fix.sigma_theta_rad**2
+    cov = [[sxy, 0.0, 0.0], [0.0, sxy, 0.0], [0.0, 0.0, sth]]
+    return {"covariance": [[round(v, 6) for v in row] for row in cov]}
+
+
 @dataclass(frozen=True)
 class Localization:
     """One localization and what it was made from.
@@ -92,6 +110,7 @@ class Localization:
         est = self.estimate
         out: dict[str, Any] = {
             **estimate_fields(est),
+            **estimate_covariance(est),
             "mode": est.mode,
             "strategy": self.strategy,
             "images": len(self.queries),
