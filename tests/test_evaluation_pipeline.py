@@ -18,7 +18,9 @@ from naoloc.evaluation.runner import LocalizeChunk, Scorer, localize_chunk
 
 TINY = {
     "robot": {"backend": "fake"},
-    "world": {"room": {"size_m": [3.2, 3.2], "seed": 5}},
+    # Exact odometry: about the evaluation's plumbing; a NAO's drift walks this tiny room's
+    # survey into a wall (issue 12 keeps it off by vision).
+    "world": {"room": {"size_m": [3.2, 3.2], "seed": 5}, "odometry": {"profile": "ideal"}},
     "survey": {"laps": 1, "step_m": 0.3, "wall_offset_m": 0.9},
     "map": {"neurons": 12, "epochs": 12, "vocabulary_size": 48},
 }

@@ -274,7 +274,7 @@ class FakeMotion:
         """``[x, y, theta]`` in FRAME_WORLD: True = sensor odometry (drifts), False = commands."""
         w = self._world
         w.tick()
-        return (w.sensor.pose if useSensors else w.command).normalized().to_list()
+        return (w.sensor if useSensors else w.command).normalized().to_list()
 
     def getNextRobotPosition(self) -> list[float]:
         """Where the current move ends (moveTo) or where it is in 0.5 s (move), FRAME_WORLD."""

@@ -140,7 +140,7 @@ class MujocoMotion:
         if not self._ready_to_walk():
             sim.cycle()
             return False
-        start = sim.true_pose2d()
+        start = sim.sensor_odometry  # open loop on odometry, as NAO's walk
         sim.walk.set_goals([start * p for p in points], start)
         while sim.walk.mode == "target":
             sim.cycle()
@@ -230,7 +230,7 @@ class MujocoMotion:
         sim = self._sim
         sim.cycle()
         if sim.walk.mode == "target" and sim.walk.goals:
-            rest = pose2DInverse(sim.true_pose2d()) * sim.walk.goals[-1]
+            rest = pose2DInverse(sim.sensor_odometry) * sim.walk.goals[-1]
             return (sim.command_odometry * rest).normalized().to_list()
         return sim.command_odometry.normalized().to_list()
 

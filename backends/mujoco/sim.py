@@ -5,6 +5,12 @@ frame; the base joints ``base_x, base_y, base_yaw`` are the robot's true pose in
 FRAME_WORLD (odometry) starts at the robot's pose when the simulation is created, and is
 never told about teleports.
 
+Walking is open-loop on odometry, as on a NAO: the walk controller steers on the sensor
+odometry, each cycle's odometry increment goes through
+:class:`naoloc.simulated.odometry.OdometryModel` (``world.odometry``), and the base is
+driven at the true velocity the model returns, so physics (walls, furniture) decides where
+the body goes while the odometry keeps counting what the legs did.
+
 Time is simulated only: nothing here reads the wall clock except the optional real-time
 pacing (``world.sim.realtime``). Every call of :meth:`Simulation.cycle` advances the
 physics by one ALMotion cycle. The same config gives the same run, step for step.
@@ -37,6 +43,7 @@ from naoloc.constants import FOV_V5, FOV_V6, JOINT_NAMES, MOTION_CYCLE_S
 from naoloc.errors import BackendError, RobotError
 from naoloc.geometry import Pose2D, modulo2PI, pose2DInverse
 from naoloc.keyframe import TORSO_HEIGHT_STANDINIT
+from naoloc.simulated.odometry import OdometryModel
 
 # mujoco reads MUJOCO_GL when first imported: import_mujoco chooses the platform first.
 mujoco: Any = import_mujoco()
@@ -116,20 +123,27 @@ class Simulation:
             for p in self.layout.posters
         }
         self.walk = WalkController(WalkLimits(), self.cycle_s)
-        seed = cfg.world.sim.seed
-        self._odo_rng = np.random.default_rng([seed, cfg.world.odometry.seed, 0x0D0])
+        self.odometry = OdometryModel(cfg.world.odometry)
         self.command_velocity = (0.0, 0.0, 0.0)
         self._gait_phase = 0.0
         self.posture_name = "StandInit"
         self.set_posture_now("StandInit")
         x, y, th = cfg.start_pose()
         self._place(x, y, th)
-        self.command_odometry = Pose2D()
-        self.sensor_odometry = Pose2D()
         self.closed = False
         self._realtime = cfg.world.sim.realtime
         self._wall0 = time.monotonic()
         self._sim0 = float(self.data.time)
+
+    @property
+    def command_odometry(self) -> Pose2D:
+        """Integrated commands (``getRobotPosition(False)``), FRAME_WORLD."""
+        return self.odometry.command
+
+    @property
+    def sensor_odometry(self) -> Pose2D:
+        """Sensor odometry (``getRobotPosition(True)``), FRAME_WORLD."""
+        return self.odometry.sensor
 
     # ----------------------------------------------------------------------------- joints
     def _init_joints(self) -> None:
@@ -280,7 +294,7 @@ class Simulation:
         start = self.true_pose2d()
         if not self.awake and self.walk.active:
             self.walk.stop()
-        cmd = self.walk.command(start)
+        cmd = self.walk.command(self.sensor_odometry)
         self.command_velocity = cmd
         dt = self.cycle_s
         step = self.rate * dt
@@ -288,7 +302,7 @@ class Simulation:
         lo, hi = head_pitch_limits(float(self.command[self._head_yaw]))  # the shell, on the way
         self.command[self._head_pitch] = min(hi, max(lo, float(self.command[self._head_pitch])))
         self._write_joint_ctrl(self._gait_offsets(cmd, dt))
-        vx, vy, wz = cmd
+        vx, vy, wz = self._true_twist(cmd, dt)
         ix, iy, iw = self._walk_ids
         for _ in range(self.substeps):
             yaw = float(d.qpos[2])
@@ -299,7 +313,19 @@ class Simulation:
             mujoco.mj_step(m, d)
         moved = pose2DInverse(start) * self.true_pose2d()
         self.walk.observe(cmd, moved)
-        self._integrate_odometry(cmd, moved)
+
+    def _true_twist(self, cmd: tuple[float, float, float], dt: float) -> tuple[float, float, float]:
+        """Count a commanded twist in the odometry; the body's true twist (FRAME_ROBOT)."""
+        vx, vy, wz = cmd
+        if vx == 0.0 and vy == 0.0 and wz == 0.0:
+            return cmd
+        half = wz * dt / 2
+        c, s = math.cos(half), math.sin(half)
+        odo = Pose2D((c * vx - s * vy) * dt, (s * vx + c * vy) * dt, wz * dt)
+        true = self.odometry.walk(odo)
+        wt = true.theta / dt
+        c, s = math.cos(wt * dt / 2), math.sin(wt * dt / 2)
+        return ((c * true.x + s * true.y) / dt, (-s * true.x + c * true.y) / dt, wt)
 
     def _gait_offsets(self, cmd: tuple[float, float, float], dt: float) -> np.ndarray | None:
         lim = self.walk.limits
@@ -316,29 +342,6 @@ class Simulation:
             out[self.joint_index[f"{side}KneePitch"]] = 2 * lift
             out[self.joint_index[f"{side}AnklePitch"]] = -lift
         return out
-
-    def _integrate_odometry(self, cmd: tuple[float, float, float], moved: Pose2D) -> None:
-        dt = self.cycle_s
-        vx, vy, wz = cmd
-        half = wz * dt / 2
-        c, s = math.cos(half), math.sin(half)
-        self.command_odometry = self.command_odometry * Pose2D(
-            (c * vx - s * vy) * dt, (s * vx + c * vy) * dt, wz * dt
-        )
-        odo = self.cfg.world.odometry
-        noise = [float(v) for v in self._odo_rng.standard_normal(3)]
-        dist = math.hypot(moved.x, moved.y)
-        turn = abs(modulo2PI(moved.theta))
-        step = Pose2D(
-            moved.x * (1 + odo.scale_error)
-            + noise[0] * odo.random_walk_m_per_sqrt_m * math.sqrt(dist),
-            moved.y * (1 + odo.scale_error)
-            + noise[1] * odo.random_walk_m_per_sqrt_m * math.sqrt(dist),
-            modulo2PI(moved.theta)
-            + odo.heading_bias_rad_per_m * dist
-            + noise[2] * odo.heading_random_walk_rad_per_sqrt_rad * math.sqrt(turn),
-        )
-        self.sensor_odometry = self.sensor_odometry * step
 
     def close(self) -> None:
         """Stop the walk and refuse further service calls; safe to call twice."""
