@@ -19,11 +19,14 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from naoloc.backends.fake.joints import STANDING, joint_limits, posture_angles, torso_height
+import numpy as np
+from naoloc.backends.fake.joints import STANDING, joint_limits, posture_angles
 from naoloc.backends.fake.walk import PathWalk, SpeedLimits, VelocityWalk
 
+from naoloc import kinematics
 from naoloc.config import Config
 from naoloc.constants import (
+    FRAME_ROBOT,
     JOINT_NAMES,
     MOTION_CYCLE_S,
     WALK_SPEED,
@@ -33,6 +36,7 @@ from naoloc.constants import (
 from naoloc.errors import MotionError, RobotError
 from naoloc.geometry import Pose2D
 from naoloc.simulated.odometry import OdometryModel
+from naoloc.simulated.sway import WalkSway
 
 ROBOT_RADIUS_M = 0.15  # the robot's footprint, a disc, for wall collisions
 LEG_JOINTS = tuple(j for j in JOINT_NAMES if "Hip" in j or "Knee" in j or "Ankle" in j)
@@ -70,6 +74,7 @@ class FakeWorld:
         self._cycles = 0
         self.true_pose = Pose2D(*cfg.start_pose())
         self.odometry = OdometryModel(cfg.world.odometry)
+        self.sway = WalkSway(cfg.world.sim.camera_sway)
         self.task: PathWalk | VelocityWalk | None = None
         self.last_move_failed = False
         self.velocity = (0.0, 0.0, 0.0)
@@ -115,6 +120,7 @@ class FakeWorld:
     def _cycle(self) -> None:
         self._step_joints()
         self._step_walk()
+        self.sway.step(self.task is not None and self.awake, self.dt)
         self._cycles += 1
         self.time_s = self._cycles * self.dt
 
@@ -139,11 +145,6 @@ class FakeWorld:
         """True when a disc of ``clearance`` m at room-frame ``(x, y)`` touches no wall."""
         sx, sy = self.size
         return clearance <= x <= sx - clearance and clearance <= y <= sy - clearance
-
-    def torso_height(self) -> float:
-        """Torso height above the floor (m) for the current posture (StandInit if unknown)."""
-        name = self.posture if self.posture != "Unknown" else "StandInit"
-        return torso_height(name)
 
     def start_walk(self, task: PathWalk | VelocityWalk) -> None:
         """Replace the current walk task; walking starts from a walk-ready posture."""
@@ -242,6 +243,24 @@ class FakeWorld:
         self.joint_target.update(target)
         self.joint_actual.update(target)
         self.posture = name
+
+    def fk_transform(self, name: str, frame: int, use_sensors: bool) -> np.ndarray:
+        """4x4 pose of an effector in a NAOqi frame from the joints (see naoloc.kinematics).
+
+        Sensors: measured joints, the sway and the sensor odometry; else the commands.
+        """
+        angles = self.joint_actual if use_sensors else self.joint_cmd
+        odometry = self.sensor if use_sensors else self.command
+        offset = self.sway.torso_offset() if use_sensors else None
+        return kinematics.transform(name, frame, angles, odometry.to_list(), offset)
+
+    def camera_in_room(self, index: int) -> np.ndarray:
+        """True 4x4 pose of a camera (NAOqi camera frame) in the room frame."""
+        name = "CameraTop" if index == 0 else "CameraBottom"
+        local = kinematics.transform(
+            name, FRAME_ROBOT, self.joint_actual, torso_offset=self.sway.torso_offset()
+        )
+        return kinematics.world_to_robot(self.true_pose.to_list()) @ local
 
     def head_angles(self) -> tuple[float, float]:
         """Measured ``(HeadYaw, HeadPitch)`` in radians."""

@@ -33,23 +33,25 @@ from naoloc.backends.mujoco.nao import (
     ROBOT_RADIUS,
     STANDING_POSTURES,
     head_pitch_limits,
-    torso_height,
 )
 from naoloc.backends.mujoco.room import RoomLayout, build_layout, room_mjcf
 from naoloc.backends.mujoco.walk import WalkController, WalkLimits
 
+from naoloc import kinematics
 from naoloc.config import Config
 from naoloc.constants import FOV_V5, FOV_V6, JOINT_NAMES, MOTION_CYCLE_S
 from naoloc.errors import BackendError, RobotError
 from naoloc.geometry import Pose2D, modulo2PI, pose2DInverse
-from naoloc.keyframe import TORSO_HEIGHT_STANDINIT
 from naoloc.simulated.odometry import OdometryModel
+from naoloc.simulated.sway import WalkSway
 
 # mujoco reads MUJOCO_GL when first imported: import_mujoco chooses the platform first.
 mujoco: Any = import_mujoco()
 
 CAMERA_NAMES = ("CameraTop", "CameraBottom")
 _LEG_JOINTS = tuple(n for n in JOINT_NAMES if n[1:4] in ("Hip", "Kne", "Ank"))
+# MuJoCo's camera frame (looks along -z, x right, y up) -> NAOqi's (x along the view, y left).
+_GL_TO_NAOQI = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]])
 _GAIT_HZ = 1.0  # strides per second: two steps per second, NAO's maximum step frequency
 _GAIT_AMPLITUDE = 0.18  # rad of hip flexion at full speed (a visible, not a dynamic, gait)
 
@@ -124,6 +126,7 @@ class Simulation:
         }
         self.walk = WalkController(WalkLimits(), self.cycle_s)
         self.odometry = OdometryModel(cfg.world.odometry)
+        self.sway = WalkSway(cfg.world.sim.camera_sway)
         self.command_velocity = (0.0, 0.0, 0.0)
         self._gait_phase = 0.0
         self.posture_name = "StandInit"
@@ -162,8 +165,8 @@ class Simulation:
         self._walk_ids = [
             _obj_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, n) for n in ("walk_x", "walk_y", "walk_yaw")
         ]
-        self._torso_act = _obj_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "torso_z")
-        self._torso_qadr = int(m.jnt_qposadr[_obj_id(m, mujoco.mjtObj.mjOBJ_JOINT, "torso_z")])
+        self._torso_body = _obj_id(m, mujoco.mjtObj.mjOBJ_BODY, "torso")
+        self._cam_ids = [_obj_id(m, mujoco.mjtObj.mjOBJ_CAMERA, n) for n in CAMERA_NAMES]
         self._lhip = self.joint_index["LHipPitch"]
         self._lknee = self.joint_index["LKneePitch"]
         self._r_hyp = self.joint_index["RHipYawPitch"]
@@ -242,8 +245,8 @@ class Simulation:
             i = self.joint_index[n]
             self.target[i] = self.command[i] = a
             self.data.qpos[self._qadr[i]] = a
-        self.data.qpos[self._torso_qadr] = self._torso_offset()
         self.posture_name = name
+        self.place_torso()
         self._write_joint_ctrl()
         mujoco.mj_forward(self.model, self.data)
 
@@ -264,14 +267,54 @@ class Simulation:
                 return name
         return "Unknown"
 
-    def _torso_offset(self) -> float:
-        h = torso_height(float(self.command[self._lhip]), float(self.command[self._lknee]))
-        return h - TORSO_HEIGHT_STANDINIT
+    def fk_angles(self, use_sensors: bool) -> dict[str, float]:
+        """Joint angles (rad) for the forward kinematics: measured or commanded.
+
+        The legs' gait swing (visual) is left out: the torso's pose comes from the stance legs
+        (the commanded posture) plus the walk's sway.
+        """
+        angles = dict(zip(JOINT_NAMES, (float(v) for v in self.command), strict=True))
+        if use_sensors:
+            q = self.data.qpos[self._qadr]
+            walking = self._gait_phase != 0.0
+            for i, n in enumerate(JOINT_NAMES):
+                if not (walking and n in _LEG_JOINTS):
+                    angles[n] = float(q[i])
+        return angles
+
+    def torso_in_robot(self, use_sensors: bool = True) -> np.ndarray:
+        """The torso's 4x4 pose in FRAME_ROBOT: legs' kinematics, plus the sway if sensed."""
+        t = kinematics.robot_to_torso(self.fk_angles(use_sensors))
+        offset = self.sway.torso_offset() if use_sensors else None
+        return t if offset is None else offset @ t
+
+    def place_torso(self) -> None:
+        """Put the torso body where the kinematics (and the sway) say (model pos and quat)."""
+        t = self.torso_in_robot(True)
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, np.ascontiguousarray(t[:3, :3]).reshape(-1))
+        self.model.body_pos[self._torso_body] = t[:3, 3]
+        self.model.body_quat[self._torso_body] = quat
+
+    def true_camera_pose(self, camera_index: int = 0) -> list[float]:
+        """True pose of a camera, room frame: ``[x, y, z, wx, wy, wz]`` (m, rad).
+
+        The frame is NAOqi's camera frame (x along the view, y left, z up); the angles are
+        ALMotion.getPosition's roll-pitch-yaw, so ``wy > 0`` looks down.
+
+        Raises:
+            RobotError: For a camera index other than 0 (top) or 1 (bottom).
+        """
+        if camera_index not in (0, 1):
+            raise RobotError(f"camera index {camera_index} does not exist (0 top, 1 bottom)")
+        mujoco.mj_kinematics(self.model, self.data)
+        cam = self._cam_ids[camera_index]
+        rot = self.data.cam_xmat[cam].reshape(3, 3) @ _GL_TO_NAOQI
+        return kinematics.position6d(kinematics.homogeneous(rot, self.data.cam_xpos[cam]))
 
     def _write_joint_ctrl(self, gait: np.ndarray | None = None) -> None:
         q = self.command if gait is None else self.command + gait
         self.data.ctrl[self._act_ids] = q[self._act_mask]
-        self.data.ctrl[self._torso_act] = self._torso_offset()
 
     # ----------------------------------------------------------------------------- stepping
     def cycle(self, n: int = 1) -> None:
@@ -313,6 +356,8 @@ class Simulation:
             mujoco.mj_step(m, d)
         moved = pose2DInverse(start) * self.true_pose2d()
         self.walk.observe(cmd, moved)
+        self.sway.step(any(v != 0.0 for v in cmd) and self.awake, dt)
+        self.place_torso()
 
     def _true_twist(self, cmd: tuple[float, float, float], dt: float) -> tuple[float, float, float]:
         """Count a commanded twist in the odometry; the body's true twist (FRAME_ROBOT)."""
