@@ -98,8 +98,7 @@ def main() -> None:
             f"pitch {r['standinit_top_pitch_deg']} deg (down)"
         )
         print(
-            f"  getPosition vs true_camera_pose: max {r['max_diff_mm']} mm, "
-            f"{r['max_diff_deg']} deg"
+            f"  getPosition vs true_camera_pose: max {r['max_diff_mm']} mm, {r['max_diff_deg']} deg"
         )
         print(
             f"  sway while move(0.1, 0, 0): {r['sway_lateral_p2p_mm']} mm peak to peak sideways, "
