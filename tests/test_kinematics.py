@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -98,3 +99,26 @@ def test_the_camera_sways_while_walking_and_settles(backend: str) -> None:
             assert abs(robot.sim.true_camera_pose(0)[3]) < 1e-6
         finally:
             robot.motion.stopMove()
+
+
+def test_keyframes_keep_the_camera_pose_the_robot_reported(tmp_path: Path) -> None:
+    from naoloc.dataset import DatasetWriter, read_dataset
+    from naoloc.geometry import Pose2D
+    from naoloc.keyframe import CameraInfo, Keyframe, camera_in_robot
+
+    reported = kin.transform("CameraTop", FRAME_ROBOT, {**standinit_angles(0.4, -0.1)})
+    reported[2, 3] += 0.01  # a robot whose camera sits 1 cm higher than the nominal model
+    image = np.kron(np.arange(12 * 16, dtype=np.uint8).reshape(12, 16, 1), np.ones((20, 20, 3)))
+    kw = {"image": image.astype(np.uint8), "pose": Pose2D(), "head_yaw": 0.4, "head_pitch": -0.1,
+          "camera": CameraInfo(320, 240, 1.06, 0.83, 0)}  # fmt: skip
+    with_pose = Keyframe(**kw, camera_pose=tuple(reported.reshape(-1)))  # type: ignore[arg-type]
+    without = Keyframe(**kw)  # type: ignore[arg-type]
+    np.testing.assert_allclose(with_pose.camera_matrix(), kin.optical_from_camera(reported))
+    np.testing.assert_allclose(without.camera_matrix(), camera_in_robot(0.4, -0.1, 0))
+    path = tmp_path / "s.mcap"
+    with DatasetWriter(path, config={}, meta={}) as writer:
+        writer.write(with_pose)
+        writer.write(without)
+    back = read_dataset(path).keyframes
+    assert back[0].camera_pose == pytest.approx(with_pose.camera_pose)
+    assert back[1].camera_pose is None

@@ -9,7 +9,10 @@ yet real enough that feature extraction and the survey -> map -> localize pipeli
   commands, ``getRobotPosition(True)`` the legs' measured motion (a little joint-sensor
   noise), and the body strays from both by ``world.odometry`` (profile ``nao``: a NAO's
   published drift; ``ideal``: exact); both read ``[0, 0, 0]`` at ``cfg.start_pose()``.
-- Frames are ray-cast in numpy from the true pose and head angles.
+- Frames are ray-cast in numpy from the true camera pose: the true robot pose and the
+  forward kinematics of the joints (``naoloc/kinematics.py``; StandInit leans forward), with
+  the walk's sway (``world.sim.camera_sway``). ``getPosition``/``getTransform`` use the same
+  kinematics; ``robot.sim.true_camera_pose(i)`` gives the truth.
 - The robot starts standing in StandInit with its motors on, as Webots' NAO does; with
   ``world.sim.start_awake: false`` it starts at rest in Crouch (motors off), like a NAO that
   was just switched on, and walks only after ``motion.wakeUp()``.
