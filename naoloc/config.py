@@ -67,17 +67,42 @@ class RoomConfig(_Model):
 
 
 class OdometryConfig(_Model):
-    """Sensor odometry drift of simulated backends (``getRobotPosition(True)``)."""
+    """Odometry error of simulated backends: how far the true walk strays from odometry.
 
-    scale_error: float = Field(0.01, ge=-0.5, le=0.5, description="relative distance error")
-    heading_bias_rad_per_m: float = Field(0.005, description="heading error per metre walked")
-    random_walk_m_per_sqrt_m: float = Field(
-        0.005, ge=0, description="position noise std per sqrt(metre) walked"
+    ``profile: nao`` draws per-run systematic errors from ``seed`` at the magnitudes of
+    published NAO figures (see ``naoloc/simulated/odometry.py`` for the sources);
+    ``profile: ideal`` is exact. Any key set here overrides the profile's value (a set
+    ``scale_error`` or ``turn_scale_error`` is used as is instead of being drawn).
+    """
+
+    profile: Literal["nao", "ideal"] = Field(
+        "nao", description="nao (published NAO drift) | ideal (exact, for unit tests)"
     )
-    heading_random_walk_rad_per_sqrt_rad: float = Field(
-        0.01, ge=0, description="heading noise std per sqrt(radian) turned"
+    scale_error: float | None = Field(
+        None, ge=-0.5, le=0.5, description="odometry reads (1 + e) times the true distance"
     )
-    seed: int = Field(0, ge=0, description="seed of the noise")
+    turn_scale_error: float | None = Field(
+        None, ge=-0.5, le=0.5, description="odometry reads (1 + e) times the true turn"
+    )
+    heading_bias_rad_per_m: float | None = Field(
+        None, description="odometry heading error per metre walked (rad/m)"
+    )
+    random_walk_m_per_sqrt_m: float | None = Field(
+        None, ge=0, description="position noise std per sqrt(metre) walked"
+    )
+    heading_random_walk_rad_per_sqrt_m: float | None = Field(
+        None, ge=0, description="heading noise std per sqrt(metre) walked"
+    )
+    heading_random_walk_rad_per_sqrt_rad: float | None = Field(
+        None, ge=0, description="heading noise std per sqrt(radian) turned (feet slip)"
+    )
+    turn_slip_m_per_sqrt_rad: float | None = Field(
+        None, ge=0, description="position noise std per sqrt(radian) turned (feet slip)"
+    )
+    level: float = Field(
+        1.0, ge=0, le=20, description="multiplies every error magnitude (robustness studies)"
+    )
+    seed: int = Field(0, ge=0, description="seed of the per-run errors and the noise")
 
 
 class CameraRealismConfig(_Model):
@@ -101,6 +126,9 @@ class SimConfig(_Model):
         True,
         description="start standing in StandInit with motors on (as Webots' NAO does); "
         "false = at rest in Crouch, motors off, like a NAO just switched on",
+    )
+    camera_sway: bool = Field(
+        True, description="torso and head sway and bob while walking, as on a NAO"
     )
 
 

@@ -32,7 +32,7 @@ import numpy as np
 
 from naoloc.errors import DatasetError
 from naoloc.geometry import Pose2D
-from naoloc.keyframe import CameraInfo, Keyframe, camera_in_robot
+from naoloc.keyframe import CameraInfo, Keyframe
 
 FORMAT_NAME = "naoloc-survey"
 FORMAT_VERSION = 1
@@ -54,6 +54,11 @@ _KEYFRAME_SCHEMA = {
         "head_yaw": {"type": "number", "description": "rad"},
         "head_pitch": {"type": "number", "description": "rad"},
         "camera": {"type": "object"},
+        "camera_pose": {
+            "type": ["array", "null"],
+            "items": {"type": "number"},
+            "description": "camera in FRAME_ROBOT, 4x4 row-major, from ALMotion.getTransform",
+        },
     },
     "required": ["index", "pose", "head_yaw", "head_pitch", "camera"],
 }
@@ -231,7 +236,7 @@ class DatasetWriter:
             R=[1.0, 0, 0, 0, 1.0, 0, 0, 0, 1.0],
             P=[k[0], 0, k[2], 0, 0, k[4], k[5], 0, 0, 0, 1.0, 0],
         )  # fmt: skip
-        t_cam = camera_in_robot(kf.head_yaw, kf.head_pitch, cam.index)
+        t_cam = kf.camera_matrix()
         cam_tf = _rotation_to_quaternion(t_cam[:3, :3])
         tfs = [
             fm.FrameTransform(
@@ -256,6 +261,7 @@ class DatasetWriter:
             "head_yaw": kf.head_yaw,
             "head_pitch": kf.head_pitch,
             "camera": _camera_dict(cam),
+            "camera_pose": None if kf.camera_pose is None else list(kf.camera_pose),
         }
         try:
             self._add(IMAGE_TOPIC, stamp, bytes(image.encode()))
@@ -486,6 +492,16 @@ def _pose_or_none(value: Any) -> Pose2D | None:
     return pose
 
 
+def _camera_pose_or_none(value: Any) -> tuple[float, ...] | None:
+    """The recorded 4x4 camera pose (16 floats), or None for files written without it."""
+    if value is None:
+        return None
+    pose = tuple(float(v) for v in value)
+    if len(pose) != 16 or not all(math.isfinite(v) for v in pose):
+        raise ValueError("camera_pose must be 16 finite numbers")
+    return pose
+
+
 def _keyframe_from_record(
     rec: dict[str, Any], images: dict[int, bytes], path: Path
 ) -> tuple[Keyframe | None, int]:
@@ -509,5 +525,6 @@ def _keyframe_from_record(
         stamp=float(rec.get("stamp", 0.0)),
         command_pose=_pose_or_none(rec.get("command_pose")),
         true_pose=_pose_or_none(rec.get("true_pose")),
+        camera_pose=_camera_pose_or_none(rec.get("camera_pose")),
     )
     return keyframe, int(rec.get("lap", 0))

@@ -29,11 +29,15 @@ pytest.importorskip("naoloc.backends.fake")
 
 
 def small_cfg(**survey: Any) -> Config:
-    """A 3 x 3 m fake room; 1 lap of a 1.5 m square in 0.5 m steps (12 frames)."""
+    """A 3 x 3 m fake room; 1 lap of a 1.5 m square in 0.5 m steps (12 frames).
+
+    Exact odometry (profile ideal): these tests are about the behaviours' plumbing; a NAO's
+    drift walks this small room's survey into a wall (issue 12 keeps it off by vision).
+    """
     return load_config(
         {
             "robot": {"backend": "fake"},
-            "world": {"room": {"size_m": [3.0, 3.0], "seed": 3}},
+            "world": {"room": {"size_m": [3.0, 3.0], "seed": 3}, "odometry": {"profile": "ideal"}},
             "survey": {"laps": 1, "step_m": 0.5, "wall_offset_m": 0.75, **survey},
             "go_home": {"tolerance_m": 0.15, "max_tries": 4},
         }

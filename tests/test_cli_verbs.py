@@ -18,9 +18,11 @@ from naoloc.dataset import read_dataset
 
 pytest.importorskip("naoloc.backends.fake")
 
+# Exact odometry (profile ideal): these tests are about the verbs; in a 3 x 3 m room a NAO's
+# drift walks the survey into a wall (keeping it off by vision is issue 12's).
 SMALL = {
     "robot": {"backend": "fake"},
-    "world": {"room": {"size_m": [3.0, 3.0], "seed": 5}},
+    "world": {"room": {"size_m": [3.0, 3.0], "seed": 5}, "odometry": {"profile": "ideal"}},
     "survey": {"laps": 1, "step_m": 0.25, "wall_offset_m": 0.75},
     "map": {"neurons": 40, "epochs": 30, "vocabulary_size": 64},
     "go_home": {"tolerance_m": 0.15, "max_tries": 4},

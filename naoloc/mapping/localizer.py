@@ -309,7 +309,7 @@ def localize_verified(
         q, f = queries[qi], feats[qi]
         cam = query_camera(q)
         kmat = cam.matrix()
-        c_q = camera_in_robot(q.head_yaw, q.head_pitch, cam.index)
+        c_q = q.camera_matrix()  # the robot's own kinematics at capture
         cands = _candidates(vmap, vmap.vocabulary.histogram(f.descriptors), top_k)
         cand_all.append(cands)
         best: dict[int, tuple[float, np.ndarray]] = {}
@@ -425,7 +425,7 @@ def _fallback(
         t_map_cam_k = robot_matrix(*vmap.refined_poses[c]) @ camera_in_robot(
             float(vmap.keyframe_heads[c, 0]), float(vmap.keyframe_heads[c, 1]), cam_k.index
         )
-        off = camera_in_robot(q.head_yaw, q.head_pitch, cam_q.index)[:2, 3]
+        off = q.camera_matrix()[:2, 3]
         ct, st = math.cos(theta_q), math.sin(theta_q)
         rx = t_map_cam_k[0, 3] - (ct * off[0] - st * off[1])
         ry = t_map_cam_k[1, 3] - (st * off[0] + ct * off[1])
