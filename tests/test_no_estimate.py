@@ -20,13 +20,18 @@ pytest.importorskip("naoloc.backends.fake")
 ROOM = {"size_m": [3.0, 3.0], "seed": 5}
 BASE = {
     "robot": {"backend": "fake"},
+    # Exact odometry: a drifting survey walks into the wall of this small room; this test is
+    # about what localize says when it recognises nothing.
+    "world_odometry": {"profile": "ideal"},
     "survey": {"laps": 1, "step_m": 0.25, "wall_offset_m": 0.75},
     "map": {"neurons": 40, "epochs": 30, "vocabulary_size": 64},
 }
 
 
 def _cfg(path: Path, room: dict[str, object]) -> Path:
-    path.write_text(yaml.safe_dump({**BASE, "world": {"room": room}}))
+    data = {k: v for k, v in BASE.items() if k != "world_odometry"}
+    data["world"] = {"room": room, "odometry": BASE["world_odometry"]}
+    path.write_text(yaml.safe_dump(data))
     return path
 
 
