@@ -14,18 +14,16 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """Localize, walk to the origin, repeat (``go_home`` config); report where it ended."""
     from naoloc.behaviours.go_home import go_home
     from naoloc.behaviours.localize import Localization
-    from naoloc.cli import write_resolved_config
     from naoloc.commands.localize import teleport_if_asked
     from naoloc.commands.survey import config_path_for, interruptible
     from naoloc.mapping import load_map
+    from naoloc.outputs import staged
     from naoloc.plots import plot_localization
     from naoloc.progress import Progress
     from naoloc.registry import connect
 
     vmap = load_map(args.map)
     png: Path | None = args.png
-    if png is not None:
-        write_resolved_config(cfg, config_path_for(png))
 
     def report(tries: int, loc: Localization) -> None:
         est = loc.estimate
@@ -48,6 +46,8 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     print(line)
     if png is not None:
         loc = result.final
-        plot_localization(vmap, loc.estimate, png, truth=loc.truth, queries=loc.queries)
+        with staged(png, config_path_for(png)) as (tmp_png, tmp_cfg):
+            plot_localization(vmap, loc.estimate, tmp_png, truth=loc.truth, queries=loc.queries)
+            tmp_cfg.write_text(cfg.to_yaml(), encoding="utf-8")
         summary["png"] = str(png)
     return summary
