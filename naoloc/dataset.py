@@ -595,9 +595,9 @@ def _keyframe(
     """Keyframe record number ``k`` checked field by field, with its image decoded."""
     where = f"keyframe record {k}"
     try:
-        rec = checks.parse_json(raw, where)
+        rec = checks.parse_json(raw, "the record")
         if not isinstance(rec, dict):
-            raise ValueError(f"{where} must be an object, got {checks._kind(rec)}")
+            raise ValueError(f"the record must be an object, got {checks._kind(rec)}")
         index = checks.integer(rec.get("index"), "index", 0, 10**7)
         where = f"frame {index}"
         if index in seen:
