@@ -237,3 +237,24 @@ def test_password_reaches_no_file_and_no_message(
     data = read_dataset(dataset)
     assert "password" not in data.config["robot"] and data.config["robot"]["user"] == "nao"
     assert "password" not in yaml.safe_load((out / "s.config.yaml").read_text())["robot"]
+
+
+def test_password_reaches_no_evaluation_output(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    tiny = {
+        "robot": {"backend": "fake", "password": SECRET},
+        "world": {"room": {"size_m": [3.2, 3.2], "seed": 5}},
+        "survey": {"laps": 1, "step_m": 0.3, "wall_offset_m": 0.9},
+        "map": {"neurons": 12, "epochs": 12, "vocabulary_size": 48},
+    }
+    cfg = tmp_path / "tiny.yaml"
+    cfg.write_text(yaml.safe_dump(tiny))
+    out = tmp_path / "eval"
+    assert main(["evaluate", "-c", str(cfg), "-n", "2", "--workers", "1", "-o", str(out)]) == 0
+    printed = capsys.readouterr()
+    assert SECRET not in printed.out + printed.err
+    files = [p for p in out.rglob("*") if p.is_file()]
+    assert {"summary.json", "config.yaml", "report.md"} <= {p.name for p in files}
+    for path in files:
+        assert SECRET.encode() not in path.read_bytes(), path
