@@ -46,6 +46,7 @@ from naoloc import dataset_checks as checks
 from naoloc.errors import DatasetError, NaolocError
 from naoloc.geometry import Pose2D
 from naoloc.keyframe import CameraInfo, Keyframe, camera_in_robot, check_camera
+from naoloc.outputs import staging_path
 
 FORMAT_NAME = "naoloc-survey"
 # 2: chunked and indexed, written to NAME.partial.mcap, with the naoloc.status record.
@@ -179,7 +180,8 @@ class DatasetWriter:
     ``naoloc.status`` record) and, only when told the survey is complete, renames it to
     ``path`` atomically. Used as a context manager, the survey counts as complete when the
     block ends without an exception; an exception or Ctrl-C keeps the partial file, marked
-    incomplete. A run that wrote no frame leaves nothing behind.
+    incomplete. A run that wrote no frame leaves nothing behind (and an older partial file
+    of an earlier run as it was: the file takes its name at the first frame).
 
     Args:
         path: Output ``.mcap`` file (its folder is created).
@@ -213,9 +215,12 @@ class DatasetWriter:
         self._quality = int(jpeg_quality)
         self._closed = False
         self._origin = _origin_in_room(meta)
+        # Until the first frame the file has a hidden name, so that a run that writes no
+        # frame leaves an older partial file of an earlier run as it was.
+        self._tmp_path = staging_path(self.partial_path)
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._file: IO[bytes] = open(self.partial_path, "wb")  # noqa: SIM115 - see close()
+            self._file: IO[bytes] = open(self._tmp_path, "wb")  # noqa: SIM115 - see close()
         except OSError as err:
             raise DatasetError(f"{self.partial_path}: cannot create: {err.strerror}") from None
         self._mcap = Writer(
@@ -353,6 +358,8 @@ class DatasetWriter:
                 self._add("/tf", stamp, bytes(tf.encode()))
             self._add(KEYFRAME_TOPIC, stamp, json.dumps(record).encode())
             self._mcap.flush()  # ends this frame's chunk and writes it out
+            if self.frames == 0:
+                os.replace(self._tmp_path, self.partial_path)
         except OSError as err:
             raise DatasetError(f"{self.partial_path}: write failed: {err.strerror}") from None
         self.frames += 1
@@ -392,7 +399,7 @@ class DatasetWriter:
         finally:
             self._file.close()
             if self.frames == 0:
-                self.partial_path.unlink(missing_ok=True)
+                self._tmp_path.unlink(missing_ok=True)
             elif ok and finished:
                 os.replace(self.partial_path, self.path)
                 self.complete = True

@@ -234,17 +234,21 @@ def test_empty_survey_says_no_frames(tmp_path: Path) -> None:
     path = tmp_path / "empty.mcap"
     writer = DatasetWriter(path, config={}, meta={})
     writer._file.flush()  # died before its first frame
+    assert not writer.partial_path.exists()  # the file takes that name at the first frame
     with pytest.raises(DatasetError, match="no frames"):
-        read_dataset(writer.partial_path)
+        read_dataset(writer._file.name)
 
 
 def test_a_run_without_frames_keeps_the_existing_dataset(tmp_path: Path) -> None:
     path = tmp_path / "s.mcap"
     _write(path, 3)
     before = path.read_bytes()
-    DatasetWriter(path, config={}, meta={}).close()  # e.g. the robot failed at once
+    _write(path, 2, complete=False)  # an interrupted run...
+    partial = partial_path_for(path).read_bytes()
+    DatasetWriter(path, config={}, meta={}).close(complete=False)  # ...then one that failed at once
     assert path.read_bytes() == before
-    assert not partial_path_for(path).exists()
+    assert partial_path_for(path).read_bytes() == partial  # the earlier partial is kept too
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.mcap", "s.partial.mcap"]
     _write(path, 2)  # a complete run with frames replaces it
     assert len(read_dataset(path).keyframes) == 2
 
