@@ -68,6 +68,22 @@ def test_survey_writes_dataset_and_json(
     assert (out.parent / "survey.config.yaml").is_file()
 
 
+def test_survey_is_chunked_indexed_and_has_room_to_map(surveyed: tuple[Path, Path]) -> None:
+    from mcap.reader import make_reader
+
+    from naoloc.dataset import _protobuf_fields
+
+    _, out = surveyed
+    with open(out, "rb") as f:
+        reader = make_reader(f)
+        summary = reader.get_summary()
+        assert summary is not None and len(summary.chunk_indexes) == 24  # one per frame
+        frames = {(tf[2][0], tf[3][0]) for tf in (
+            _protobuf_fields(m.data) for _, _, m in reader.iter_messages(topics=["/tf"])
+        )}  # fmt: skip
+    assert (b"room", b"map") in frames and (b"map", b"base_link") in frames
+
+
 def test_survey_json_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     cfg = _cfg(tmp_path, survey={"laps": 1, "step_m": 0.5, "wall_offset_m": 0.75})
     out = tmp_path / "s.mcap"
