@@ -107,11 +107,6 @@ def partial_path_for(path: str | Path) -> Path:
     return path.with_name(name + PARTIAL_SUFFIX)
 
 
-def is_partial_name(path: str | Path) -> bool:
-    """True for a file named like :func:`partial_path_for` names them."""
-    return Path(path).name.endswith(PARTIAL_SUFFIX)
-
-
 def interruption_reason(err: BaseException) -> str:
     """One phrase for what ended a survey early, e.g. ``interrupted (SIGTERM)``."""
     import signal
