@@ -3,7 +3,10 @@
 Each verb lives in ``naoloc.commands.<verb>`` and returns a JSON-able dict that is
 printed as the single last line of stdout. Errors are one line on stderr and a
 non-zero exit: 1 for a naoloc error, 2 for bad usage, 3 when ``localize`` recognised
-nothing (its JSON line is still printed, with null pose fields), 130 for Ctrl-C.
+nothing (its JSON line is still printed, with null pose fields), 130 for SIGINT (Ctrl-C)
+and 143 for SIGTERM. Both signals are honoured also where the shell ignores SIGINT
+(background jobs): :func:`naoloc.interrupt.interruptible` installs the handlers for the
+whole run. Notes attached to the error (e.g. where a partial dataset was kept) join its line.
 """
 
 from __future__ import annotations
@@ -20,6 +23,8 @@ from typing import Any
 from naoloc import __version__
 from naoloc.config import Config, load_config
 from naoloc.errors import NaolocError, NoEstimate, NotBuiltError
+from naoloc.interrupt import exit_code, interruptible
+from naoloc.outputs import atomic_write_text
 
 VERBS: dict[str, str] = {
     "survey": "Algorithm 3: walk closed laps, record images and odometry poses (MCAP)",
@@ -107,6 +112,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     verb: str = args.verb
+    with interruptible():
+        return _main(verb, args)
+
+
+def _with_notes(text: str, err: BaseException) -> str:
+    """``text`` and the error's notes (``add_note``) on one line."""
+    notes = [str(n).replace("\n", " ") for n in getattr(err, "__notes__", ())]
+    return "; ".join([text, *notes])
+
+
+def _main(verb: str, args: argparse.Namespace) -> int:
     try:
         config_src = getattr(args, "config", None)
         if verb == "demo" and config_src is None:
@@ -115,20 +131,21 @@ def main(argv: Sequence[str] | None = None) -> int:
                 config_src = None
         cfg = load_config(config_src)
         result = _run_verb(verb, args, cfg)
-    except KeyboardInterrupt:
-        print(f"naoloc {verb}: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as err:
+        print(_with_notes(f"naoloc {verb}: interrupted", err), file=sys.stderr)
+        return exit_code(err)
     except NoEstimate as err:  # the result line still ends stdout, with no pose in it
         sys.stdout.write(json.dumps(err.result, separators=(", ", ": ")) + "\n")
         sys.stdout.flush()
         print(f"naoloc {verb}: {err}", file=sys.stderr)
         return err.exit_code
     except NaolocError as err:
-        print(f"naoloc {verb}: error: {err}", file=sys.stderr)
+        print(_with_notes(f"naoloc {verb}: error: {err}", err), file=sys.stderr)
         return 1
     except OSError as err:  # a path that cannot be read or written
         where = f": {err.filename}" if err.filename else ""
-        print(f"naoloc {verb}: error: {err.strerror or err}{where}", file=sys.stderr)
+        text = f"naoloc {verb}: error: {err.strerror or err}{where}"
+        print(_with_notes(text, err), file=sys.stderr)
         return 1
     sys.stdout.write(json.dumps(result, separators=(", ", ": ")) + "\n")
     sys.stdout.flush()
@@ -136,10 +153,12 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def write_resolved_config(cfg: Config, path: Path) -> Path:
-    """Write the resolved config as YAML at ``path`` (creating its folder); returns the path."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(cfg.to_yaml(), encoding="utf-8")
-    return path
+    """Write the resolved config (without secrets) as YAML at ``path``, atomically.
+
+    Call it once the output the copy describes is written, so that a failed run never
+    leaves a config copy that does not match the output beside it. Creates the folder.
+    """
+    return atomic_write_text(path, cfg.to_yaml())
 
 
 if __name__ == "__main__":

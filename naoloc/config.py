@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import BaseModel, ConfigDict, Field, SecretStr, ValidationError, field_validator
 
 from naoloc.constants import CAMERA_FPS, COLORSPACE_LAYERS, RESOLUTIONS
 from naoloc.errors import ConfigError
@@ -33,7 +33,9 @@ class RobotConfig(_Model):
         "auto", description="naoqi only: libqi (real qi package), zmq (our shim), auto"
     )
     user: str | None = Field(None, description="NAOqi 2.9+ (tcps://) user, usually 'nao'")
-    password: str | None = Field(None, description="NAOqi 2.9+ (tcps://) password")
+    password: SecretStr | None = Field(
+        None, description="NAOqi 2.9+ (tcps://) password; never written to any file"
+    )
     timeout_s: float = Field(5.0, gt=0, description="timeout of one remote call, seconds")
     move_timeout_s: float = Field(
         300.0, gt=0, description="naoqi only: timeout of one blocking motion call, seconds"
@@ -245,8 +247,12 @@ class Config(_Model):
         return (sx - 2 * off, sy - 2 * off)
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain JSON-able dict of the resolved config."""
-        return self.model_dump(mode="json")
+        """Plain JSON-able dict of the resolved config, without secrets (``robot.password``).
+
+        Everything naoloc writes to disk (config copies, dataset and map metadata,
+        evaluation outputs) comes from here, so a secret never reaches a file.
+        """
+        return self.model_dump(mode="json", exclude=_SECRETS)
 
     def to_yaml(self) -> str:
         """The resolved config as YAML text."""
@@ -254,7 +260,11 @@ class Config(_Model):
 
     def with_overrides(self, overrides: dict[str, Any]) -> Config:
         """A new config with a nested dict of keys replaced (validated again)."""
-        return _validate(_deep_merge(self.to_dict(), overrides), "<overrides>")
+        return _validate(_deep_merge(self.model_dump(), overrides), "<overrides>")
+
+
+# Keys never written anywhere (model_dump ``exclude`` form); see Config.to_dict.
+_SECRETS: dict[str, Any] = {"robot": {"password"}}
 
 
 def _deep_merge(base: dict[str, Any], extra: dict[str, Any]) -> dict[str, Any]:
@@ -275,7 +285,7 @@ def _format_error(source: str, err: ValidationError) -> str:
         msg = "unknown key"
     else:
         msg = str(first.get("msg", "invalid value"))
-        if "input" in first and kind != "missing":
+        if "input" in first and kind != "missing" and "password" not in path:
             msg += f" (got {first['input']!r})"
     more = len(err.errors()) - 1
     suffix = f" (+{more} more)" if more > 0 else ""

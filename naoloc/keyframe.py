@@ -62,6 +62,31 @@ class CameraInfo:
         return CameraInfo(width, height, self.hfov, self.vfov, self.index)
 
 
+# Largest image side a camera model may have, pixels (NAO's largest is 2560 x 1920).
+MAX_IMAGE_SIDE = 8192
+
+
+def check_camera(cam: CameraInfo) -> CameraInfo:
+    """``cam`` when it is a usable pinhole model, else ValueError naming the bad field.
+
+    Width and height must be 1 to :data:`MAX_IMAGE_SIDE` pixels, both fields of view
+    finite and strictly between 0 and pi radians (a zero field of view has no focal length),
+    and the index 0 (top) or 1 (bottom).
+
+    Raises:
+        ValueError: One phrase naming the field and its value.
+    """
+    for name, side in (("width", cam.width), ("height", cam.height)):
+        if not 1 <= side <= MAX_IMAGE_SIDE:
+            raise ValueError(f"camera {name} is {side} px, must be 1 to {MAX_IMAGE_SIDE}")
+    for name, fov in (("hfov", cam.hfov), ("vfov", cam.vfov)):
+        if not (math.isfinite(fov) and 0.0 < fov < math.pi):
+            raise ValueError(f"camera {name} is {fov} rad, must be between 0 and pi")
+    if cam.index not in (0, 1):
+        raise ValueError(f"camera index is {cam.index}, must be 0 (top) or 1 (bottom)")
+    return cam
+
+
 def standinit_angles(head_yaw: float = 0.0, head_pitch: float = 0.0) -> dict[str, float]:
     """Joint angles (rad) of StandInit's legs with the given head angles (rad)."""
     angles = {"HeadYaw": float(head_yaw), "HeadPitch": float(head_pitch)}

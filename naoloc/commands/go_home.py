@@ -14,18 +14,16 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """Localize, walk to the origin, repeat (``go_home`` config); report where it ended."""
     from naoloc.behaviours.go_home import go_home
     from naoloc.behaviours.localize import Localization
-    from naoloc.cli import write_resolved_config
     from naoloc.commands.localize import teleport_if_asked
     from naoloc.commands.survey import config_path_for, interruptible
     from naoloc.mapping import load_map
+    from naoloc.outputs import staged
     from naoloc.plots import plot_go_home
     from naoloc.progress import Progress
     from naoloc.registry import connect
 
     vmap = load_map(args.map)
     png: Path | None = args.png
-    if png is not None:
-        write_resolved_config(cfg, config_path_for(png))
 
     def report(tries: int, loc: Localization) -> None:
         est = loc.estimate
@@ -52,9 +50,11 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         line += f"; truly {result.error_m:.2f} m from the origin"
     print(line)
     if png is not None:
-        plot_go_home(
-            vmap, result.trail, [r.estimate for r in result.rounds], png,
-            blocked=result.blocked_at, truth=result.truth, reached=result.reached,
-        )  # fmt: skip
+        with staged(png, config_path_for(png)) as (tmp_png, tmp_cfg):
+            plot_go_home(
+                vmap, result.trail, [r.estimate for r in result.rounds], tmp_png,
+                blocked=result.blocked_at, truth=result.truth, reached=result.reached,
+            )  # fmt: skip
+            tmp_cfg.write_text(cfg.to_yaml(), encoding="utf-8")
         summary["png"] = str(png)
     return summary

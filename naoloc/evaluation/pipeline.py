@@ -50,6 +50,7 @@ from naoloc.evaluation.runner import (
     survey_task,
 )
 from naoloc.evaluation.stats import group_rows, heading_errors, json_float, summarize
+from naoloc.outputs import atomic_write_text
 
 
 def check_simulated(cfg: Config) -> None:
@@ -127,7 +128,6 @@ def evaluate(
         )
     workers = max(1, workers if workers is not None else (os.cpu_count() or 1))
     outdir.mkdir(parents=True, exist_ok=True)
-    write_resolved_config(cfg, outdir / "config.yaml")
     plan = make_plan(cfg, protocol, studies)
     base_dict = cfg.to_dict()
 
@@ -176,6 +176,7 @@ def evaluate(
     )
     summary["wall_s"] = round(time.monotonic() - t_start, 2)
     _write_outputs(outdir, summary, records, plan, maps, surveys, origin, room_size, protocol)
+    write_resolved_config(cfg, outdir / "config.yaml")  # last: it describes the outputs
     line = {k: summary[k] for k in _LINE_KEYS}
     line.update(
         {
@@ -453,6 +454,6 @@ def _write_outputs(
         figures.plot_cdf(
             outdir / "cdf_robustness.png", rob, "robustness: cumulative position error"
         )
-    (outdir / "summary.json").write_text(json.dumps(jsonable(summary), indent=1), encoding="utf-8")
-    (outdir / "estimates.json").write_text(json.dumps(jsonable(list(records))), encoding="utf-8")
-    (outdir / "report.md").write_text(report.render(summary), encoding="utf-8")
+    atomic_write_text(outdir / "estimates.json", json.dumps(jsonable(list(records))))
+    atomic_write_text(outdir / "report.md", report.render(summary))
+    atomic_write_text(outdir / "summary.json", json.dumps(jsonable(summary), indent=1))
