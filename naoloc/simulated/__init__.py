@@ -1,0 +1,1 @@
+"""Simulation parts shared by the simulated backends (numpy and OpenCV only)."""
