@@ -88,7 +88,9 @@ ROOMS = [
 @pytest.mark.parametrize("room", ROOMS, ids=["paper", "lab", "seed41", "seed77"])
 def test_akaze_finds_100_keypoints_on_a_poster_wall_from_one_metre(room: Any) -> None:
     akaze = cv2.AKAZE_create()  # type: ignore[attr-defined]
-    with naoloc.connect(room) as robot:
+    posters = {"world": {"room": {"style": "posters"}}}  # posters in the camera's band
+    cfg = naoloc.config.load_config(room).with_overrides(posters)
+    with naoloc.connect(cfg) as robot:
         sim, video = _parts(robot)
         handle = video.subscribeCamera("akaze", 0, kQVGA, kYuvColorSpace, 30)
         counts = []
