@@ -18,7 +18,10 @@ from naoloc.evaluation.runner import LocalizeChunk, Scorer, localize_chunk
 
 TINY = {
     "robot": {"backend": "fake"},
-    "world": {"room": {"size_m": [3.2, 3.2], "seed": 5}},
+    "world": {
+        "room": {"size_m": [3.2, 3.2], "seed": 5, "style": "posters"},
+        "camera_realism": {"profile": "ideal"},
+    },  # the pre-issue-11 world: pipeline logic, not realism
     "survey": {"laps": 1, "step_m": 0.3, "wall_offset_m": 0.9},
     "map": {"neurons": 12, "epochs": 12, "vocabulary_size": 48},
 }
@@ -102,7 +105,10 @@ def test_evaluate_paper_protocol_writes_table3(tmp_path: Path) -> None:
     cfg = load_config(
         {
             "robot": {"backend": "fake"},
-            "world": {"room": {"size_m": [6.0, 6.0], "seed": 2}},
+            "world": {
+                "room": {"size_m": [6.0, 6.0], "seed": 2, "style": "posters"},
+                "camera_realism": {"profile": "ideal"},
+            },  # the pre-issue-11 world: pipeline logic, not realism
             "survey": {"laps": 1, "step_m": 0.5, "wall_offset_m": 1.0},
             "map": {"vocabulary_size": 48},
         }

@@ -29,7 +29,10 @@ def world() -> tuple[Config, list[Keyframe], list[tuple[list[Keyframe], Pose2D]]
     cfg = load_config(
         {
             "robot": {"backend": "fake"},
-            "world": {"room": {"size_m": [4.0, 4.0], "seed": 3}},
+            "world": {
+                "room": {"size_m": [4.0, 4.0], "seed": 3, "style": "posters"},
+                "camera_realism": {"profile": "ideal"},
+            },  # the pre-issue-11 world: pipeline logic, not realism
             "survey": {"wall_offset_m": 0.9},
         }
     )
