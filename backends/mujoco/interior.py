@@ -115,12 +115,12 @@ def _picture(
     kind = float(rng.random())
     if photos and kind < real_p:
         image = photos[int(rng.integers(0, len(photos)))]
-    elif kind < real_p + (1 - real_p) / 3:
-        image = pictures.landscape(rng, w_px, h_px)
-    elif kind < real_p + 2 * (1 - real_p) / 3:
-        image = pictures.portrait(rng, w_px, h_px)
-    else:
+    elif kind < real_p + 0.45 * (1 - real_p):  # an abstract print or a poster
         image = poster_images.procedural_poster(w_px, h_px, rng)
+    elif kind < real_p + 0.75 * (1 - real_p):
+        image = pictures.landscape(rng, w_px, h_px)
+    else:
+        image = pictures.portrait(rng, w_px, h_px)
     return pictures.framed(image, rng, w_px, h_px)
 
 
@@ -174,7 +174,7 @@ def plan_walls(cfg: Config, circuit: list[tuple[float, float]]) -> WallPlan:
 
     order = [walls[int(i)] for i in rng.permutation(4)]
     # Doors: 0.9 x 2.05 m with an architrave, a handle at 1.0 m, a switch at 1.05 m.
-    for w in order[: 2 if office else 1]:
+    for w in order[: 2 if office and max(size) >= 5.0 else 1]:
         a = place(w, 1.1, 0.35)
         if a is None:
             continue
@@ -184,7 +184,7 @@ def plan_walls(cfg: Config, circuit: list[tuple[float, float]]) -> WallPlan:
         fixtures.append(_wall_box(w, a + 0.7, 1.05, 0.08, 0.08, 0.01, size))  # light switch
         used[w].append((a + 0.6, a + 0.8))
     # Windows with daylight (sill 0.9 m) and a ribbed radiator under each.
-    for w in order[1 : 3 if max(size) >= 4.5 or office else 2]:
+    for w in order[1 : 3 if max(size) >= 4.5 else 2]:
         width = float(rng.uniform(1.0, 1.6))
         a = place(w, width + 0.2)
         if a is None:
@@ -220,28 +220,43 @@ def plan_walls(cfg: Config, circuit: list[tuple[float, float]]) -> WallPlan:
     for w in walls:
         length = wall_length(w, size)
         along, count = 0.3 + float(rng.uniform(0.0, 0.6)), 0
-        if rng.random() < 0.15 and length >= 4.0:
+        if rng.random() < 0.15 and length >= 5.0:
             along = length  # a long stretch of blank wall: this wall stays bare
+        tries = 0
         while along < length - 0.4 and count < room.posters_per_wall:
             kind = float(rng.random())
             if office and kind < 0.25:  # a whiteboard or a notice board
-                n, pw, ph = 1, float(rng.uniform(1.0, 1.6)), float(rng.uniform(0.7, 0.9))
-                image = _board(rng, pw, ph, bool(rng.random() < 0.5))
+                n, pw, ph, what = 1, float(rng.uniform(1.0, 1.6)), float(rng.uniform(0.7, 0.9)), 0
             elif kind < 0.45:  # one large picture
-                n, pw, ph = 1, float(rng.uniform(0.55, 1.0)), float(rng.uniform(0.45, 0.75))
-                image = _picture(rng, 384, int(384 * ph / pw), 0.3, own)
+                n, pw, ph, what = (
+                    1,
+                    float(rng.uniform(0.55, 1.0)),
+                    float(rng.uniform(0.45, 0.75)),
+                    1,
+                )
             elif kind < 0.7:  # a series of identical frames
-                n, pw, ph = int(rng.integers(2, 4)), float(rng.uniform(0.28, 0.4)), 0.0
+                n, pw, what = int(rng.integers(2, 4)), float(rng.uniform(0.28, 0.4)), 2
                 ph = pw * float(rng.uniform(1.1, 1.35))
-                image = _picture(rng, 192, int(192 * ph / pw), 0.2, own)
             else:  # a small photograph
-                n, pw, ph = 1, float(rng.uniform(0.3, 0.45)), float(rng.uniform(0.25, 0.45))
-                image = _picture(rng, 256, int(256 * ph / pw), 0.5, own)
+                n, pw, ph, what = (
+                    1,
+                    float(rng.uniform(0.3, 0.45)),
+                    float(rng.uniform(0.25, 0.45)),
+                    3,
+                )
             gap = 0.12
             span = n * pw + (n - 1) * gap
             if along + span > length - 0.3 or not _free(used[w], along, along + span):
-                along += 0.15
+                tries += 1
+                if tries >= 4:  # nothing fits here: move on along the wall
+                    along, tries = along + 0.15, 0
                 continue
+            tries = 0
+            if what == 0:
+                image = _board(rng, pw, ph, bool(rng.random() < 0.5))
+            else:
+                px = (384, 192, 256)[what - 1]
+                image = _picture(rng, px, int(px * ph / pw), (0.3, 0.2, 0.5)[what - 1], own)
             zc = float(rng.uniform(1.35, 1.65)) if n == 1 else 1.5
             zc = min(
                 max(zc, CAMERA_BAND_TOP + 0.02 + ph / 2, ART_Z[0]), ART_Z[1], top - 0.1 - ph / 2

@@ -153,6 +153,7 @@ class Motion:
 class _Geometry:
     map_x: np.ndarray
     map_y: np.ndarray
+    fixed: tuple[np.ndarray, np.ndarray]  # the maps in OpenCV's fixed-point form (faster)
     vignette: np.ndarray  # (h, w, 3) float32
     vignette_small: np.ndarray  # (30, 40) float32: what the AE's meter sees
     focal: float  # px of the output image
@@ -301,7 +302,8 @@ class CameraModel:
                 self._rng.standard_normal((height + m, width + m), dtype=np.float32),
             )
             small = cv2.resize(vignette[..., 0], (40, 30), interpolation=cv2.INTER_AREA)
-            geo = _Geometry(map_x, map_y, vignette, small, focal, noise_y, noise_c)
+            fixed = cv2.convertMaps(map_x, map_y, cv2.CV_16SC2)
+            geo = _Geometry(map_x, map_y, fixed, vignette, small, focal, noise_y, noise_c)
             self._geometry[key] = geo
         return geo
 
@@ -350,14 +352,14 @@ class CameraModel:
             flow = (-f * (wy + vx / BLUR_DEPTH_M), f * (wx - vy / BLUR_DEPTH_M))
 
         img = rgb
-        if s.distortion or (s.rolling_shutter and flow != (0.0, 0.0)):
-            map_x, map_y = geo.map_x, geo.map_y
-            if s.rolling_shutter and flow != (0.0, 0.0):
-                rows = np.arange(height, dtype=np.float32)
-                tau = (rows / max(1, height - 1) - 0.5) * (ROLLING_SHUTTER_FRAMES / fps)
-                map_x = map_x - np.float32(flow[0]) * tau[:, None]
-                map_y = map_y - np.float32(flow[1]) * tau[:, None]
+        if s.rolling_shutter and flow != (0.0, 0.0):
+            rows = np.arange(height, dtype=np.float32)
+            tau = (rows / max(1, height - 1) - 0.5) * (ROLLING_SHUTTER_FRAMES / fps)
+            map_x = geo.map_x - np.float32(flow[0]) * tau[:, None]
+            map_y = geo.map_y - np.float32(flow[1]) * tau[:, None]
             img = cv2.remap(img, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        elif s.distortion:
+            img = cv2.remap(img, *geo.fixed, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         if s.motion_blur:
             du, dv = flow[0] * self.exposure_s, flow[1] * self.exposure_s
             if math.hypot(du, dv) >= 0.75:

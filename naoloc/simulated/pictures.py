@@ -69,12 +69,30 @@ def landscape(rng: np.random.Generator, width: int, height: int) -> np.ndarray:
         mask = np.arange(height)[:, None] > ridge[None, xs]
         img[mask] = np.clip(colour, 0, 255)
     img = np.ascontiguousarray(np.clip(img, 0, 255).astype(np.uint8))
-    for _ in range(int(rng.integers(3, 9))):
+    for _ in range(int(rng.integers(1, 4))):  # houses: walls, roofs, windows (corners)
+        hw = max(6, int(width * rng.uniform(0.08, 0.18)))
+        x, y = int(rng.integers(0, max(1, width - hw))), int(height * rng.uniform(0.65, 0.9))
+        wall = tuple(int(c) for c in rng.uniform(150, 245, 3))
+        cv2.rectangle(img, (x, y - hw), (x + hw, y), wall, -1)
+        roof = np.array(
+            [[x - hw // 8, y - hw], [x + hw + hw // 8, y - hw], [x + hw // 2, y - 3 * hw // 2]]
+        )
+        cv2.fillPoly(img, [roof.astype(np.int32)], (int(rng.integers(90, 170)), 50, 40))
+        for k in range(3):
+            wx = x + hw // 8 + k * hw // 3
+            cv2.rectangle(img, (wx, y - 3 * hw // 4), (wx + hw // 6, y - hw // 2), (40, 50, 70), -1)
+    for _ in range(int(rng.integers(4, 12))):  # trees
         x, y = int(rng.integers(0, width)), int(height * rng.uniform(0.6, 0.95))
         r = max(2, int(width * rng.uniform(0.02, 0.05)))
         cv2.line(img, (x, y), (x, y - 2 * r), (70, 50, 30), max(1, r // 3))
-        cv2.circle(img, (x, y - 2 * r), r, tuple(int(c) for c in rng.uniform(20, 110, 3)), -1)
-    noise = rng.normal(0, 4, img.shape)
+        leaf = rng.uniform(20, 110, 3)
+        for _ in range(5):
+            c = (x + int(rng.integers(-r, r + 1)), y - 2 * r + int(rng.integers(-r, r + 1)))
+            cv2.circle(
+                img, c, max(2, r * 2 // 3), tuple(int(v) for v in leaf * rng.uniform(0.7, 1.3)), -1
+            )
+    grass = (rng.normal(0, 14, (height, width)) * (t[..., 0] > 0.6))[..., None]
+    noise = rng.normal(0, 4, img.shape) + grass
     return np.clip(img + noise, 0, 255).astype(np.uint8)
 
 
@@ -85,6 +103,13 @@ def portrait(rng: np.random.Generator, width: int, height: int) -> np.ndarray:
     img *= (0.7 + 0.6 * _blobs(rng, height, width, max(4, width // 4)))[..., None]
     img = np.ascontiguousarray(np.clip(img, 0, 255).astype(np.uint8))
     cx, s = width // 2, min(width, height)
+    stripe = max(3, int(s * rng.uniform(0.04, 0.09)))
+    tone = tuple(int(c) for c in np.clip(bg * 1.6 + 20, 0, 255))
+    for x in range(0, width, 2 * stripe):  # wallpaper behind the sitter
+        cv2.line(img, (x, 0), (x, height), tone, max(1, stripe // 3))
+    for _ in range(int(rng.integers(3, 7))):  # a few ornaments
+        c = (int(rng.integers(0, width)), int(rng.integers(0, height // 2)))
+        cv2.circle(img, c, max(2, s // 25), tuple(int(v) for v in rng.uniform(80, 230, 3)), -1)
     cloth = tuple(int(c) for c in rng.uniform(10, 160, 3))
     cv2.ellipse(img, (cx, height), (int(0.45 * width), int(0.3 * height)), 0, 180, 360, cloth, -1)
     skin = tuple(int(c) for c in np.array([225, 180, 150]) * rng.uniform(0.45, 1.0))
@@ -116,7 +141,11 @@ def portrait(rng: np.random.Generator, width: int, height: int) -> np.ndarray:
         max(1, s // 150),
         cv2.LINE_AA,
     )
-    blurred = cv2.GaussianBlur(img, (0, 0), max(0.6, s / 300))
+    for k in range(3):  # buttons and a collar
+        cv2.circle(
+            img, (cx, int(0.75 * height) + k * s // 14), max(1, s // 60), (230, 220, 200), -1
+        )
+    blurred = cv2.GaussianBlur(img, (0, 0), max(0.5, s / 500))
     return np.clip(blurred + rng.normal(0, 3, blurred.shape), 0, 255).astype(np.uint8)
 
 
