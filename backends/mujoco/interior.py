@@ -226,19 +226,19 @@ def plan_walls(cfg: Config, circuit: list[tuple[float, float]]) -> WallPlan:
         while along < length - 0.4 and count < room.posters_per_wall:
             kind = float(rng.random())
             if office and kind < 0.25:  # a whiteboard or a notice board
-                n, pw, ph, what = 1, float(rng.uniform(1.0, 1.6)), float(rng.uniform(0.7, 0.9)), 0
+                n, pw, ph, pick = 1, float(rng.uniform(1.0, 1.6)), float(rng.uniform(0.7, 0.9)), 0
             elif kind < 0.45:  # one large picture
-                n, pw, ph, what = (
+                n, pw, ph, pick = (
                     1,
                     float(rng.uniform(0.55, 1.0)),
                     float(rng.uniform(0.45, 0.75)),
                     1,
                 )
             elif kind < 0.7:  # a series of identical frames
-                n, pw, what = int(rng.integers(2, 4)), float(rng.uniform(0.28, 0.4)), 2
+                n, pw, pick = int(rng.integers(2, 4)), float(rng.uniform(0.28, 0.4)), 2
                 ph = pw * float(rng.uniform(1.1, 1.35))
             else:  # a small photograph
-                n, pw, ph, what = (
+                n, pw, ph, pick = (
                     1,
                     float(rng.uniform(0.3, 0.45)),
                     float(rng.uniform(0.25, 0.45)),
@@ -252,11 +252,11 @@ def plan_walls(cfg: Config, circuit: list[tuple[float, float]]) -> WallPlan:
                     along, tries = along + 0.15, 0
                 continue
             tries = 0
-            if what == 0:
+            if pick == 0:
                 image = _board(rng, pw, ph, bool(rng.random() < 0.5))
             else:
-                px = (384, 192, 256)[what - 1]
-                image = _picture(rng, px, int(px * ph / pw), (0.3, 0.2, 0.5)[what - 1], own)
+                px = (384, 192, 256)[pick - 1]
+                image = _picture(rng, px, int(px * ph / pw), (0.3, 0.2, 0.5)[pick - 1], own)
             zc = float(rng.uniform(1.35, 1.65)) if n == 1 else 1.5
             zc = min(
                 max(zc, CAMERA_BAND_TOP + 0.02 + ph / 2, ART_Z[0]), ART_Z[1], top - 0.1 - ph / 2
