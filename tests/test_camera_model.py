@@ -151,10 +151,10 @@ def test_motion_blur_follows_the_camera_turn_and_rolling_shutter_shears() -> Non
     assert abs(top - bottom) > 5  # rows read out later see the scene moved
 
 
-def _brightness_and_noise(backend: str, light: float) -> tuple[float, float]:
+def _brightness_and_noise(backend: str, light: float, style: str) -> tuple[float, float]:
     cfg = {
         "robot": {"backend": backend},
-        "world": {"sim": {"light": light}, "room": {"style": "posters", "seed": 1}},
+        "world": {"sim": {"light": light}, "room": {"style": style, "seed": 1}},
     }
     with naoloc.connect(cfg) as robot:
         handle = robot.video.subscribeCamera("ae", 0, kQVGA, kRGBColorSpace, 30)
@@ -169,9 +169,10 @@ def _brightness_and_noise(backend: str, light: float) -> tuple[float, float]:
     ["fake", pytest.param("mujoco", marks=[pytest.mark.sim, pytest.mark.skipif(
         not HAS_MUJOCO, reason="mujoco is not installed")])],
 )  # fmt: skip
-def test_dim_room_is_as_bright_within_30_percent_and_noisier(backend: str) -> None:
-    normal, normal_noise = _brightness_and_noise(backend, 1.0)
-    dim, dim_noise = _brightness_and_noise(backend, 0.3)
+@pytest.mark.parametrize("style", ["home", "posters"])
+def test_dim_room_is_as_bright_within_30_percent_and_noisier(backend: str, style: str) -> None:
+    normal, normal_noise = _brightness_and_noise(backend, 1.0, style)
+    dim, dim_noise = _brightness_and_noise(backend, 0.3, style)
     assert abs(dim - normal) <= 0.3 * normal, (dim, normal)
     assert dim_noise > 1.2 * normal_noise, (dim_noise, normal_noise)
 

@@ -71,11 +71,12 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("-c", "--config", default="configs/sim_paper_room.yaml")
     parser.add_argument("--json", action="store_true")
+    parser.add_argument("--styles", default="home,office,posters", help="comma-separated")
     args = parser.parse_args(argv)
     rows = []
     print(f"{'style':8s} {'light':>5s} {'camera':6s} {'head':7s} {'views':>5s} "
           f"{'kp med':>6s} {'kp min':>6s} {'luma':>6s} {'noise':>6s}")  # fmt: skip
-    for style in ("home", "office", "posters"):
+    for style in args.styles.split(","):
         for light in (1.0, 0.3):
             for profile in ("ideal", "nao"):
                 for head, pitch in (("level", 0.0), ("up-0.35", -0.35), ("up-0.6", -0.6)):

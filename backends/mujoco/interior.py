@@ -63,7 +63,9 @@ class WallPlan:
     Attributes:
         art: Pictures (become ``poster_<wall>_<k>`` posters).
         fixtures: Visual-only boxes: skirting, doors, windows, radiators, sockets, boards.
-        objects: ``(name, kind, rect, height, parts)`` pieces that collide (cabinets, clutter).
+        objects: ``(name, kind, rect, height, parts)`` pieces that collide (cabinets, clutter,
+            bookcases: their parts are left to ``room.py``); ``room.py`` keeps those clear of
+            the survey circuit by ``WALL_ITEM_CLEARANCE``.
     """
 
     art: tuple[WallArt, ...]
@@ -124,21 +126,11 @@ def _picture(
     return pictures.framed(image, rng, w_px, h_px)
 
 
-def _segment_gap(
-    rect: tuple[float, float, float, float], circuit: list[tuple[float, float]]
-) -> float:
-    from naoloc.backends.mujoco.room import _segment_distance
-
-    loop = list(zip(circuit, circuit[1:] + circuit[:1], strict=True))
-    return min(_segment_distance(rect, p, q) for p, q in loop)
-
-
-def plan_walls(cfg: Config, circuit: list[tuple[float, float]]) -> WallPlan:
+def plan_walls(cfg: Config) -> WallPlan:
     """Plan the walls of a ``home`` or ``office`` room (seeded by ``world.room.seed``).
 
     Args:
         cfg: The validated config.
-        circuit: Corners of the survey rectangle, room frame (wall-side objects keep clear).
 
     Returns:
         The plan; the same config gives the same plan.
@@ -270,6 +262,7 @@ def plan_walls(cfg: Config, circuit: list[tuple[float, float]]) -> WallPlan:
     # Objects that stand along the walls: filing cabinets (office), clutter on the floor.
     start = cfg.start_pose()
     kinds: list[str] = ["cabinet", "cabinet"] if office else []
+    kinds += ["bookcase"] * (1 if office else 2)  # against the walls, in the camera's band
     kinds += ["bin", "box", "plant"][: int(rng.integers(2, 4))]
     for i, what in enumerate(kinds):
         w = walls[int(rng.integers(0, 4))]
@@ -278,17 +271,17 @@ def plan_walls(cfg: Config, circuit: list[tuple[float, float]]) -> WallPlan:
             "bin": (0.28, 0.28, 0.32),
             "box": (0.4, 0.3, 0.28),
             "plant": (0.3, 0.3, 0.35),
+            "bookcase": (0.9, 0.32, 1.2),
         }[what]
-        a = place(w, width, 0.3, tall=what == "cabinet")
+        a = place(w, width, 0.3, tall=what in ("cabinet", "bookcase"))
         if a is None:
             continue
         body = _wall_box(w, a, height / 2, width, height, depth, size, offset=0.03)
         (cx, cy, _), (hx, hy, _) = body.pos, body.size
         rect = (cx - hx, cy - hy, cx + hx, cy + hy)
-        near_start = math.hypot(cx - start[0], cy - start[1]) < 0.6
-        if near_start or _segment_gap(rect, circuit) < WALL_ITEM_CLEARANCE:
+        if math.hypot(cx - start[0], cy - start[1]) < 0.6:
             continue
-        parts = _object_parts(what, body, rng)
+        parts = () if what == "bookcase" else _object_parts(what, body, rng)
         objects.append((f"{what}_{i}", what, rect, height, parts))
     return WallPlan(tuple(art), tuple(fixtures), tuple(objects))
 

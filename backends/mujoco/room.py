@@ -395,7 +395,10 @@ def _furnished_layout(cfg: Config, rng: np.random.Generator) -> RoomLayout:
     room = cfg.world.room
     size = (float(room.size_m[0]), float(room.size_m[1]))
     office = room.style == "office"
-    plan = interior.plan_walls(cfg, survey_circuit(cfg))
+    plan = interior.plan_walls(cfg)
+    corners = survey_circuit(cfg)
+    loop = list(zip(corners, corners[1:] + corners[:1], strict=True))
+    books = np.random.default_rng([room.seed, 0xB00C])
     posters = []
     depth = POSTER_GAP + POSTER_THICKNESS / 2
     counts = dict.fromkeys(("x0", "x1", "y0", "y1"), 0)
@@ -417,9 +420,18 @@ def _furnished_layout(cfg: Config, rng: np.random.Generator) -> RoomLayout:
     furniture = list(_place_furniture(cfg, rng) if room.furniture else ())
     furniture = [_textured(f) for f in furniture]
     for name, kind, rect, height, boxes in plan.objects:
-        if all(_rect_gap(rect, f.rect) >= 0.1 for f in furniture):
-            parts = tuple(Part(b.kind, b.pos, b.size, b.rgba, b.material) for b in boxes)
-            furniture.append(Furniture(name, kind, rect, height, parts))
+        clear = min(_segment_distance(rect, p, q) for p, q in loop)
+        if clear < interior.WALL_ITEM_CLEARANCE:
+            continue  # the robot walks there
+        if any(_rect_gap(rect, f.rect) < 0.1 for f in furniture):
+            continue
+        if kind == "bookcase":
+            cx, cy = (rect[0] + rect[2]) / 2, (rect[1] + rect[3]) / 2
+            along_x = rect[2] - rect[0] > rect[3] - rect[1]
+            furniture.append(_textured(_shelf(name, cx, cy, along_x, books)))
+            continue
+        parts = tuple(Part(b.kind, b.pos, b.size, b.rgba, b.material) for b in boxes)
+        furniture.append(Furniture(name, kind, rect, height, parts))
     fixtures = tuple(Part(b.kind, b.pos, b.size, b.rgba, b.material) for b in plan.fixtures)
     materials = interior.material_images(room.seed)
     paint_rng = np.random.default_rng([room.seed, 0x7A1])
