@@ -153,6 +153,7 @@ def plan_walls(cfg: Config) -> WallPlan:
         )
 
     low: dict[str, list[tuple[float, float]]] = {w: [] for w in walls}
+    hung: dict[str, list[tuple[float, float]]] = {w: [] for w in walls}  # pictures
 
     def place(w: str, width: float, margin: float = 0.25, tall: bool = True) -> float | None:
         """Find a free place along a wall: tall things block pictures, low ones do not."""
@@ -238,7 +239,7 @@ def plan_walls(cfg: Config) -> WallPlan:
                 )
             gap = 0.12
             span = n * pw + (n - 1) * gap
-            if along + span > length - 0.3 or not _free(used[w], along, along + span):
+            if along + span > length - 0.3 or not _free(used[w] + hung[w], along, along + span):
                 tries += 1
                 if tries >= 4:  # nothing fits here: move on along the wall
                     along, tries = along + 0.15, 0
@@ -256,13 +257,14 @@ def plan_walls(cfg: Config) -> WallPlan:
             for k in range(n):
                 centre = along + pw / 2 + k * (pw + gap)
                 art.append(WallArt(w, centre, zc, pw, ph, image))
-            used[w].append((along, along + span))
+            hung[w].append((along, along + span))
             count += n
             along += span + float(rng.uniform(0.25, 1.1))
     # Objects that stand along the walls: filing cabinets (office), clutter on the floor.
     start = cfg.start_pose()
     kinds: list[str] = ["cabinet", "cabinet"] if office else []
-    kinds += ["bookcase"] * (1 if office else 2)  # against the walls, in the camera's band
+    # Against the walls, in the camera's band: bookcases, sideboards at home, desks at work.
+    kinds += ["bookcase"] * (1 if office else 2) + (["desk"] * 2 if office else ["sideboard"] * 2)
     kinds += ["bin", "box", "plant"][: int(rng.integers(2, 4))]
     for i, what in enumerate(kinds):
         w = walls[int(rng.integers(0, 4))]
@@ -272,6 +274,8 @@ def plan_walls(cfg: Config) -> WallPlan:
             "box": (0.4, 0.3, 0.28),
             "plant": (0.3, 0.3, 0.35),
             "bookcase": (0.9, 0.32, 1.2),
+            "sideboard": (1.2, 0.42, 0.78),
+            "desk": (1.2, 0.6, 0.75),
         }[what]
         a = place(w, width, 0.3, tall=what in ("cabinet", "bookcase"))
         if a is None:
@@ -288,6 +292,10 @@ def plan_walls(cfg: Config) -> WallPlan:
 
 def _object_parts(kind: str, body: Box, rng: np.random.Generator) -> tuple[Box, ...]:
     (cx, cy, cz), (hx, hy, hz) = body.pos, body.size
+    if kind == "sideboard":
+        return _sideboard(body, rng)
+    if kind == "desk":
+        return _desk(body, rng)
     if kind == "cabinet":
         parts = [Box("box", body.pos, body.size, _METAL)]
         for k in range(3):  # drawers with handles
@@ -305,6 +313,150 @@ def _object_parts(kind: str, body: Box, rng: np.random.Generator) -> tuple[Box, 
     pot = Box("cylinder", (cx, cy, 0.12), (r * 0.7, 0.12), (0.6, 0.3, 0.2, 1.0))
     leaves = Box("sphere", (cx, cy, 0.24 + r * 0.6), (r,), (0.15, 0.45, 0.15, 1.0), "fabric")
     return (pot, leaves)
+
+
+def _along(body: Box) -> tuple[int, int]:
+    """Index of the axis along the wall and of the axis into the room for a wall box."""
+    return (0, 1) if body.size[0] >= body.size[1] else (1, 0)
+
+
+def _at(body: Box, along: float, depth: float, z: float) -> tuple[float, float, float]:
+    """A point of a wall box: ``along`` and ``depth`` in [-1, 1] of its half sizes, z (m)."""
+    a, d = _along(body)
+    p = [body.pos[0], body.pos[1], z]
+    p[a] += along * body.size[a]
+    p[d] += depth * body.size[d]
+    return (p[0], p[1], p[2])
+
+
+def _half(body: Box, along: float, depth: float, up: float) -> tuple[float, float, float]:
+    a, _ = _along(body)
+    return (along, depth, up) if a == 0 else (depth, along, up)
+
+
+def _colour(rng: np.random.Generator, lo: float, hi: float) -> tuple[float, float, float, float]:
+    r, g, b = (float(c) for c in rng.uniform(lo, hi, 3))
+    return (r, g, b, 1.0)
+
+
+def _sideboard(body: Box, rng: np.random.Generator) -> tuple[Box, ...]:
+    """A low wooden sideboard with doors, books, a vase and a lamp on top."""
+    hz = body.size[2]
+    white = (1.0, 1.0, 1.0, 1.0)
+    parts = [Box("box", (body.pos[0], body.pos[1], hz), body.size, white, "wood")]
+    for k in (-0.5, 0.5):  # two doors with knobs
+        parts.append(
+            Box(
+                "box",
+                _at(body, k, 1.0, hz),
+                _half(body, 0.28, 0.006, hz * 0.8),
+                (0.75, 0.6, 0.45, 1.0),
+                "wood",
+            )
+        )
+        parts.append(
+            Box("sphere", _at(body, k * 0.2, 1.05, hz * 1.1), (0.015,), (0.8, 0.7, 0.3, 1))
+        )
+    top = 2 * hz
+    u = -0.9
+    while u < -0.2:  # a row of books
+        w = float(rng.uniform(0.02, 0.05))
+        h = float(rng.uniform(0.15, 0.28))
+        colour = _colour(rng, 0.05, 0.9)
+        parts.append(
+            Box("box", _at(body, u, 0.0, top + h / 2), _half(body, w / 2, 0.1, h / 2), colour)
+        )
+        u += (w + 0.005) / body.size[_along(body)[0]]
+    vase = _colour(rng, 0.1, 0.9)
+    parts.append(Box("cylinder", _at(body, 0.2, 0.0, top + 0.12), (0.06, 0.12), vase))
+    parts.append(Box("cylinder", _at(body, 0.7, 0.0, top + 0.2), (0.012, 0.2), (0.2, 0.2, 0.2, 1)))
+    parts.append(
+        Box(
+            "cylinder", _at(body, 0.7, 0.0, top + 0.42), (0.12, 0.08), (0.95, 0.9, 0.8, 1), "fabric"
+        )
+    )
+    return tuple(parts)
+
+
+def _desk(body: Box, rng: np.random.Generator) -> tuple[Box, ...]:
+    """A desk with a monitor (showing a screen), keyboard, papers and a mug."""
+    hz = body.size[2]
+    top = 2 * hz
+    parts = [
+        Box(
+            "box",
+            _at(body, 0.0, 0.0, top - 0.02),
+            _half(body, body.size[_along(body)[0]], body.size[_along(body)[1]], 0.02),
+            (1.0, 1.0, 1.0, 1.0),
+            "wood",
+        )
+    ]
+    for a in (-0.95, 0.95):
+        for d in (-0.85, 0.85):
+            parts.append(
+                Box(
+                    "box",
+                    _at(body, a, d, (top - 0.04) / 2),
+                    _half(body, 0.02, 0.02, (top - 0.04) / 2),
+                    (0.3, 0.3, 0.32, 1.0),
+                )
+            )
+    parts.append(
+        Box(
+            "box",
+            _at(body, 0.0, -0.5, top + 0.28),
+            _half(body, 0.27, 0.015, 0.17),
+            (1.0, 1.0, 1.0, 1.0),
+            "screen",
+        )
+    )
+    parts.append(
+        Box(
+            "box",
+            _at(body, 0.0, -0.6, top + 0.06),
+            _half(body, 0.03, 0.02, 0.06),
+            (0.1, 0.1, 0.1, 1.0),
+        )
+    )
+    parts.append(
+        Box(
+            "box",
+            _at(body, 0.0, 0.4, top + 0.01),
+            _half(body, 0.22, 0.07, 0.01),
+            (0.12, 0.12, 0.13, 1.0),
+        )
+    )
+    for k in range(int(rng.integers(1, 4))):
+        u = float(rng.uniform(-0.9, -0.5)) if k % 2 == 0 else float(rng.uniform(0.5, 0.9))
+        parts.append(
+            Box(
+                "box",
+                _at(body, u, float(rng.uniform(-0.3, 0.5)), top + 0.002 + 0.002 * k),
+                _half(body, 0.105, 0.148, 0.002),
+                (0.97, 0.97, 0.95, 1.0),
+            )
+        )
+    mug = _colour(rng, 0.1, 0.9)
+    parts.append(Box("cylinder", _at(body, 0.75, 0.3, top + 0.05), (0.04, 0.05), mug))
+    return tuple(parts)
+
+
+def _screen(rng: np.random.Generator) -> np.ndarray:
+    """What a monitor shows: windows with title bars, text lines, a picture."""
+    import cv2
+
+    w, h = 320, 200
+    img = np.full((h, w, 3), (40, 70, 110), np.uint8)
+    for _ in range(3):
+        x0, y0 = int(rng.integers(0, w // 2)), int(rng.integers(0, h // 2))
+        x1, y1 = x0 + int(rng.integers(80, 180)), y0 + int(rng.integers(60, 120))
+        cv2.rectangle(img, (x0, y0), (x1, y1), (235, 235, 235), -1)
+        cv2.rectangle(img, (x0, y0), (x1, y0 + 10), (60, 60, 160), -1)
+        for y in range(y0 + 16, y1 - 4, 7):
+            cv2.line(
+                img, (x0 + 4, y), (x0 + 4 + int(rng.integers(20, x1 - x0 - 8)), y), (50, 50, 50), 1
+            )
+    return img
 
 
 def _board(rng: np.random.Generator, width_m: float, height_m: float, white: bool) -> np.ndarray:
@@ -376,4 +528,5 @@ def material_images(seed: int) -> dict[str, np.ndarray]:
     for k in range(0, 256, 128):  # carpet tiles, 0.5 m
         carpet[k, :] = carpet[:, k] = (85, 90, 98)
     out["carpet"] = carpet
+    out["screen"] = _screen(rng)
     return out

@@ -495,8 +495,11 @@ def room_mjcf(layout: RoomLayout, timestep: float) -> str:
         assets.append(
             f'<texture name="{name}" type="2d" builtin="flat" width="{tw}" height="{th}"/>'
         )
-        if name == "window":  # daylight: the glass glows, brighter than anything lit
-            assets.append(f'<material name="{name}" texture="{name}" emission="1" specular="0"/>')
+        if name in ("window", "screen"):  # daylight and a monitor glow: brighter than lit
+            glow = 1 if name == "window" else 0.6
+            assets.append(
+                f'<material name="{name}" texture="{name}" emission="{glow}" specular="0"/>'
+            )
         else:
             assets.append(
                 f'<material name="{name}" texture="{name}" texuniform="true" texrepeat="3 3" '
