@@ -193,22 +193,28 @@ def _lens_maps(
     return mx.astype(np.float32), my.astype(np.float32), fc
 
 
-def _line_kernel(du: float, dv: float) -> np.ndarray:
-    """A normalised kernel that smears along the segment ``(-du/2, -dv/2)..(du/2, dv/2)``."""
+def motion_blur(img: np.ndarray, du: float, dv: float) -> np.ndarray:
+    """Smear an image along the segment ``(du, dv)`` pixels long (a moving camera's blur).
+
+    A box blur of the segment's length along its direction: directly when the motion is
+    within 10 degrees of horizontal or vertical (a panning or tilting head), else on the
+    image rotated so that the motion is horizontal, and rotated back.
+    """
     length = math.hypot(du, dv)
-    half = math.ceil(length / 2.0) + 1
-    size = 2 * half + 1
-    kernel = np.zeros((size, size), np.float32)
-    for t in np.linspace(-0.5, 0.5, max(3, int(length * 4) + 1)):
-        x, y = half + t * du, half + t * dv
-        x0, y0 = math.floor(x), math.floor(y)
-        fx, fy = x - x0, y - y0
-        kernel[y0, x0] += (1 - fx) * (1 - fy)
-        kernel[y0, x0 + 1] += fx * (1 - fy)
-        kernel[y0 + 1, x0] += (1 - fx) * fy
-        kernel[y0 + 1, x0 + 1] += fx * fy
-    kernel /= kernel.sum()
-    return kernel
+    n = max(1, round(length))
+    if n < 2:
+        return img
+    ang = math.atan2(dv, du)
+    if abs(math.sin(ang)) < 0.17:
+        return cv2.blur(img, (n, 1), borderType=cv2.BORDER_REPLICATE)
+    if abs(math.cos(ang)) < 0.17:
+        return cv2.blur(img, (1, n), borderType=cv2.BORDER_REPLICATE)
+    h, w = img.shape[:2]
+    rot = cv2.getRotationMatrix2D((w / 2 - 0.5, h / 2 - 0.5), math.degrees(ang), 1.0)
+    flat = cv2.warpAffine(img, rot, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    flat = cv2.blur(flat, (n, 1), borderType=cv2.BORDER_REFLECT)
+    back = cv2.invertAffineTransform(rot)
+    return cv2.warpAffine(flat, back, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
 
 
 class CameraModel:
@@ -362,8 +368,7 @@ class CameraModel:
             img = cv2.remap(img, *geo.fixed, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         if s.motion_blur:
             du, dv = flow[0] * self.exposure_s, flow[1] * self.exposure_s
-            if math.hypot(du, dv) >= 0.75:
-                img = cv2.filter2D(img, -1, _line_kernel(du, dv), borderType=cv2.BORDER_REPLICATE)
+            img = motion_blur(img, du, dv)
         if s.blur_px > 0:
             img = cv2.GaussianBlur(img, (0, 0), s.blur_px)
 
