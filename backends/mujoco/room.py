@@ -419,7 +419,7 @@ def _furnished_layout(cfg: Config, rng: np.random.Generator) -> RoomLayout:
         )
     furniture = list(_place_furniture(cfg, rng) if room.furniture else ())
     furniture = [_textured(f) for f in furniture]
-    for name, kind, rect, height, boxes in plan.objects:
+    for name, kind, rect, height, boxes in plan.objects if room.furniture else ():
         clear = min(_segment_distance(rect, p, q) for p, q in loop)
         if clear < interior.WALL_ITEM_CLEARANCE:
             continue  # the robot walks there
