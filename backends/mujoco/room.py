@@ -2,8 +2,11 @@
 
 Room frame: origin at a room corner, x and y along the walls, z up, metres. The inner
 floor is ``[0, sx] x [0, sy]``. Walls are named by the coordinate they stand at: ``x0``
-(x = 0), ``x1`` (x = sx), ``y0`` (y = 0), ``y1`` (y = sy). Posters hang on the inside of
-the walls around the camera's height (about 0.5 m); furniture stands in the middle of the
+(x = 0), ``x1`` (x = sx), ``y0`` (y = 0), ``y1`` (y = sy). ``world.room.style: posters``:
+posters hang on the inside of the walls around the camera's height (about 0.5 m), as in
+earlier versions; ``home`` and ``office``: pictures hang at real heights and the walls get
+doors, windows, radiators, sockets, skirting and wall-side furniture (``interior.py``).
+Furniture stands in the middle of the
 room, clear of the survey circuit (by 0.45 m), of the start pose and of the room's centre
 (by 0.5 m) and, whenever the room is large enough, of the band 0.6-1.4 m from the walls
 where the ``random`` evaluation protocol draws poses.
