@@ -17,7 +17,7 @@ from naoloc.mapping.localizer import no_estimate
 
 pytest.importorskip("naoloc.backends.fake")
 
-ROOM = {"size_m": [3.0, 3.0], "seed": 5}
+ROOM = {"size_m": [3.0, 3.0], "seed": 5, "style": "posters"}
 BASE = {
     "robot": {"backend": "fake"},
     # Exact odometry: a drifting survey walks into the wall of this small room; this test is
@@ -30,7 +30,11 @@ BASE = {
 
 def _cfg(path: Path, room: dict[str, object]) -> Path:
     data = {k: v for k, v in BASE.items() if k != "world_odometry"}
-    data["world"] = {"room": room, "odometry": BASE["world_odometry"]}
+    data["world"] = {
+        "room": room,
+        "odometry": BASE["world_odometry"],
+        "camera_realism": {"profile": "ideal"},  # the subject is the answer, not the camera
+    }
     path.write_text(yaml.safe_dump(data))
     return path
 

@@ -30,7 +30,11 @@ SMALL = {
     "robot": {"backend": "fake"},
     # Exact odometry: a NAO's drifting survey walks into the wall of this small room, and
     # these tests are about outputs, not odometry.
-    "world": {"room": {"size_m": [3.0, 3.0], "seed": 5}, "odometry": {"profile": "ideal"}},
+    "world": {
+        "room": {"size_m": [3.0, 3.0], "seed": 5, "style": "posters"},
+        "camera_realism": {"profile": "ideal"},
+        "odometry": {"profile": "ideal"},
+    },
     "survey": {"laps": 1, "step_m": 0.25, "wall_offset_m": 0.75},
     "map": {"neurons": 40, "epochs": 30, "vocabulary_size": 64},
     "go_home": {"tolerance_m": 0.15, "max_tries": 2},
@@ -246,7 +250,12 @@ def test_password_reaches_no_evaluation_output(
 ) -> None:
     tiny = {
         "robot": {"backend": "fake", "password": SECRET},
-        "world": {"room": {"size_m": [3.2, 3.2], "seed": 5}},
+        # The pre-issue-11 world: this test is about secrets, not realism.
+        "world": {
+            "room": {"size_m": [3.2, 3.2], "seed": 5, "style": "posters"},
+            "camera_realism": {"profile": "ideal"},
+            "odometry": {"profile": "ideal"},
+        },
         "survey": {"laps": 1, "step_m": 0.3, "wall_offset_m": 0.9},
         "map": {"neurons": 12, "epochs": 12, "vocabulary_size": 48},
     }
