@@ -212,7 +212,7 @@ def build_map(
     vocab = train_vocabulary(
         [f.descriptors for f in feats], cfg.vocabulary_size, extractor.binary, cfg.seed
     )
-    hists = np.stack([vocab.histogram(f.descriptors) for f in feats])
+    hists = vocab.histograms([f.descriptors for f in feats])
     report("vocabulary", 1, 1)
     t2 = time.perf_counter()
     gcs = train_gcs(hists, cfg.neurons, cfg.epochs, cfg.seed)
