@@ -15,11 +15,12 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
+from naoloc.config import PoseGraphTuning
+from naoloc.geometry import robot_matrix
 from naoloc.keyframe import CameraInfo, camera_in_robot
-from naoloc.mapping.bundle import bundle_adjust, tracks_from_links
-from naoloc.mapping.landmarks import camera_matrix_in_map, robot_matrix, triangulate
+from naoloc.mapping.bundle import BundleProblem, bundle_adjust, tracks_from_links
+from naoloc.mapping.landmarks import camera_matrix_in_map, triangulate
 from naoloc.mapping.posegraph import (
-    SIGMA_BIAS_PRIOR,
     Edge,
     graph_system,
     odometry_edges,
@@ -29,6 +30,7 @@ from naoloc.mapping.posegraph import (
     solve_pose_graph,
 )
 
+SIGMA_BIAS_PRIOR = PoseGraphTuning().sigma_bias_prior
 HEAD = (-math.pi / 2, 0.1)  # HeadYaw (right), HeadPitch (rad)
 CAM = CameraInfo(320, 240, math.radians(56.3), math.radians(43.7), 0)
 BIAS = 0.01  # rad/m, twice the simulators' default
@@ -238,8 +240,9 @@ def test_refine_and_bundle_adjust_beat_odometry(scene: Scene) -> None:
     frame = np.repeat(np.arange(n), [len(a) for a in scene.xy])
     tracks = tracks_from_links(kp_xy.shape[0], lm.matches)
     odo_edges = [e for e in refined.edges if e.odometry]
-    ba = bundle_adjust(refined.poses, heads, [0] * n, k, kp_xy, frame, tracks, lm.points,
-                       odo_edges, refined.heading_bias)  # fmt: skip
+    problem = BundleProblem(refined.poses, heads, [0] * n, k, kp_xy, frame, tracks, lm.points,
+                            odo_edges)  # fmt: skip
+    ba = bundle_adjust(problem, heading_bias=refined.heading_bias)
     assert ba.long_tracks > 50
     assert ba.rms_px < 1.0
     np.testing.assert_allclose(ba.poses[0], refined.poses[0], atol=1e-6)
@@ -262,11 +265,11 @@ def test_long_tracks_count_only_tracks_that_tie_the_laps(scene: Scene) -> None:
     lap = frame // 80
     same_lap = lm.matches[lap[lm.matches[:, 0]] == lap[lm.matches[:, 1]]]
     edges = odometry_edges(scene.truth)
-    both = bundle_adjust(scene.truth, heads, [0] * n, k, kp_xy, frame,
-                         tracks_from_links(kp_xy.shape[0], lm.matches), lm.points, edges,
-                         iterations=1, long_gap=40)  # fmt: skip
-    within = bundle_adjust(scene.truth, heads, [0] * n, k, kp_xy, frame,
-                           tracks_from_links(kp_xy.shape[0], same_lap), lm.points, edges,
-                           iterations=1, long_gap=40)  # fmt: skip
+    both = bundle_adjust(BundleProblem(scene.truth, heads, [0] * n, k, kp_xy, frame,
+                                       tracks_from_links(kp_xy.shape[0], lm.matches),
+                                       lm.points, edges), iterations=1, long_gap=40)  # fmt: skip
+    within = bundle_adjust(BundleProblem(scene.truth, heads, [0] * n, k, kp_xy, frame,
+                                         tracks_from_links(kp_xy.shape[0], same_lap),
+                                         lm.points, edges), iterations=1, long_gap=40)  # fmt: skip
     assert both.long_tracks > 100
     assert within.long_tracks < 0.1 * both.long_tracks

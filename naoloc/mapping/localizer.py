@@ -18,21 +18,58 @@ taken (metres, radians).
 
 from __future__ import annotations
 
+import enum
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from naoloc.geometry import Pose2D, modulo2PI, relative_pose
-from naoloc.keyframe import CameraInfo, Keyframe, camera_in_robot
-from naoloc.mapping.features import Features
-from naoloc.mapping.landmarks import hamming_matcher, planar_pose, ratio_matches, robot_matrix
+from naoloc.errors import NaolocError
+from naoloc.geometry import Pose2D, circular_mean, modulo2PI, relative_pose
+from naoloc.keyframe import Keyframe, camera_in_robot
+from naoloc.mapping.data import MapData
+from naoloc.mapping.features import FeatureExtractor, Features
+from naoloc.mapping.landmarks import (
+    hamming_matcher,
+    planar_pose,
+    query_camera,
+    ratio_matches,
+    robot_matrix,
+)
+from naoloc.mapping.planar import solve_planar
 from naoloc.mapping.vocabulary import dbow_scores
 
-if TYPE_CHECKING:
-    from naoloc.mapping.map import VisualMap
+__all__ = [
+    "CONFIDENT",
+    "Estimate",
+    "LocalizeMode",
+    "LocalizeStrategy",
+    "localize_features",
+    "localize_paper",
+    "localize_verified",
+    "map_extractor",
+    "query_camera",
+]
+
+#: The map type the localizer reads (plain data; naoloc.mapping.VisualMap is one).
+VisualMap = MapData
+
+
+class LocalizeMode(enum.StrEnum):
+    """How a pose is estimated from query images (a ``str``: ``"paper"`` == PAPER)."""
+
+    VERIFIED = "verified"  # retrieval + landmark PnP + joint refinement (module doc)
+    PAPER = "paper"  # Algorithm 5: the GCS winners' mean pose
+
+
+class LocalizeStrategy(enum.StrEnum):
+    """How the localize behaviour takes its query pictures."""
+
+    SCAN = "scan"  # a head sweep (and quarter turns in place while unsure)
+    PAPER = "paper"  # the paper's 1-2 pictures towards the nearest wall
+
 
 MIN_PNP_INLIERS = 10
 PNP_REPROJECTION_PX = 4.0
@@ -73,17 +110,41 @@ class Estimate:
         return Pose2D(self.x, self.y, self.theta)
 
 
-def query_camera(kf: Keyframe) -> CameraInfo:
-    """The keyframe's camera model at the keyframe's actual image size."""
-    h, w = kf.image.shape[:2]
-    cam = kf.camera
-    return cam if (cam.width, cam.height) == (w, h) else cam.scaled(w, h)
-
-
-def _circular_mean(angles: np.ndarray, weights: np.ndarray) -> float:
-    return math.atan2(
-        float(np.sum(weights * np.sin(angles))), float(np.sum(weights * np.cos(angles)))
+def map_extractor(vmap: MapData) -> FeatureExtractor:
+    """A feature extractor with the parameters the map was built with."""
+    p = vmap.feature_params
+    return FeatureExtractor(
+        p["kind"], int(p.get("max_features", 0)), float(p.get("akaze_threshold", 0.001))
     )
+
+
+def localize_features(
+    vmap: MapData,
+    feats: Sequence[Features],
+    queries: Sequence[Keyframe],
+    mode: LocalizeMode | str = LocalizeMode.VERIFIED,
+) -> Estimate:
+    """Estimate the pose at the last query from the queries' features (see module doc).
+
+    Args:
+        vmap: The map.
+        feats: Features of each query, extracted with the map's extractor.
+        queries: The query images (odometry poses and head angles).
+        mode: ``verified`` (default) or ``paper``.
+
+    Raises:
+        NaolocError: On an unknown mode or no queries.
+    """
+    try:
+        chosen = LocalizeMode(mode)
+    except ValueError:
+        valid = ", ".join(m.value for m in LocalizeMode)
+        raise NaolocError(f"unknown localize mode {mode!r}; valid: {valid}") from None
+    if not queries or len(feats) != len(queries):
+        raise NaolocError("localize needs at least one query image and one feature set each")
+    if chosen is LocalizeMode.PAPER:
+        return localize_paper(vmap, feats, queries)
+    return localize_verified(vmap, feats, queries)
 
 
 def _to_last(queries: Sequence[Keyframe]) -> list[np.ndarray]:
@@ -151,7 +212,7 @@ def localize_paper(
         headings.append(theta_q + math.atan2(to_last[i][1, 0], to_last[i][0, 0]))
         closeness.append(max(0.0, 1.0 - math.sqrt(float(d2[j])) / math.sqrt(2.0)))
     conf = len(usable) / len(feats) * float(np.mean(closeness))
-    theta = _circular_mean(np.asarray(headings), np.ones(len(headings)))
+    theta = circular_mean(np.asarray(headings), np.ones(len(headings)))
     return Estimate(
         float(np.mean(xs)),
         float(np.mean(ys)),
@@ -198,23 +259,19 @@ def _residuals(pose: np.ndarray, mats: np.ndarray, pts: np.ndarray, px: np.ndarr
 
 
 def _refine(pose: np.ndarray, mats: np.ndarray, pts: np.ndarray, px: np.ndarray) -> np.ndarray:
-    """Gauss-Newton on (x, y, theta) over the given correspondences (numeric Jacobian)."""
-    p = pose.astype(np.float64).copy()
-    for _ in range(6):
-        uv, _z = _project(p, mats, pts)
-        r = (uv - px).ravel()
-        jac = np.empty((r.size, 3))
-        for k, step in enumerate((1e-4, 1e-4, 1e-4)):
-            dp = p.copy()
-            dp[k] += step
-            jac[:, k] = ((_project(dp, mats, pts)[0] - px).ravel() - r) / step
-        if not np.isfinite(jac).all() or not np.isfinite(r).all():
-            break
-        delta, *_ = np.linalg.lstsq(jac, -r, rcond=None)
-        p += delta
-        if np.abs(delta).max() < 1e-6:
-            break
-    return p
+    """Gauss-Newton on (x, y, theta) over the given correspondences (naoloc.mapping.planar)."""
+
+    def at(p: np.ndarray) -> np.ndarray:
+        return (_project(p, mats, pts)[0] - px).ravel()
+
+    def linearise(p: np.ndarray) -> tuple[np.ndarray, Callable[[np.ndarray], np.ndarray]]:
+        return at(p), at
+
+    fit = solve_planar(
+        linearise, pose, iterations=6, fd_step=1e-4, tol=1e-6, stop_on_nonfinite=True
+    )
+    assert fit is not None  # linearise never gives up
+    return fit.x
 
 
 def crowded_landmarks(vmap: VisualMap, x: float, y: float) -> int:
@@ -427,7 +484,7 @@ def _fallback(
     return Estimate(
         float(np.average(xs, weights=w)),
         float(np.average(ys, weights=w)),
-        modulo2PI(_circular_mean(np.asarray(ths), w)),
+        modulo2PI(circular_mean(np.asarray(ths), w)),
         conf,
         "verified",
         details,

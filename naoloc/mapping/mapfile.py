@@ -1,6 +1,6 @@
 """The map file: one ``.npz`` (zip of ``.npy`` arrays) with JSON metadata inside.
 
-Layout: every numeric array of :class:`~naoloc.mapping.map.VisualMap` under its own name,
+Layout: every numeric array of :class:`~naoloc.mapping.data.MapData` under its own name,
 plus ``meta_json``: a uint8 array holding UTF-8 JSON with the format tag and version, the
 feature parameters, the training config, the user metadata, the timings and a SHA-256
 checksum over every array (name, dtype, shape and bytes). Files are written
@@ -25,11 +25,11 @@ from typing import Any
 
 import numpy as np
 
+import naoloc.mapping.mapcheck as mapcheck
 from naoloc.config import MapConfig
 from naoloc.errors import MapFormatError, NaolocError
-from naoloc.mapping import mapcheck
+from naoloc.mapping.data import MapData
 from naoloc.mapping.gcs import GCSNetwork
-from naoloc.mapping.map import VisualMap
 from naoloc.mapping.vocabulary import Vocabulary
 
 FORMAT_TAG = "naoloc-map"
@@ -37,7 +37,7 @@ FORMAT_VERSION = 1
 _ZIP_TIME = (1980, 1, 1, 0, 0, 0)
 
 
-def _arrays_of(vmap: VisualMap) -> dict[str, np.ndarray]:
+def _arrays_of(vmap: MapData) -> dict[str, np.ndarray]:
     return {
         "vocab_centres": vmap.vocabulary.centres,
         "vocab_idf": vmap.vocabulary.idf,
@@ -68,7 +68,7 @@ def checksum(arrays: dict[str, np.ndarray]) -> str:
     return h.hexdigest()
 
 
-def map_bytes(vmap: VisualMap) -> bytes:
+def map_bytes(vmap: MapData) -> bytes:
     """The map file's bytes (deterministic for a given map)."""
     arrays = {k: np.ascontiguousarray(v) for k, v in _arrays_of(vmap).items()}
     meta = {
@@ -97,7 +97,7 @@ def map_bytes(vmap: VisualMap) -> bytes:
     return buf.getvalue()
 
 
-def save_map(vmap: VisualMap, path: str | Path) -> None:
+def save_map(vmap: MapData, path: str | Path) -> None:
     """Write a map file.
 
     Raises:
@@ -177,7 +177,7 @@ def _consistent(a: dict[str, np.ndarray], name: str) -> None:
             raise _fail(name, why)
 
 
-def load_map(source: str | Path | bytes) -> VisualMap:
+def read_map(source: str | Path | bytes) -> MapData:
     """Read a map file (or its bytes).
 
     Raises:
@@ -213,7 +213,7 @@ def load_map(source: str | Path | bytes) -> VisualMap:
         arrays["gcs_weights"], arrays["gcs_triangles"], int(counts[0]), int(counts[1]),
         int(counts[2]),
     )  # fmt: skip
-    return VisualMap(
+    return MapData(
         config=config,
         meta=user_meta,
         feature_params=dict(features),
