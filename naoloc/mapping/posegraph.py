@@ -97,7 +97,7 @@ class RefinedPoses:
     edges: tuple[Edge, ...] = ()
 
 
-def _edge_terms(
+def edge_terms(
     x: np.ndarray, edges: Sequence[Edge], bias: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Residuals and Jacobians of all edges at once.
@@ -199,7 +199,7 @@ def graph_cost(
     """
     cost = (bias / sigma_bias_prior) ** 2
     if edges:
-        r, _, _, _ = _edge_terms(x, edges, bias)
+        r, _, _, _ = edge_terms(x, edges, bias)
         info = np.stack([e.info for e in edges])
         cost += float(np.einsum("ei,eij,ej->", r, info, r))
     return cost
@@ -242,7 +242,7 @@ def graph_system(
     ia = np.array([e.a for e in edges], np.int64)
     ib = np.array([e.b for e in edges], np.int64)
     info = np.stack([e.info for e in edges])
-    r, ja, jb, jbias = _edge_terms(x, edges, bias)
+    r, ja, jb, jbias = edge_terms(x, edges, bias)
     if huber_k is not None:
         loop = np.array([not e.odometry for e in edges])
         chi2 = np.einsum("ei,eij,ej->e", r, info, r)
