@@ -21,7 +21,7 @@ descriptors (A-KAZE of ``--dataset``, or of a 200-image survey of the fake backe
 alternating old and new; prints best-of-N times, the ratio, and whether centres, IDF, every
 word assignment and every histogram are identical. Then it builds the whole map with the
 old revision (in a subprocess, from ``git archive``) and with the current code and compares
-every array of the two map files.
+every array and the metadata of the two map files.
 """
 
 from __future__ import annotations
@@ -214,18 +214,29 @@ def bench_vocabulary(args: argparse.Namespace) -> None:
     new_path.write_bytes(map_bytes(vm))
     old_map, new_map = load_map(old_path), load_map(new_path)
     fields = [
-        "neuron_poses", "keyframe_poses", "refined_poses", "histograms", "winners",
-        "kp_points", "kp_desc", "kp_xy",
+        "neuron_poses", "neuron_views", "keyframe_poses", "refined_poses", "keyframe_heads",
+        "keyframe_cameras", "histograms", "winners", "kp_offsets", "kp_points", "kp_desc",
+        "kp_xy",
     ]  # fmt: skip
     diff = [
         f
         for f in fields
         if not np.array_equal(getattr(old_map, f), getattr(new_map, f), equal_nan=True)
     ]
-    identical = old_path.read_bytes() == new_path.read_bytes()
+    for name, a, b in (
+        ("vocabulary", old_map.vocabulary.centres, new_map.vocabulary.centres),
+        ("idf", old_map.vocabulary.idf, new_map.vocabulary.idf),
+        ("gcs", old_map.gcs.weights, new_map.gcs.weights),
+    ):
+        if not np.array_equal(a, b):
+            diff.append(name)
+    old_cfg = old_map.config.model_dump()  # the old file has no tuning: read as the defaults
+    new_cfg = new_map.config.model_dump()
+    same_meta = old_map.meta == new_map.meta and old_map.feature_params == new_map.feature_params
     print(
-        f"  whole map, old vs new build: files byte-identical (timings left out): {identical}; "
-        f"arrays that differ: {diff or 'none'}; vocabulary_s of the new build "
+        f"  whole map, old vs new build: arrays that differ: {diff or 'none'}; metadata "
+        f"identical: {same_meta}; config identical (the new tuning block at its defaults): "
+        f"{old_cfg == new_cfg}; vocabulary_s of a new build "
         f"{build_map(keyframes, cfg).timings['vocabulary_s']:.3f} s"
     )
 
