@@ -281,12 +281,41 @@ class BundleTuning(_Model):
     )
 
 
+class LocalizerTuning(_Model):
+    """The verified localizer (naoloc.mapping.localizer)."""
+
+    candidates: int = Field(5, ge=1, description="keyframes retrieved per query (TF-IDF)")
+    min_pnp_inliers: int = Field(10, ge=4, description="least inliers of a PnP pose")
+    pnp_reprojection_px: float = Field(4.0, gt=0, description="inlier threshold of PnP (px)")
+    pnp_iterations: int = Field(100, ge=1, description="RANSAC iterations of PnP per query")
+    camera_height_tolerance_m: float = Field(
+        0.3, gt=0, description="largest difference of a PnP camera from the head's height (m)"
+    )
+    confidence_scale: float = Field(
+        25.0, gt=0, description="inliers at which the confidence reaches 1 - 1/e"
+    )
+    confident_inliers: float = Field(
+        40.0, gt=0, description="inliers of a confident estimate (behaviours may stop looking)"
+    )
+    fallback_max_confidence: float = Field(
+        0.3, ge=0, le=1, description="confidence cap of the unverified keyframe fallback"
+    )
+    fallback_epipolar_px: float = Field(
+        3.0, gt=0, description="fundamental-matrix RANSAC threshold of the fallback (px)"
+    )
+    clearance_m: float = Field(0.25, gt=0, description="radius of the robot's free body (m)")
+    clearance_max_landmarks: int = Field(
+        4, ge=0, description="landmarks inside the body (0-3 m up) that make a pose implausible"
+    )
+
+
 class MapTuning(_Model):
-    """Tuning of map building (landmarks, pose graph, bundle adjustment)."""
+    """Tuning of map building (landmarks, pose graph, bundle adjustment) and localizing."""
 
     landmarks: LandmarkTuning = LandmarkTuning()
     pose_graph: PoseGraphTuning = PoseGraphTuning()
     bundle: BundleTuning = BundleTuning()
+    localizer: LocalizerTuning = LocalizerTuning()
 
 
 class MapConfig(_Model):
@@ -297,7 +326,9 @@ class MapConfig(_Model):
     epochs: int = Field(300, ge=1, le=10000, description="passes over the training images")
     seed: int = Field(0, ge=0, description="seed of vocabulary and GCS")
     vocabulary_size: int = Field(256, ge=8, le=4096, description="visual words")
-    tuning: MapTuning = Field(MapTuning(), description="landmark, pose-graph and bundle tuning")
+    tuning: MapTuning = Field(
+        MapTuning(), description="landmark, pose-graph, bundle and localizer tuning"
+    )
 
 
 class LocalizeConfig(_Model):

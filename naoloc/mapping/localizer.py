@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from naoloc.config import LocalizerTuning
 from naoloc.errors import NaolocError
 from naoloc.geometry import Pose2D, circular_mean, modulo2PI, relative_pose
 from naoloc.keyframe import Keyframe, camera_in_robot
@@ -71,18 +72,15 @@ class LocalizeStrategy(enum.StrEnum):
     PAPER = "paper"  # the paper's 1-2 pictures towards the nearest wall
 
 
-MIN_PNP_INLIERS = 10
-PNP_REPROJECTION_PX = 4.0
-CAMERA_HEIGHT_TOLERANCE_M = 0.3
-CONFIDENCE_SCALE = 25.0  # inliers at which confidence reaches 1 - 1/e
+#: Defaults of ``MapConfig.tuning.localizer`` (the map's own config is what is used).
+DEFAULTS = LocalizerTuning()
 #: A PnP estimate with at least this confidence (40 inliers) is "confident": behaviours may
 #: stop looking. Unverified fallbacks never reach it (capped at FALLBACK_MAX_CONFIDENCE).
-CONFIDENT = 1.0 - math.exp(-40.0 / CONFIDENCE_SCALE)
-FALLBACK_MAX_CONFIDENCE = 0.3
+CONFIDENT = 1.0 - math.exp(-DEFAULTS.confident_inliers / DEFAULTS.confidence_scale)
+FALLBACK_MAX_CONFIDENCE = DEFAULTS.fallback_max_confidence
 #: Plausibility of a pose: no more than CLEARANCE_MAX_LANDMARKS landmarks (between the floor
-#: and 3 m up) closer than CLEARANCE_M to the robot's centre, which cannot stand in a wall.
-CLEARANCE_M = 0.25
-CLEARANCE_MAX_LANDMARKS = 4
+#: and 3 m up) closer than the clearance radius to the robot's centre.
+CLEARANCE_MAX_LANDMARKS = DEFAULTS.clearance_max_landmarks
 
 
 @dataclass(frozen=True)
@@ -275,15 +273,16 @@ def _refine(pose: np.ndarray, mats: np.ndarray, pts: np.ndarray, px: np.ndarray)
 
 
 def crowded_landmarks(vmap: VisualMap, x: float, y: float) -> int:
-    """Landmarks (0.05-3 m above the floor) closer than CLEARANCE_M to ``(x, y)`` (map frame).
+    """Landmarks (0.05-3 m above the floor) closer than the clearance radius to ``(x, y)``.
 
     A robot stands in free space: a pose with many landmarks within its body is a wrong one
     (e.g. PnP on a repeated poster that puts the robot in a wall).
     """
     p = vmap.kp_points
-    near = (np.abs(p[:, 0] - x) < CLEARANCE_M) & (np.abs(p[:, 1] - y) < CLEARANCE_M)
+    r = vmap.config.tuning.localizer.clearance_m
+    near = (np.abs(p[:, 0] - x) < r) & (np.abs(p[:, 1] - y) < r)
     q = p[near]
-    ok = (np.hypot(q[:, 0] - x, q[:, 1] - y) < CLEARANCE_M) & (q[:, 2] > 0.05) & (q[:, 2] < 3.0)
+    ok = (np.hypot(q[:, 0] - x, q[:, 1] - y) < r) & (q[:, 2] > 0.05) & (q[:, 2] < 3.0)
     return int(ok.sum())
 
 
@@ -299,11 +298,12 @@ def _best_plausible(
     Returns:
         The refined last-robot pose, its inlier mask over all correspondences and the number
         of implausible hypotheses passed over; None when no hypothesis reaches
-        MIN_PNP_INLIERS at a plausible pose.
+        ``min_pnp_inliers`` at a plausible pose.
     """
+    tun = vmap.config.tuning.localizer
     scored = []
     for h in hypotheses:
-        inl = _residuals(h, mm, pts, px) < PNP_REPROJECTION_PX
+        inl = _residuals(h, mm, pts, px) < tun.pnp_reprojection_px
         scored.append((int(inl.sum()), h, inl))
     scored.sort(key=lambda t: -t[0])
     rejected = 0
@@ -316,10 +316,10 @@ def _best_plausible(
             if inl.sum() < 4:
                 break
             pose = _refine(pose, mm[inl], pts[inl], px[inl])
-            inl = _residuals(pose, mm, pts, px) < PNP_REPROJECTION_PX
-        if int(inl.sum()) < MIN_PNP_INLIERS:
+            inl = _residuals(pose, mm, pts, px) < tun.pnp_reprojection_px
+        if int(inl.sum()) < tun.min_pnp_inliers:
             continue
-        if crowded_landmarks(vmap, float(pose[0]), float(pose[1])) > CLEARANCE_MAX_LANDMARKS:
+        if crowded_landmarks(vmap, float(pose[0]), float(pose[1])) > tun.clearance_max_landmarks:
             rejected += 1
             continue
         return pose, inl, rejected
@@ -330,11 +330,16 @@ def localize_verified(
     vmap: VisualMap,
     feats: Sequence[Features],
     queries: Sequence[Keyframe],
-    top_k: int = 5,
+    top_k: int | None = None,
 ) -> Estimate:
-    """Retrieval + landmark matching + PnP + joint 3-DoF refinement (see module doc)."""
+    """Retrieval + landmark matching + PnP + joint 3-DoF refinement (see module doc).
+
+    ``top_k`` retrieval candidates per query (default: the map's tuning).
+    """
     import cv2
 
+    tun = vmap.config.tuning.localizer
+    top_k = tun.candidates if top_k is None else top_k
     usable = [i for i, f in enumerate(feats) if len(f) > 0]
     if not usable:
         return _no_estimate(vmap, "verified", "no features")
@@ -382,8 +387,8 @@ def localize_verified(
                 img,
                 kmat,
                 None,
-                iterationsCount=100,
-                reprojectionError=PNP_REPROJECTION_PX,
+                iterationsCount=tun.pnp_iterations,
+                reprojectionError=tun.pnp_reprojection_px,
                 confidence=0.99,
                 flags=cv2.SOLVEPNP_AP3P,
             )
@@ -395,7 +400,7 @@ def localize_verified(
         t_cam_map = np.eye(4)
         t_cam_map[:3, :3], t_cam_map[:3, 3] = rot, tvec.ravel()
         t_map_cam = np.linalg.inv(t_cam_map)
-        if abs(t_map_cam[2, 3] - c_q[2, 3]) > CAMERA_HEIGHT_TOLERANCE_M:
+        if abs(t_map_cam[2, 3] - c_q[2, 3]) > tun.camera_height_tolerance_m:
             continue
         t_map_robot_last = t_map_cam @ np.linalg.inv(c_q) @ to_last[qi]
         hypotheses.append(np.array(planar_pose(t_map_robot_last)))
@@ -416,7 +421,7 @@ def localize_verified(
                 inliers_per_query=[int((inl & (qs == qi)).sum()) for qi in usable],
                 implausible_rejected=rejected,
             )
-            conf = 1.0 - math.exp(-n_inl / CONFIDENCE_SCALE)
+            conf = 1.0 - math.exp(-n_inl / tun.confidence_scale)
             return Estimate(
                 float(pose[0]), float(pose[1]), modulo2PI(float(pose[2])), conf, "verified", details
             )
@@ -435,6 +440,7 @@ def _fallback(
     """Inlier-weighted mean of candidate keyframe poses; heading from image rotation."""
     import cv2
 
+    tun = vmap.config.tuning.localizer
     xs, ys, ths, ws = [], [], [], []
     for qi, c, _n, m in votes:
         if m.shape[0] < 8:
@@ -445,7 +451,7 @@ def _fallback(
         mask: Any = None
         try:
             cv2.setRNGSeed(int(vmap.config.seed) + qi)
-            _f, mask = cv2.findFundamentalMat(a, b, cv2.FM_RANSAC, 3.0, 0.99)
+            _f, mask = cv2.findFundamentalMat(a, b, cv2.FM_RANSAC, tun.fallback_epipolar_px, 0.99)
         except cv2.error:
             mask = None
         if mask is None or mask.size != len(a):
@@ -480,7 +486,8 @@ def _fallback(
         return Estimate(est.x, est.y, est.theta, 0.0, "verified", {**details, **est.details})
     w = np.asarray(ws)
     details.update(method="keyframes", inliers=int(w.sum()))
-    conf = FALLBACK_MAX_CONFIDENCE * (1.0 - math.exp(-float(w.max()) / CONFIDENCE_SCALE))
+    cap, scale = tun.fallback_max_confidence, tun.confidence_scale
+    conf = cap * (1.0 - math.exp(-float(w.max()) / scale))
     return Estimate(
         float(np.average(xs, weights=w)),
         float(np.average(ys, weights=w)),
