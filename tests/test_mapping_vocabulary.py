@@ -121,3 +121,16 @@ def test_batch_histograms_equal_one_by_one() -> None:
     sift = Vocabulary(np.eye(3, dtype=np.float32), np.ones(3), False)
     f = [np.eye(3, dtype=np.float32)[[0, 0, 2]], np.zeros((0, 3), np.float32)]
     assert np.array_equal(sift.histograms(f), np.stack([sift.histogram(d) for d in f]))
+
+
+def test_descriptors_of_another_kind_are_refused_in_one_line() -> None:
+    from naoloc.errors import FeatureError
+
+    vocab = train_vocabulary(_clustered_descriptors(5), 16, True, 0)  # 8-byte words
+    with pytest.raises(FeatureError, match="do not fit this vocabulary"):
+        vocab.assign(np.zeros((3, 32), np.uint8))  # ORB-sized
+    with pytest.raises(FeatureError, match="do not fit"):
+        vocab.histogram(np.zeros((3, 8), np.float32))  # floats against binary words
+    sift = Vocabulary(np.eye(4, dtype=np.float32), np.ones(4), False)
+    with pytest.raises(FeatureError, match="float words of 4 values"):
+        sift.assign(np.zeros((2, 8), np.uint8))

@@ -21,6 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from naoloc.errors import FeatureError
+
 # Descriptors drawn from the training images to cluster (the rest are only assigned).
 MAX_TRAIN_DESCRIPTORS = 10000
 KMEANS_ITERATIONS = 10
@@ -123,7 +125,20 @@ class Vocabulary:
         return int(self.centres.shape[0])
 
     def assign(self, desc: np.ndarray) -> np.ndarray:
-        """Word index ``(n,)`` int64 of each descriptor (nearest centre)."""
+        """Word index ``(n,)`` int64 of each descriptor (nearest centre).
+
+        Raises:
+            FeatureError: Descriptors of another kind or width than the words (e.g. ORB
+                descriptors against an A-KAZE map).
+        """
+        width = self.centres.shape[1] // 8 if self.binary else self.centres.shape[1]
+        if desc.ndim != 2 or desc.shape[1] != width or (desc.dtype == np.uint8) != self.binary:
+            kind = "binary" if self.binary else "float"
+            raise FeatureError(
+                f"descriptors {desc.dtype} x {desc.shape[1:]} do not fit this vocabulary of "
+                f"{kind} words of {width} {'bytes' if self.binary else 'values'} "
+                "(a map built with another feature kind?)"
+            )
         if desc.shape[0] == 0:
             return np.zeros(0, np.int64)
         if self.binary:
