@@ -24,6 +24,7 @@ from __future__ import annotations
 import io
 import json
 import math
+import re
 import zipfile
 from collections.abc import Mapping
 from pathlib import Path
@@ -172,27 +173,25 @@ def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, key: str, name: str
     return flat.reshape(shape, order="F") if fortran else flat.reshape(shape)
 
 
+_STRING = re.compile(r'"(?:[^"\\]|\\.)*"')
+_BRACKET = re.compile(r"[\[\]{}]")
+
+
 def _depth(text: str) -> int:
-    """Deepest nesting of ``[`` and ``{`` in JSON text (brackets inside strings skipped)."""
+    """Deepest nesting of ``[`` and ``{`` in JSON text (brackets inside strings skipped).
+
+    Stops counting once past MAX_META_DEPTH.
+    """
+    if text.count("[") + text.count("{") <= MAX_META_DEPTH:
+        return 0
     depth = deepest = 0
-    in_string = escaped = False
-    for ch in text:
-        if in_string:
-            if escaped:
-                escaped = False
-            elif ch == "\\":
-                escaped = True
-            elif ch == '"':
-                in_string = False
-        elif ch == '"':
-            in_string = True
-        elif ch in "[{":
+    for m in _BRACKET.finditer(_STRING.sub("", text)):
+        if m.group() in "[{":
             depth += 1
-            if depth > deepest:
-                deepest = depth
-                if deepest > MAX_META_DEPTH:
-                    return deepest
-        elif ch in "]}":
+            deepest = max(deepest, depth)
+            if deepest > MAX_META_DEPTH:
+                break
+        else:
             depth -= 1
     return deepest
 
