@@ -294,15 +294,38 @@ def test_localize_cli_refuses_every_corrupt_map(corpus: dict[str, Path], tmp_pat
         procs[name] = subprocess.Popen(
             cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
         )
-    peak_kb = {}
     for name, proc in procs.items():
-        _pid, status, usage = os.wait4(proc.pid, 0)
-        proc.returncode = os.waitstatus_to_exitcode(status)
-        peak_kb[name] = usage.ru_maxrss
         out, err = proc.communicate()
         lines = err.strip().splitlines()
         assert proc.returncode != 0, (name, out, err)
         assert len(lines) == 1 and "Traceback" not in err, (name, err)
         assert str(corpus[name]) in lines[0] and CORPUS[name][1] in lines[0], (name, err)
         assert out == "", (name, out)
-    assert peak_kb["zip_bomb"] < 500 * 1024, peak_kb["zip_bomb"]  # KiB on Linux
+
+
+# Started from a small Python so that the child's peak RSS does not count the memory of the
+# test process it was forked from (Linux keeps the pre-exec peak in ru_maxrss).
+_PEAK = """
+import os, subprocess, sys
+proc = subprocess.Popen(sys.argv[1:], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+_pid, status, usage = os.wait4(proc.pid, 0)
+print(os.waitstatus_to_exitcode(status), usage.ru_maxrss, proc.stderr.read().decode().strip())
+"""
+
+
+def test_the_zip_bomb_is_refused_without_inflating(corpus: dict[str, Path], tmp_path: Path) -> None:
+    cfg = tmp_path / "fake.yaml"
+    cfg.write_text("robot: {backend: fake}\n")
+    cmd = [sys.executable, "-m", "naoloc.cli", "localize", "-c", str(cfg), "-m"]
+    baseline = subprocess.run(
+        [sys.executable, "-c", _PEAK, *cmd, str(corpus["not_a_zip"])],
+        capture_output=True, text=True, check=True,
+    ).stdout.split(maxsplit=2)  # fmt: skip
+    bomb = subprocess.run(
+        [sys.executable, "-c", _PEAK, *cmd, str(corpus["zip_bomb"])],
+        capture_output=True, text=True, check=True,
+    ).stdout.split(maxsplit=2)  # fmt: skip
+    assert bomb[0] == "1" and "refused before inflating" in bomb[2], bomb
+    # The 2 GiB member is never inflated: the bomb costs no more than a 600-byte junk file.
+    peak_kb, base_kb = int(bomb[1]), int(baseline[1])
+    assert peak_kb < 500 * 1024 and peak_kb < base_kb + 64 * 1024, (peak_kb, base_kb)
