@@ -7,6 +7,7 @@ A config comes from a YAML file (read with ``yaml.safe_load`` only), a dict, or 
 
 from __future__ import annotations
 
+import enum
 import math
 from pathlib import Path
 from typing import Any, Literal
@@ -331,11 +332,26 @@ class MapConfig(_Model):
     )
 
 
+class LocalizeMode(enum.StrEnum):
+    """How a pose is estimated from query images (a ``str``: ``"paper"`` == PAPER)."""
+
+    VERIFIED = "verified"  # retrieval + landmark PnP + joint refinement
+    PAPER = "paper"  # Algorithm 5: the GCS winners' mean pose
+
+
+class LocalizeStrategy(enum.StrEnum):
+    """How the localize behaviour takes its query pictures."""
+
+    SCAN = "scan"  # a head sweep (and quarter turns in place while unsure)
+    PAPER = "paper"  # the paper's 1-2 pictures towards the nearest wall
+
+
 class LocalizeConfig(_Model):
     """Algorithm 5 and beyond."""
 
-    mode: Literal["verified", "paper"] = Field(
-        "verified", description="paper: GCS winners' mean pose; verified: RANSAC-checked retrieval"
+    mode: LocalizeMode = Field(
+        LocalizeMode.VERIFIED,
+        description="paper: GCS winners' mean pose; verified: RANSAC-checked retrieval",
     )
     images: int = Field(2, ge=1, le=8, description="images taken per estimate")
 

@@ -2,7 +2,7 @@
 
 Public API::
 
-    from naoloc.mapping import VisualMap, Estimate, build_map, load_map
+    from naoloc.mapping import Estimate, LocalizeMode, VisualMap, build_map, load_map
 
     vmap = build_map(keyframes, cfg.map, meta={"origin_room_pose": [1.0, 1.0, 0.0]})
     vmap.save("room.npz")

@@ -18,7 +18,6 @@ taken (metres, radians).
 
 from __future__ import annotations
 
-import enum
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -26,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from naoloc.config import LocalizerTuning
+from naoloc.config import LocalizeMode, LocalizerTuning, LocalizeStrategy
 from naoloc.errors import NaolocError
 from naoloc.geometry import Pose2D, circular_mean, modulo2PI, relative_pose
 from naoloc.keyframe import Keyframe, camera_in_robot
@@ -56,20 +55,6 @@ __all__ = [
 
 #: The map type the localizer reads (plain data; naoloc.mapping.VisualMap is one).
 VisualMap = MapData
-
-
-class LocalizeMode(enum.StrEnum):
-    """How a pose is estimated from query images (a ``str``: ``"paper"`` == PAPER)."""
-
-    VERIFIED = "verified"  # retrieval + landmark PnP + joint refinement (module doc)
-    PAPER = "paper"  # Algorithm 5: the GCS winners' mean pose
-
-
-class LocalizeStrategy(enum.StrEnum):
-    """How the localize behaviour takes its query pictures."""
-
-    SCAN = "scan"  # a head sweep (and quarter turns in place while unsure)
-    PAPER = "paper"  # the paper's 1-2 pictures towards the nearest wall
 
 
 #: Defaults of ``MapConfig.tuning.localizer`` (the map's own config is what is used).
