@@ -7,6 +7,7 @@ A config comes from a YAML file (read with ``yaml.safe_load`` only), a dict, or 
 
 from __future__ import annotations
 
+import enum
 import math
 from pathlib import Path
 from typing import Any, Literal
@@ -239,6 +240,160 @@ class SurveyConfig(_Model):
     )
 
 
+# --- Map building and localizing tuning (naoloc.mapping): defaults are the tuned values. ---
+
+
+class LandmarkTuning(_Model):
+    """Triangulation of landmarks between nearby keyframes (naoloc.mapping.landmarks)."""
+
+    pair_min_baseline_m: float = Field(
+        0.05, gt=0, description="least camera baseline of a pair (m)"
+    )
+    pair_max_baseline_m: float = Field(
+        1.2, gt=0, description="largest camera baseline of a pair (m)"
+    )
+    pair_max_view_angle_deg: float = Field(
+        50.0, gt=0, le=180, description="largest angle between the views of a pair (deg)"
+    )
+    pairs_per_keyframe: int = Field(4, ge=1, description="pairs per keyframe, nearest first")
+    ratio_test: float = Field(0.8, gt=0, le=1, description="Lowe ratio of descriptor matches")
+    max_reprojection_px: float = Field(
+        2.0,
+        gt=0,
+        description="largest reprojection error of a triangulated point in either view (px)",
+    )
+    epipolar_px: float = Field(3.0, gt=0, description="largest distance to the epipolar line (px)")
+    min_parallax_deg: float = Field(1.0, ge=0, description="least parallax of a point (deg)")
+    depth_range_m: tuple[float, float] = Field(
+        (0.15, 12.0), description="depth range of a point in both cameras (m)"
+    )
+
+
+class PoseGraphTuning(_Model):
+    """Survey pose refinement by visual loop closures (naoloc.mapping.posegraph)."""
+
+    local_window: int = Field(
+        3, ge=1, description="keyframes either side triangulating local landmarks"
+    )
+    loop_min_gap: int = Field(
+        6, ge=1, description="keyframes closer in capture order are tied by odometry only"
+    )
+    loop_candidates: int = Field(3, ge=1, description="retrieval candidates per keyframe")
+    geometric_candidates: int = Field(
+        3, ge=0, description="candidates per keyframe from the first solution's camera poses"
+    )
+    loop_min_inliers: int = Field(15, ge=4, description="least PnP inliers of a loop closure")
+    sigma_odo_xy: tuple[float, float] = Field(
+        (0.002, 0.01),
+        description="odometry position noise per edge: constant (m), per metre walked",
+    )
+    sigma_odo_theta: tuple[float, float, float] = Field(
+        (0.001, 0.006, 0.002),
+        description="odometry heading noise per edge: constant (rad), per sqrt(rad) turned, "
+        "per metre walked (rad/m)",
+    )
+    loop_reprojection_px: float = Field(
+        3.0, gt=0, description="inlier threshold of loop-closure PnP (px)"
+    )
+    loop_pixel_sigma: float = Field(
+        1.0, gt=0, description="least pixel noise of a loop-closure match (px)"
+    )
+    loop_effective_matches: int = Field(
+        20,
+        ge=1,
+        description="matches counted at most per loop closure (their landmark errors correlate)",
+    )
+    huber_k: float = Field(
+        2.0, gt=0, description="loop residuals beyond this many sigmas get a linear loss"
+    )
+    sigma_bias_prior: float = Field(
+        0.05, gt=0, description="prior of the odometry heading bias around 0 (rad/m)"
+    )
+    outlier_chi2: float = Field(
+        16.0, gt=0, description="loop closures with a larger chi-square are dropped"
+    )
+    geometric_max_angle_deg: float = Field(
+        45.0, gt=0, le=180, description="largest angle between views of a geometric pair (deg)"
+    )
+    geometric_lookahead_m: float = Field(
+        1.5, gt=0, description="look-at point ahead of a camera (m)"
+    )
+    geometric_max_distance_m: float = Field(
+        1.0, gt=0, description="largest distance between look-at points (m)"
+    )
+    max_height_change_m: float = Field(
+        0.1, gt=0, description="largest height between the robots of a loop closure (same floor, m)"
+    )
+
+
+class BundleTuning(_Model):
+    """Bundle adjustment of poses and landmarks (naoloc.mapping.bundle)."""
+
+    pixel_sigma_px: float = Field(1.0, gt=0, description="pixel noise of an observation (px)")
+    huber_px: float = Field(
+        2.0, gt=0, description="reprojection errors beyond this get a linear loss (px)"
+    )
+    max_error_px: float = Field(
+        8.0, gt=0, description="observations beyond this after an iteration are dropped (px)"
+    )
+    min_track: int = Field(2, ge=2, description="least keyframes seeing a track")
+    long_track_gap: int = Field(
+        6,
+        ge=1,
+        description="capture-index span of a long track (build-map uses half the loop gap)",
+    )
+    min_long_tracks: int = Field(
+        50,
+        ge=0,
+        description="below this many lap-tying tracks the adjustment keeps the loop closures",
+    )
+    min_depth_m: float = Field(
+        0.05, gt=0, description="points nearer the camera than this are not used (m)"
+    )
+    iterations: int = Field(6, ge=1, description="Levenberg-Marquardt iterations at most")
+    lm_lambda: tuple[float, float, float] = Field(
+        (1e-3, 1e-7, 1e4),
+        description="Levenberg-Marquardt damping: start, least, largest (gives up)",
+    )
+
+
+class LocalizerTuning(_Model):
+    """The verified localizer (naoloc.mapping.localizer)."""
+
+    candidates: int = Field(5, ge=1, description="keyframes retrieved per query (TF-IDF)")
+    min_pnp_inliers: int = Field(10, ge=4, description="least inliers of a PnP pose")
+    pnp_reprojection_px: float = Field(4.0, gt=0, description="inlier threshold of PnP (px)")
+    pnp_iterations: int = Field(100, ge=1, description="RANSAC iterations of PnP per query")
+    camera_height_tolerance_m: float = Field(
+        0.3, gt=0, description="largest difference of a PnP camera from the head's height (m)"
+    )
+    confidence_scale: float = Field(
+        25.0, gt=0, description="inliers at which the confidence reaches 1 - 1/e"
+    )
+    confident_inliers: float = Field(
+        40.0, gt=0, description="inliers of a confident estimate (behaviours may stop looking)"
+    )
+    fallback_max_confidence: float = Field(
+        0.3, ge=0, le=1, description="confidence cap of the unverified keyframe fallback"
+    )
+    fallback_epipolar_px: float = Field(
+        3.0, gt=0, description="fundamental-matrix RANSAC threshold of the fallback (px)"
+    )
+    clearance_m: float = Field(0.25, gt=0, description="radius of the robot's free body (m)")
+    clearance_max_landmarks: int = Field(
+        4, ge=0, description="landmarks inside the body (0-3 m up) that make a pose implausible"
+    )
+
+
+class MapTuning(_Model):
+    """Tuning of map building (landmarks, pose graph, bundle adjustment) and localizing."""
+
+    landmarks: LandmarkTuning = LandmarkTuning()
+    pose_graph: PoseGraphTuning = PoseGraphTuning()
+    bundle: BundleTuning = BundleTuning()
+    localizer: LocalizerTuning = LocalizerTuning()
+
+
 class MapConfig(_Model):
     """Algorithm 4: features -> bag of words -> Growing Cell Structures."""
 
@@ -247,13 +402,31 @@ class MapConfig(_Model):
     epochs: int = Field(300, ge=1, le=10000, description="passes over the training images")
     seed: int = Field(0, ge=0, description="seed of vocabulary and GCS")
     vocabulary_size: int = Field(256, ge=8, le=4096, description="visual words")
+    tuning: MapTuning = Field(
+        MapTuning(), description="landmark, pose-graph, bundle and localizer tuning"
+    )
+
+
+class LocalizeMode(enum.StrEnum):
+    """How a pose is estimated from query images (a ``str``: ``"paper"`` == PAPER)."""
+
+    VERIFIED = "verified"  # retrieval + landmark PnP + joint refinement
+    PAPER = "paper"  # Algorithm 5: the GCS winners' mean pose
+
+
+class LocalizeStrategy(enum.StrEnum):
+    """How the localize behaviour takes its query pictures."""
+
+    SCAN = "scan"  # a head sweep (and quarter turns in place while unsure)
+    PAPER = "paper"  # the paper's 1-2 pictures towards the nearest wall
 
 
 class LocalizeConfig(_Model):
     """Algorithm 5 and beyond."""
 
-    mode: Literal["verified", "paper"] = Field(
-        "verified", description="paper: GCS winners' mean pose; verified: RANSAC-checked retrieval"
+    mode: LocalizeMode = Field(
+        LocalizeMode.VERIFIED,
+        description="paper: GCS winners' mean pose; verified: RANSAC-checked retrieval",
     )
     images: int = Field(2, ge=1, le=8, description="images taken per estimate")
 

@@ -1,4 +1,4 @@
-"""2-D poses with almath semantics: ``Pose2D``, ``pose2DInverse``, ``modulo2PI``.
+"""2-D poses: ``Pose2D`` with almath semantics, and the SE(2) helpers of the mapping code.
 
 Frames follow NAOqi: x forward, y left, theta counter-clockwise; metres and radians.
 Composition ``p1 * p2`` expresses ``p2`` (given in the frame of ``p1``) in the frame
@@ -8,7 +8,7 @@ Composition ``p1 * p2`` expresses ``p2`` (given in the frame of ``p1``) in the f
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -104,3 +104,63 @@ def relative_pose(start: Pose2D, end: Pose2D) -> Pose2D:
         ``end`` expressed in the frame of ``start``.
     """
     return (pose2DInverse(start) * end).normalized()
+
+
+# --- SE(2) on numpy arrays: poses ``(3,)`` = (x, y, theta) in metres and radians. ---
+
+
+def se2_matrix(pose: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The 3x3 homogeneous transform of a planar pose ``(x, y, theta)``."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    return np.array([[c, -s, pose[0]], [s, c, pose[1]], [0.0, 0.0, 1.0]])
+
+
+def se2_vector(t: np.ndarray) -> np.ndarray:
+    """The pose ``(x, y, theta)`` of a 3x3 homogeneous planar transform."""
+    return np.array([t[0, 2], t[1, 2], math.atan2(t[1, 0], t[0, 0])])
+
+
+def se2_relative(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Pose ``b`` expressed in the frame of pose ``a`` (both ``(3,)``, same frame)."""
+    return se2_vector(np.linalg.inv(se2_matrix(a)) @ se2_matrix(b))
+
+
+def se2_compose_local(z: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """``z (+) d``: the pose ``z`` moved by ``d`` expressed in its own frame."""
+    c, s = math.cos(z[2]), math.sin(z[2])
+    return np.array([z[0] + c * d[0] - s * d[1], z[1] + s * d[0] + c * d[1], z[2] + d[2]])
+
+
+def robot_matrix(x: float, y: float, theta: float) -> np.ndarray:
+    """``T_map_robot`` (4x4, z up) of a planar robot pose in the map frame."""
+    c, s = math.cos(theta), math.sin(theta)
+    t = np.eye(4)
+    t[:2, :2] = [[c, -s], [s, c]]
+    t[0, 3], t[1, 3] = x, y
+    return t
+
+
+def planar_pose(t_map_robot: np.ndarray) -> tuple[float, float, float]:
+    """(x, y, theta) of a 4x4 robot transform projected on the floor (m, m, rad)."""
+    return (
+        float(t_map_robot[0, 3]),
+        float(t_map_robot[1, 3]),
+        math.atan2(float(t_map_robot[1, 0]), float(t_map_robot[0, 0])),
+    )
+
+
+def rotations_z(theta: np.ndarray) -> np.ndarray:
+    """``(n, 3, 3)`` rotations about z by the angles ``theta`` (rad)."""
+    c, s = np.cos(theta), np.sin(theta)
+    r = np.zeros((theta.size, 3, 3))
+    r[:, 0, 0], r[:, 0, 1], r[:, 1, 0], r[:, 1, 1], r[:, 2, 2] = c, -s, s, c, 1.0
+    return r
+
+
+def circular_mean(angles: np.ndarray, weights: np.ndarray | None = None) -> float:
+    """Weighted mean direction of angles (rad), in (-pi, pi]; unweighted sums without weights."""
+    if weights is None:
+        return math.atan2(float(np.sin(angles).sum()), float(np.cos(angles).sum()))
+    return math.atan2(
+        float(np.sum(weights * np.sin(angles))), float(np.sum(weights * np.cos(angles)))
+    )

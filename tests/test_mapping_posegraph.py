@@ -15,11 +15,12 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
+from naoloc.config import PoseGraphTuning
+from naoloc.geometry import robot_matrix
 from naoloc.keyframe import CameraInfo, camera_in_robot
-from naoloc.mapping.bundle import bundle_adjust, tracks_from_links
-from naoloc.mapping.landmarks import camera_matrix_in_map, robot_matrix, triangulate
+from naoloc.mapping.bundle import BundleProblem, bundle_adjust, tracks_from_links
+from naoloc.mapping.landmarks import camera_matrix_in_map, triangulate
 from naoloc.mapping.posegraph import (
-    SIGMA_BIAS_PRIOR,
     Edge,
     graph_system,
     odometry_edges,
@@ -29,6 +30,7 @@ from naoloc.mapping.posegraph import (
     solve_pose_graph,
 )
 
+SIGMA_BIAS_PRIOR = PoseGraphTuning().sigma_bias_prior
 HEAD = (-math.pi / 2, 0.1)  # HeadYaw (right), HeadPitch (rad)
 CAM = CameraInfo(320, 240, math.radians(56.3), math.radians(43.7), 0)
 BIAS = 0.01  # rad/m, twice the simulators' default
@@ -238,8 +240,9 @@ def test_refine_and_bundle_adjust_beat_odometry(scene: Scene) -> None:
     frame = np.repeat(np.arange(n), [len(a) for a in scene.xy])
     tracks = tracks_from_links(kp_xy.shape[0], lm.matches)
     odo_edges = [e for e in refined.edges if e.odometry]
-    ba = bundle_adjust(refined.poses, heads, [0] * n, k, kp_xy, frame, tracks, lm.points,
-                       odo_edges, refined.heading_bias)  # fmt: skip
+    problem = BundleProblem(refined.poses, heads, [0] * n, k, kp_xy, frame, tracks, lm.points,
+                            odo_edges)  # fmt: skip
+    ba = bundle_adjust(problem, heading_bias=refined.heading_bias)
     assert ba.long_tracks > 50
     assert ba.rms_px < 1.0
     np.testing.assert_allclose(ba.poses[0], refined.poses[0], atol=1e-6)
@@ -262,11 +265,128 @@ def test_long_tracks_count_only_tracks_that_tie_the_laps(scene: Scene) -> None:
     lap = frame // 80
     same_lap = lm.matches[lap[lm.matches[:, 0]] == lap[lm.matches[:, 1]]]
     edges = odometry_edges(scene.truth)
-    both = bundle_adjust(scene.truth, heads, [0] * n, k, kp_xy, frame,
-                         tracks_from_links(kp_xy.shape[0], lm.matches), lm.points, edges,
-                         iterations=1, long_gap=40)  # fmt: skip
-    within = bundle_adjust(scene.truth, heads, [0] * n, k, kp_xy, frame,
-                           tracks_from_links(kp_xy.shape[0], same_lap), lm.points, edges,
-                           iterations=1, long_gap=40)  # fmt: skip
+    both = bundle_adjust(BundleProblem(scene.truth, heads, [0] * n, k, kp_xy, frame,
+                                       tracks_from_links(kp_xy.shape[0], lm.matches),
+                                       lm.points, edges), iterations=1, long_gap=40)  # fmt: skip
+    within = bundle_adjust(BundleProblem(scene.truth, heads, [0] * n, k, kp_xy, frame,
+                                         tracks_from_links(kp_xy.shape[0], same_lap),
+                                         lm.points, edges), iterations=1, long_gap=40)  # fmt: skip
     assert both.long_tracks > 100
     assert within.long_tracks < 0.1 * both.long_tracks
+
+
+def _small_problem(scene: Scene, n: int = 12) -> tuple[BundleProblem, np.ndarray]:
+    """Bundle problem of the first ``n`` keyframes with true-pose landmarks, and a jitter."""
+    k = [CAM.matrix()] * n
+    heads = np.tile(np.array(HEAD), (n, 1))
+    cams = np.stack([camera_matrix_in_map(p, *HEAD, 0) for p in scene.truth[:n]])
+    lm = triangulate(scene.xy[:n], scene.desc[:n], cams, k, True)
+    kp_xy = np.concatenate(scene.xy[:n])
+    frame = np.repeat(np.arange(n), [len(a) for a in scene.xy[:n]])
+    tracks = tracks_from_links(kp_xy.shape[0], lm.matches)
+    problem = BundleProblem(scene.truth[:n], heads, [0] * n, k, kp_xy, frame, tracks,
+                            lm.points, odometry_edges(scene.truth[:n]))  # fmt: skip
+    rng = np.random.default_rng(3)
+    return problem, rng.normal(0, [0.02, 0.02, 0.01], (n, 3))
+
+
+def test_bundle_reprojection_jacobians_match_finite_differences(scene: Scene) -> None:
+    from naoloc.config import BundleTuning
+    from naoloc.mapping.bundle import camera_models, initial_points, observations, reprojection
+
+    problem, jitter = _small_problem(scene)
+    obs = observations(problem, BundleTuning())
+    assert obs.n_pts > 100
+    cams = camera_models(problem)
+    x = problem.poses + jitter
+    pts = initial_points(obs, problem.points) + 0.01
+    res, _z, j_pose, j_pt = reprojection(x, pts, obs.kf, obs.tr, obs.uv, cams, True)
+
+    def residuals(xx: np.ndarray, pp: np.ndarray) -> np.ndarray:
+        return reprojection(xx, pp, obs.kf, obs.tr, obs.uv, cams, False)[0]
+
+    h = 1e-6
+    for k in range(3):  # d residual of observation i / d pose of its keyframe, component k
+        xp, xm = x.copy(), x.copy()
+        xp[:, k] += h
+        xm[:, k] -= h
+        num = (residuals(xp, pts) - residuals(xm, pts)) / (2 * h)
+        np.testing.assert_allclose(j_pose[:, :, k], num, rtol=1e-5, atol=1e-3)
+    for k in range(3):  # d residual / d point coordinate k
+        pp, pm = pts.copy(), pts.copy()
+        pp[:, k] += h
+        pm[:, k] -= h
+        num = (residuals(x, pp) - residuals(x, pm)) / (2 * h)
+        np.testing.assert_allclose(j_pt[:, :, k], num, rtol=1e-5, atol=1e-3)
+    assert np.abs(j_pose).max() > 10 and np.abs(res).max() > 0.1  # not a vacuous check
+
+
+def test_pose_graph_edge_jacobians_match_finite_differences(scene: Scene) -> None:
+    from naoloc.mapping.posegraph import edge_terms
+
+    rng = np.random.default_rng(4)
+    x = scene.truth[:10] + rng.normal(0, [0.05, 0.05, 0.05], (10, 3))
+    edges = [*odometry_edges(scene.odometry[:10]),
+             Edge(1, 8, relative(scene.truth[1], scene.truth[8]), np.eye(3))]  # fmt: skip
+    bias = 0.004
+    _r, ja, jb, jbias = edge_terms(x, edges, bias)
+    h = 1e-6
+    for e_idx, e in enumerate(edges):
+        for k in range(3):
+            for node, jac in ((e.a, ja), (e.b, jb)):
+                xp, xm = x.copy(), x.copy()
+                xp[node, k] += h
+                xm[node, k] -= h
+                num = (edge_terms(xp, [e], bias)[0][0] - edge_terms(xm, [e], bias)[0][0]) / (2 * h)
+                np.testing.assert_allclose(jac[e_idx, :, k], num, rtol=1e-5, atol=1e-6)
+        # The bias enters the heading residual; it also rotates the position residual, which
+        # the Gauss-Newton leaves out: that leaves the cost unchanged when the position
+        # information is isotropic, as for odometry edges (checked by the gradient test).
+        num_b = (edge_terms(x, [e], bias + h)[0][0] - edge_terms(x, [e], bias - h)[0][0]) / (2 * h)
+        assert num_b[2] == pytest.approx(jbias[e_idx], abs=1e-6)
+
+
+def test_mapping_modules_import_no_circle() -> None:
+    """Every import between naoloc.mapping modules (also lazy and TYPE_CHECKING ones)."""
+    import ast
+    from pathlib import Path
+
+    import naoloc.mapping
+
+    folder = Path(naoloc.mapping.__file__).parent
+    graph: dict[str, set[str]] = {}
+    for path in folder.glob("*.py"):
+        if path.stem == "__init__":
+            continue
+        deps = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module:
+                names = [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            else:
+                continue
+            for name in names:
+                if name.startswith("naoloc.mapping."):
+                    deps.add(name.split(".")[2])
+                elif name == "naoloc.mapping":
+                    deps.add("__init__")
+        graph[path.stem] = deps & ({p.stem for p in folder.glob("*.py")} | {"__init__"})
+    assert all("__init__" not in d for d in graph.values()), graph
+    # The plain data imports only the data classes of the vocabulary and the network.
+    assert graph["data"] <= {"gcs", "vocabulary"}, graph["data"]
+    for low in ("gcs", "vocabulary"):
+        assert not graph[low] & {"builder", "localizer", "mapfile", "map", "data"}
+    seen: dict[str, int] = {}
+
+    def visit(mod: str, stack: tuple[str, ...]) -> None:
+        if seen.get(mod) == 2:
+            return
+        assert seen.get(mod) != 1, f"import circle: {' -> '.join((*stack, mod))}"
+        seen[mod] = 1
+        for dep in sorted(graph.get(mod, ())):
+            visit(dep, (*stack, mod))
+        seen[mod] = 2
+
+    for mod in sorted(graph):
+        visit(mod, ())

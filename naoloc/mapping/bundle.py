@@ -16,18 +16,47 @@ pixels in the keyframe's image.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from naoloc.config import BundleTuning, PoseGraphTuning
+from naoloc.geometry import rotations_z
 from naoloc.keyframe import camera_in_robot
 from naoloc.mapping.posegraph import Edge, graph_cost, graph_system
 
-PIXEL_SIGMA = 1.0  # px
-HUBER_PX = 2.0  # px: reprojection errors beyond this get a linear loss
-MAX_ERROR_PX = 8.0  # observations beyond this after an iteration are dropped
-MIN_TRACK = 2
-LONG_TRACK_GAP = 6
+_HOLD = 1e9  # weight that holds keyframe 0 in place (the map frame)
+_REGULARISE = 1e-9  # keeps the normal equations invertible
+
+
+@dataclass(frozen=True)
+class BundleProblem:
+    """What bundle adjustment refines: keyframes, their keypoints and the pose-graph edges.
+
+    Attributes:
+        poses: ``(N, 3)`` initial keyframe poses (map frame); keyframe 0 stays fixed.
+        heads: ``(N, 2)`` HeadYaw, HeadPitch (rad).
+        cam_index: Per keyframe camera index.
+        intrinsics: Per keyframe 3x3 K.
+        kp_xy: ``(M, 2)`` keypoint pixels of all keyframes (concatenated).
+        kp_frame: ``(M,)`` keyframe of each keypoint.
+        track: ``(M,)`` track label of each keypoint, -1 for none (see
+            :func:`tracks_from_links`).
+        points: ``(M, 3)`` initial 3-D point of each keypoint (map frame), NaN if none.
+        edges: Pose-graph edges (odometry edges carry the heading bias).
+        graph: Pose-graph tuning (the heading-bias prior of the edges' cost).
+    """
+
+    poses: np.ndarray
+    heads: np.ndarray
+    cam_index: Sequence[int]
+    intrinsics: Sequence[np.ndarray]
+    kp_xy: np.ndarray
+    kp_frame: np.ndarray
+    track: np.ndarray
+    points: np.ndarray
+    edges: Sequence[Edge]
+    graph: PoseGraphTuning = field(default_factory=PoseGraphTuning)
 
 
 @dataclass(frozen=True)
@@ -50,6 +79,34 @@ class BundleResult:
     observations: int
     rms_px: float
     long_tracks: int = 0
+
+
+@dataclass(frozen=True)
+class Observations:
+    """One pixel observation per (track, keyframe), of tracks seen by enough keyframes.
+
+    Attributes:
+        rows: ``(n,)`` keypoint row of each observation.
+        kf: ``(n,)`` keyframe of each observation.
+        tr: ``(n,)`` track of each observation, 0 .. ``n_pts - 1``.
+        uv: ``(n, 2)`` float64 pixels.
+        n_pts: Number of tracks.
+    """
+
+    rows: np.ndarray
+    kf: np.ndarray
+    tr: np.ndarray
+    uv: np.ndarray
+    n_pts: int
+
+
+@dataclass(frozen=True)
+class CameraModels:
+    """Per keyframe ``T_cam_robot`` rotation ``(N, 3, 3)``, translation ``(N, 3)`` and K."""
+
+    rot: np.ndarray
+    t: np.ndarray
+    kmats: np.ndarray
 
 
 def tracks_from_links(n_keypoints: int, links: np.ndarray) -> np.ndarray:
@@ -83,34 +140,75 @@ def tracks_from_links(n_keypoints: int, links: np.ndarray) -> np.ndarray:
     return out
 
 
-def _robot_rot(theta: np.ndarray) -> np.ndarray:
-    """``(n, 3, 3)`` rotations about z."""
-    c, s = np.cos(theta), np.sin(theta)
-    r = np.zeros((theta.size, 3, 3))
-    r[:, 0, 0], r[:, 0, 1], r[:, 1, 0], r[:, 1, 1], r[:, 2, 2] = c, -s, s, c, 1.0
-    return r
+def observations(problem: BundleProblem, tuning: BundleTuning) -> Observations:
+    """The observations of tracks seen by at least ``tuning.min_track`` keyframes."""
+    n = problem.poses.shape[0]
+    use = (problem.track >= 0) & np.isfinite(problem.points[:, 0])
+    labels, inv = np.unique(problem.track[use], return_inverse=True)
+    rows = np.flatnonzero(use)
+    kf = problem.kp_frame[rows].astype(np.int64)
+    # One observation per (track, keyframe); tracks seen by at least min_track keyframes.
+    key = inv * n + kf
+    _, first = np.unique(key, return_index=True)
+    rows, kf, tr = rows[first], kf[first], inv[first]
+    seen = np.bincount(tr, minlength=labels.size)
+    ok = seen[tr] >= tuning.min_track
+    rows, kf, tr = rows[ok], kf[ok], tr[ok]
+    if rows.size == 0:
+        return Observations(rows, kf, tr, np.zeros((0, 2)), 0)
+    _, tr = np.unique(tr, return_inverse=True)
+    uv = problem.kp_xy[rows].astype(np.float64)
+    return Observations(rows, kf, tr, uv, int(tr.max()) + 1)
 
 
-def _residuals(
+def long_track_count(obs: Observations, n: int, long_gap: int) -> int:
+    """Tracks whose keyframes span at least ``long_gap`` captures."""
+    lo = np.full(obs.n_pts, n, np.int64)
+    hi = np.zeros(obs.n_pts, np.int64)
+    np.minimum.at(lo, obs.tr, obs.kf)
+    np.maximum.at(hi, obs.tr, obs.kf)
+    return int(np.sum(hi - lo >= long_gap))
+
+
+def initial_points(obs: Observations, points: np.ndarray) -> np.ndarray:
+    """``(n_pts, 3)`` mean of the keypoints' triangulated points per track."""
+    pts = np.zeros((obs.n_pts, 3))
+    np.add.at(pts, obs.tr, points[obs.rows])
+    pts /= np.bincount(obs.tr, minlength=obs.n_pts)[:, None]
+    return pts
+
+
+def camera_models(problem: BundleProblem) -> CameraModels:
+    """The head cameras of the keyframes (robot frame) and their intrinsics."""
+    heads, cam_index = problem.heads, problem.cam_index
+    cams = [
+        camera_in_robot(float(heads[i, 0]), float(heads[i, 1]), cam_index[i])
+        for i in range(problem.poses.shape[0])
+    ]
+    cam_inv = np.stack([np.linalg.inv(c) for c in cams])
+    kmats = np.stack([np.asarray(k, np.float64) for k in problem.intrinsics])
+    return CameraModels(cam_inv[:, :3, :3], cam_inv[:, :3, 3], kmats)
+
+
+def reprojection(
     poses: np.ndarray,
     pts: np.ndarray,
     kf: np.ndarray,
     tr: np.ndarray,
     uv: np.ndarray,
-    cam_rot: np.ndarray,
-    cam_t: np.ndarray,
-    kmats: np.ndarray,
+    cams: CameraModels,
     jacobians: bool,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Reprojection residuals ``(n, 2)``, depth, and Jacobians by pose ``(n, 2, 3)`` and
-    point ``(n, 2, 3)``."""
-    rt = np.transpose(_robot_rot(poses[kf, 2]), (0, 2, 1))  # R^T
+    """Reprojection residuals ``(n, 2)`` (px), depth ``(n,)`` (m), and the analytic
+    Jacobians by pose ``(n, 2, 3)`` and by point ``(n, 2, 3)`` (empty without
+    ``jacobians``)."""
+    rt = np.transpose(rotations_z(poses[kf, 2]), (0, 2, 1))  # R^T
     d = pts[tr] - np.concatenate([poses[kf, :2], np.zeros((kf.size, 1))], axis=1)
     p_r = np.einsum("nij,nj->ni", rt, d)
-    p_c = np.einsum("nij,nj->ni", cam_rot[kf], p_r) + cam_t[kf]
+    p_c = np.einsum("nij,nj->ni", cams.rot[kf], p_r) + cams.t[kf]
     z = p_c[:, 2]
     zs = np.where(np.abs(z) < 1e-6, 1e-6, z)
-    k = kmats[kf]
+    k = cams.kmats[kf]
     u = k[:, 0, 0] * p_c[:, 0] / zs + k[:, 0, 2]
     v = k[:, 1, 1] * p_c[:, 1] / zs + k[:, 1, 2]
     res = np.stack([u, v], axis=1) - uv
@@ -121,7 +219,7 @@ def _residuals(
     dproj[:, 0, 2] = -k[:, 0, 0] * p_c[:, 0] / zs**2
     dproj[:, 1, 1] = k[:, 1, 1] / zs
     dproj[:, 1, 2] = -k[:, 1, 1] * p_c[:, 1] / zs**2
-    a = np.einsum("nij,njk->nik", dproj, cam_rot[kf])  # d uv / d p_r
+    a = np.einsum("nij,njk->nik", dproj, cams.rot[kf])  # d uv / d p_r
     # p_r = R^T (X - t): d/dX = R^T; d/d(x, y) = -R^T[:, :2]; d/dtheta = (y_r, -x_r, 0).
     jp = np.zeros((kf.size, 3, 3))
     jp[:, :, :2] = -rt[:, :, :2]
@@ -132,157 +230,193 @@ def _residuals(
     return res, z, j_pose, j_pt
 
 
+@dataclass
+class _State:
+    """The unknowns and the bookkeeping of one adjustment."""
+
+    x: np.ndarray  # (N, 3) poses
+    pts: np.ndarray  # (P, 3) track points
+    bias: float
+    active: np.ndarray  # (n,) observations in use
+    lam: float
+
+
+def _cost(
+    problem: BundleProblem,
+    tuning: BundleTuning,
+    obs: Observations,
+    cams: CameraModels,
+    active: np.ndarray,
+    x: np.ndarray,
+    pts: np.ndarray,
+    bias: float,
+) -> float:
+    """Huber cost of the active observations plus the pose-graph cost."""
+    r, z, _, _ = reprojection(x, pts, obs.kf[active], obs.tr[active], obs.uv[active], cams, False)
+    e = np.linalg.norm(r, axis=1) / tuning.pixel_sigma_px
+    e = np.where(z > tuning.min_depth_m, e, tuning.max_error_px)
+    hub = tuning.huber_px
+    rho = np.where(e <= hub, e**2, 2 * hub * e - hub**2)
+    return float(rho.sum()) + graph_cost(x, problem.edges, bias, problem.graph.sigma_bias_prior)
+
+
+@dataclass(frozen=True)
+class _Normal:
+    """Blocks of the normal equations of the active observations and the graph."""
+
+    k_: np.ndarray  # keyframe of each active observation
+    t_: np.ndarray  # track of each active observation
+    hpp: np.ndarray  # (n, 3, 3) pose-pose
+    hpl: np.ndarray  # (n, 3, 3) pose-point
+    hl: np.ndarray  # (P, 3, 3) point-point, summed per track
+    gp: np.ndarray  # (n, 3) pose gradient
+    gll: np.ndarray  # (P, 3) point gradient, summed per track
+    h_graph: np.ndarray
+    g_graph: np.ndarray
+
+
+def _normal_equations(
+    problem: BundleProblem,
+    tuning: BundleTuning,
+    obs: Observations,
+    cams: CameraModels,
+    st: _State,
+) -> _Normal:
+    k_, t_ = obs.kf[st.active], obs.tr[st.active]
+    r, z, j_pose, j_pt = reprojection(st.x, st.pts, k_, t_, obs.uv[st.active], cams, True)
+    sig, hub = tuning.pixel_sigma_px, tuning.huber_px
+    e = np.linalg.norm(r, axis=1) / sig
+    w = np.where(e <= hub, 1.0, hub / np.maximum(e, 1e-12)) / sig**2
+    w = np.where(z > tuning.min_depth_m, w, 0.0)
+    # Blocks: pose-pose (per keyframe), point-point (per track), pose-point (per obs).
+    hpp = np.einsum("n,nki,nkj->nij", w, j_pose, j_pose)
+    hll = np.einsum("n,nki,nkj->nij", w, j_pt, j_pt)
+    hpl = np.einsum("n,nki,nkj->nij", w, j_pose, j_pt)
+    gp = np.einsum("n,nki,nk->ni", w, j_pose, r)
+    gl = np.einsum("n,nki,nk->ni", w, j_pt, r)
+    hl = np.zeros((obs.n_pts, 3, 3))
+    np.add.at(hl, t_, hll)
+    gll = np.zeros((obs.n_pts, 3))
+    np.add.at(gll, t_, gl)
+    h_graph, g_graph = graph_system(
+        st.x, problem.edges, st.bias, estimate_bias=True,
+        sigma_bias_prior=problem.graph.sigma_bias_prior,
+    )  # fmt: skip
+    return _Normal(k_, t_, hpp, hpl, hl, gp, gll, h_graph, g_graph)
+
+
+def _schur_step(eq: _Normal, n: int, lam: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """Damped step ``(dx, dl)``: poses and bias ``(3N + 1,)``, points ``(P, 3)``.
+
+    The points are eliminated by the Schur complement (3x3 blocks per track); None when
+    the reduced system is singular.
+    """
+    k_, t_, hpl = eq.k_, eq.t_, eq.hpl
+    dim = 3 * n + 1
+    hl_d = eq.hl + np.eye(3) * (lam * np.trace(eq.hl, axis1=1, axis2=2)[:, None, None] / 3 + 1e-9)
+    hl_inv = np.linalg.inv(hl_d)
+    s = eq.h_graph.copy()
+    g = eq.g_graph.copy()
+    blk = np.zeros((n, n, 3, 3))
+    np.add.at(blk, (k_, k_), eq.hpp)
+    # Schur complement: - sum over pairs of observations of one track.
+    a_mat = np.einsum("nij,njk->nik", hpl, hl_inv[t_])  # H_pl H_ll^-1, (obs, 3, 3)
+    order = np.argsort(t_, kind="stable")
+    ts = t_[order]
+    starts = np.flatnonzero(np.r_[True, ts[1:] != ts[:-1]])
+    counts = np.diff(np.r_[starts, ts.size])
+    for c in np.unique(counts).tolist():
+        grp = starts[counts == c]
+        idx = order[grp[:, None] + np.arange(c)]  # (tracks, c) observation indices
+        prod = np.einsum("tair,tbjr->tabij", a_mat[idx], hpl[idx])
+        kk = k_[idx]
+        np.add.at(blk, (kk[:, :, None].repeat(c, 2), kk[:, None, :].repeat(c, 1)), -prod)
+    s[: 3 * n, : 3 * n] += blk.transpose(0, 2, 1, 3).reshape(3 * n, 3 * n)
+    gred = np.zeros((n, 3))
+    np.add.at(gred, k_, eq.gp - np.einsum("nij,nj->ni", a_mat, eq.gll[t_]))
+    g[: 3 * n] += gred.ravel()
+    s[:3, :3] += np.eye(3) * _HOLD  # hold keyframe 0
+    s += np.diag(np.diag(s)) * lam + np.eye(dim) * _REGULARISE
+    try:
+        dx = np.linalg.solve(s, -g)
+    except np.linalg.LinAlgError:
+        return None
+    dpose = dx[: 3 * n].reshape(n, 3)
+    rhs = eq.gll.copy()
+    np.add.at(rhs, t_, np.einsum("nji,nj->ni", hpl, dpose[k_]))
+    dl = -np.einsum("nij,nj->ni", hl_inv, rhs)
+    return dx, dl
+
+
 def bundle_adjust(
-    poses: np.ndarray,
-    heads: np.ndarray,
-    cam_index: Sequence[int],
-    intrinsics: Sequence[np.ndarray],
-    kp_xy: np.ndarray,
-    kp_frame: np.ndarray,
-    track: np.ndarray,
-    points: np.ndarray,
-    edges: Sequence[Edge],
+    problem: BundleProblem,
+    tuning: BundleTuning | None = None,
+    *,
     heading_bias: float = 0.0,
-    iterations: int = 6,
-    long_gap: int = LONG_TRACK_GAP,
+    iterations: int | None = None,
+    long_gap: int | None = None,
 ) -> BundleResult:
     """Refine keyframe poses, track points and the heading bias together (module doc).
 
     Args:
-        poses: ``(N, 3)`` initial keyframe poses (map frame); keyframe 0 stays fixed.
-        heads: ``(N, 2)`` HeadYaw, HeadPitch (rad).
-        cam_index: Per keyframe camera index.
-        intrinsics: Per keyframe 3x3 K.
-        kp_xy: ``(M, 2)`` keypoint pixels of all keyframes (concatenated).
-        kp_frame: ``(M,)`` keyframe of each keypoint.
-        track: ``(M,)`` track label of each keypoint, -1 for none (see
-            :func:`tracks_from_links`).
-        points: ``(M, 3)`` initial 3-D point of each keypoint (map frame), NaN if none.
-        edges: Pose-graph edges (odometry edges carry the heading bias).
+        problem: Keyframes, keypoints, tracks, initial points and pose-graph edges.
+        tuning: Loss, outlier and damping settings; default :class:`BundleTuning`.
         heading_bias: Initial heading bias (rad/m).
-        iterations: Levenberg-Marquardt iterations at most.
-        long_gap: Capture-index span that makes a track count in ``long_tracks``.
+        iterations: Levenberg-Marquardt iterations at most; default ``tuning.iterations``.
+        long_gap: Capture-index span that makes a track count in ``long_tracks``; default
+            ``tuning.long_track_gap``.
 
     Returns:
         The refined poses; the input poses when there is nothing to adjust.
     """
+    tuning = tuning or BundleTuning()
+    iterations = tuning.iterations if iterations is None else iterations
+    long_gap = tuning.long_track_gap if long_gap is None else long_gap
+    poses = problem.poses
     n = poses.shape[0]
-    use = (track >= 0) & np.isfinite(points[:, 0])
-    labels, inv = np.unique(track[use], return_inverse=True)
-    rows = np.flatnonzero(use)
-    kf = kp_frame[rows].astype(np.int64)
-    # One observation per (track, keyframe); tracks seen by at least MIN_TRACK keyframes.
-    key = inv * n + kf
-    _, first = np.unique(key, return_index=True)
-    rows, kf, tr = rows[first], kf[first], inv[first]
-    seen = np.bincount(tr, minlength=labels.size)
-    ok = seen[tr] >= MIN_TRACK
-    rows, kf, tr = rows[ok], kf[ok], tr[ok]
-    if rows.size == 0:
+    obs = observations(problem, tuning)
+    if obs.rows.size == 0:
         return BundleResult(poses.copy(), heading_bias, 0, 0, 0.0)
-    _, tr = np.unique(tr, return_inverse=True)
-    n_pts = int(tr.max()) + 1
-    lo = np.full(n_pts, n, np.int64)
-    hi = np.zeros(n_pts, np.int64)
-    np.minimum.at(lo, tr, kf)
-    np.maximum.at(hi, tr, kf)
-    long_tracks = int(np.sum(hi - lo >= long_gap))
-    pts = np.zeros((n_pts, 3))
-    np.add.at(pts, tr, points[rows])
-    pts /= np.bincount(tr, minlength=n_pts)[:, None]
-    uv = kp_xy[rows].astype(np.float64)
-    cams = [camera_in_robot(float(heads[i, 0]), float(heads[i, 1]), cam_index[i]) for i in range(n)]
-    cam_inv = np.stack([np.linalg.inv(c) for c in cams])
-    cam_rot, cam_t = cam_inv[:, :3, :3], cam_inv[:, :3, 3]
-    kmats = np.stack([np.asarray(k, np.float64) for k in intrinsics])
-    x = poses.astype(np.float64).copy()
-    bias = heading_bias
-    active = np.ones(rows.size, bool)
-    lam = 1e-3
+    long_tracks = long_track_count(obs, n, long_gap)
+    cams = camera_models(problem)
+    lam0, lam_min, lam_max = tuning.lm_lambda
+    st = _State(
+        poses.astype(np.float64).copy(), initial_points(obs, problem.points), heading_bias,
+        np.ones(obs.rows.size, bool), lam0,
+    )  # fmt: skip
+    failed = BundleResult(poses.copy(), heading_bias, obs.n_pts, 0, float("nan"), long_tracks)
 
-    def total_cost(xx: np.ndarray, pp: np.ndarray, bb: float) -> float:
-        r, z, _, _ = _residuals(xx, pp, kf[active], tr[active], uv[active], cam_rot, cam_t,
-                                kmats, False)  # fmt: skip
-        e = np.linalg.norm(r, axis=1) / PIXEL_SIGMA
-        e = np.where(z > 0.05, e, MAX_ERROR_PX)
-        rho = np.where(e <= HUBER_PX, e**2, 2 * HUBER_PX * e - HUBER_PX**2)
-        return float(rho.sum()) + graph_cost(xx, edges, bb)
+    def cost(x: np.ndarray, pts: np.ndarray, bias: float) -> float:
+        return _cost(problem, tuning, obs, cams, st.active, x, pts, bias)
 
-    cost = total_cost(x, pts, bias)
+    current = cost(st.x, st.pts, st.bias)
     for _ in range(iterations):
-        k_, t_ = kf[active], tr[active]
-        r, z, j_pose, j_pt = _residuals(x, pts, k_, t_, uv[active], cam_rot, cam_t, kmats, True)
-        e = np.linalg.norm(r, axis=1) / PIXEL_SIGMA
-        w = np.where(e <= HUBER_PX, 1.0, HUBER_PX / np.maximum(e, 1e-12)) / PIXEL_SIGMA**2
-        w = np.where(z > 0.05, w, 0.0)
-        # Blocks: pose-pose (per keyframe), point-point (per track), pose-point (per obs).
-        hpp = np.einsum("n,nki,nkj->nij", w, j_pose, j_pose)
-        hll = np.einsum("n,nki,nkj->nij", w, j_pt, j_pt)
-        hpl = np.einsum("n,nki,nkj->nij", w, j_pose, j_pt)
-        gp = np.einsum("n,nki,nk->ni", w, j_pose, r)
-        gl = np.einsum("n,nki,nk->ni", w, j_pt, r)
-        hl = np.zeros((n_pts, 3, 3))
-        np.add.at(hl, t_, hll)
-        gll = np.zeros((n_pts, 3))
-        np.add.at(gll, t_, gl)
-        h_graph, g_graph = graph_system(x, edges, bias, estimate_bias=True)
-        dim = 3 * n + 1
+        eq = _normal_equations(problem, tuning, obs, cams, st)
         while True:
-            hl_d = hl + np.eye(3) * (lam * np.trace(hl, axis1=1, axis2=2)[:, None, None] / 3 + 1e-9)
-            hl_inv = np.linalg.inv(hl_d)
-            s = h_graph.copy()
-            g = g_graph.copy()
-            blk = np.zeros((n, n, 3, 3))
-            np.add.at(blk, (k_, k_), hpp)
-            # Schur complement: - sum over pairs of observations of one track.
-            a_mat = np.einsum("nij,njk->nik", hpl, hl_inv[t_])  # H_pl H_ll^-1, (obs, 3, 3)
-            order = np.argsort(t_, kind="stable")
-            ts = t_[order]
-            starts = np.flatnonzero(np.r_[True, ts[1:] != ts[:-1]])
-            counts = np.diff(np.r_[starts, ts.size])
-            for c in np.unique(counts).tolist():
-                grp = starts[counts == c]
-                idx = order[grp[:, None] + np.arange(c)]  # (tracks, c) observation indices
-                left = a_mat[idx]  # (T, c, 3, 3)
-                right = hpl[idx]  # (T, c, 3, 3)
-                prod = np.einsum("tair,tbjr->tabij", left, right)
-                kk = k_[idx]
-                np.add.at(
-                    blk,
-                    (kk[:, :, None].repeat(c, 2), kk[:, None, :].repeat(c, 1)),
-                    -prod,
-                )
-            s[: 3 * n, : 3 * n] += blk.transpose(0, 2, 1, 3).reshape(3 * n, 3 * n)
-            gred = np.zeros((n, 3))
-            np.add.at(gred, k_, gp - np.einsum("nij,nj->ni", a_mat, gll[t_]))
-            g[: 3 * n] += gred.ravel()
-            s[:3, :3] += np.eye(3) * 1e9  # hold keyframe 0
-            s += np.diag(np.diag(s)) * lam + np.eye(dim) * 1e-9
-            try:
-                dx = np.linalg.solve(s, -g)
-            except np.linalg.LinAlgError:
-                return BundleResult(poses.copy(), heading_bias, n_pts, 0, float("nan"), long_tracks)
-            dpose = dx[: 3 * n].reshape(n, 3)
-            rhs = gll.copy()
-            np.add.at(rhs, t_, np.einsum("nji,nj->ni", hpl, dpose[k_]))
-            dl = -np.einsum("nij,nj->ni", hl_inv, rhs)
-            x_new, pts_new, bias_new = x + dpose, pts + dl, bias + float(dx[-1])
-            new_cost = total_cost(x_new, pts_new, bias_new)
-            if new_cost < cost:
-                x, pts, bias, cost = x_new, pts_new, bias_new, new_cost
-                lam = max(lam / 10, 1e-7)
+            step = _schur_step(eq, n, st.lam)
+            if step is None:
+                return failed
+            dx, dl = step
+            x_new = st.x + dx[: 3 * n].reshape(n, 3)
+            pts_new, bias_new = st.pts + dl, st.bias + float(dx[-1])
+            new_cost = cost(x_new, pts_new, bias_new)
+            if new_cost < current:
+                st.x, st.pts, st.bias, current = x_new, pts_new, bias_new, new_cost
+                st.lam = max(st.lam / 10, lam_min)
                 break
-            lam *= 10
-            if lam > 1e4:
+            st.lam *= 10
+            if st.lam > lam_max:
                 break
-        if lam > 1e4 or np.abs(dx[: 3 * n]).max() < 1e-6:
+        if st.lam > lam_max or np.abs(dx[: 3 * n]).max() < 1e-6:
             break
-        r_all, z_all, _, _ = _residuals(x, pts, kf, tr, uv, cam_rot, cam_t, kmats, False)
-        active = (np.linalg.norm(r_all, axis=1) < MAX_ERROR_PX) & (z_all > 0.05)
-        cost = total_cost(x, pts, bias)
-    r_end, _, _, _ = _residuals(x, pts, kf[active], tr[active], uv[active], cam_rot, cam_t,
-                                kmats, False)  # fmt: skip
+        r_all, z_all, _, _ = reprojection(st.x, st.pts, obs.kf, obs.tr, obs.uv, cams, False)
+        st.active = (np.linalg.norm(r_all, axis=1) < tuning.max_error_px) & (
+            z_all > tuning.min_depth_m
+        )
+        current = cost(st.x, st.pts, st.bias)
+    a = st.active
+    r_end, _, _, _ = reprojection(st.x, st.pts, obs.kf[a], obs.tr[a], obs.uv[a], cams, False)
     rms = float(np.sqrt(np.mean(np.sum(r_end**2, axis=1)))) if r_end.size else 0.0
-    if not (np.isfinite(x).all() and np.isfinite(bias)):
-        return BundleResult(poses.copy(), heading_bias, n_pts, 0, float("nan"), long_tracks)
-    return BundleResult(x, bias, n_pts, int(active.sum()), rms, long_tracks)
+    if not (np.isfinite(st.x).all() and np.isfinite(st.bias)):
+        return failed
+    return BundleResult(st.x, st.bias, obs.n_pts, int(a.sum()), rms, long_tracks)

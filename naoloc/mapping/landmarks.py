@@ -14,27 +14,24 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from naoloc.keyframe import camera_in_robot
+from naoloc.config import LandmarkTuning
+from naoloc.geometry import planar_pose, robot_matrix
+from naoloc.keyframe import CameraInfo, Keyframe, camera_in_robot
 
-# Pair selection: camera centres this far apart (m) and views within this angle (rad).
-PAIR_MIN_BASELINE_M = 0.05
-PAIR_MAX_BASELINE_M = 1.2
-PAIR_MAX_VIEW_ANGLE = math.radians(50.0)
-PAIRS_PER_KEYFRAME = 4
-RATIO_TEST = 0.8
-MAX_REPROJECTION_PX = 2.0
-EPIPOLAR_PX = 3.0
-MIN_PARALLAX_RAD = math.radians(1.0)
-DEPTH_RANGE_M = (0.15, 12.0)
+__all__ = [
+    "LandmarkSet",
+    "camera_matrix_in_map",
+    "camera_poses",
+    "hamming_matcher",
+    "planar_pose",
+    "query_camera",
+    "ratio_matches",
+    "robot_matrix",
+    "select_pairs",
+    "triangulate",
+]
 
-
-def robot_matrix(x: float, y: float, theta: float) -> np.ndarray:
-    """``T_map_robot`` (4x4) of a planar robot pose in the map frame."""
-    c, s = math.cos(theta), math.sin(theta)
-    t = np.eye(4)
-    t[:2, :2] = [[c, -s], [s, c]]
-    t[0, 3], t[1, 3] = x, y
-    return t
+DEFAULT = LandmarkTuning()
 
 
 def camera_matrix_in_map(
@@ -44,12 +41,26 @@ def camera_matrix_in_map(
     return robot_matrix(*pose) @ camera_in_robot(head_yaw, head_pitch, index)
 
 
-def planar_pose(t_map_robot: np.ndarray) -> tuple[float, float, float]:
-    """(x, y, theta) of a 4x4 robot transform projected on the floor (m, m, rad)."""
-    return (
-        float(t_map_robot[0, 3]),
-        float(t_map_robot[1, 3]),
-        math.atan2(float(t_map_robot[1, 0]), float(t_map_robot[0, 0])),
+def query_camera(kf: Keyframe) -> CameraInfo:
+    """The keyframe's camera model at the keyframe's actual image size."""
+    h, w = kf.image.shape[:2]
+    cam = kf.camera
+    return cam if (cam.width, cam.height) == (w, h) else cam.scaled(w, h)
+
+
+def camera_poses(poses: np.ndarray, heads: np.ndarray, cam_index: Sequence[int]) -> np.ndarray:
+    """``(N, 4, 4)`` ``T_map_cam`` of keyframes with robot poses ``poses`` (map frame).
+
+    Args:
+        poses: ``(N, 3)`` robot poses (m, m, rad).
+        heads: ``(N, 2)`` HeadYaw, HeadPitch (rad).
+        cam_index: Per keyframe camera index.
+    """
+    return np.stack(
+        [
+            camera_matrix_in_map(poses[i], heads[i, 0], heads[i, 1], cam_index[i])
+            for i in range(poses.shape[0])
+        ]
     )
 
 
@@ -61,7 +72,7 @@ def hamming_matcher(binary: bool) -> object:
 
 
 def ratio_matches(
-    matcher: object, query: np.ndarray, train: np.ndarray, ratio: float = RATIO_TEST
+    matcher: object, query: np.ndarray, train: np.ndarray, ratio: float = DEFAULT.ratio_test
 ) -> np.ndarray:
     """Lowe-ratio-tested nearest-neighbour matches ``(m, 2)``: query index, train index.
 
@@ -98,28 +109,29 @@ class LandmarkSet:
     matches: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
 
 
-def select_pairs(cams: np.ndarray) -> list[tuple[int, int]]:
+def select_pairs(cams: np.ndarray, tuning: LandmarkTuning = DEFAULT) -> list[tuple[int, int]]:
     """Keyframe pairs with a usable baseline and overlapping views.
 
     Args:
         cams: ``(N, 4, 4)`` camera poses ``T_map_cam``.
+        tuning: Baseline and view-angle limits.
 
     Returns:
-        Sorted unique pairs ``(i, j)``, i < j; up to PAIRS_PER_KEYFRAME per keyframe.
+        Sorted unique pairs ``(i, j)``, i < j; up to ``pairs_per_keyframe`` per keyframe.
     """
     centres = cams[:, :3, 3]
     views = cams[:, :3, 2]
     dist = np.linalg.norm(centres[:, None, :] - centres[None, :, :], axis=2)
     cosang = np.clip(views @ views.T, -1.0, 1.0)
     ok = (
-        (dist >= PAIR_MIN_BASELINE_M)
-        & (dist <= PAIR_MAX_BASELINE_M)
-        & (cosang >= math.cos(PAIR_MAX_VIEW_ANGLE))
+        (dist >= tuning.pair_min_baseline_m)
+        & (dist <= tuning.pair_max_baseline_m)
+        & (cosang >= math.cos(math.radians(tuning.pair_max_view_angle_deg)))
     )
     pairs: set[tuple[int, int]] = set()
     for i in range(cams.shape[0]):
         cand = np.flatnonzero(ok[i])
-        for j in cand[np.argsort(dist[i, cand], kind="stable")][:PAIRS_PER_KEYFRAME]:
+        for j in cand[np.argsort(dist[i, cand], kind="stable")][: tuning.pairs_per_keyframe]:
             pairs.add((min(i, int(j)), max(i, int(j))))
     return sorted(pairs)
 
@@ -141,6 +153,7 @@ def triangulate(
     intrinsics: Sequence[np.ndarray],
     binary: bool,
     pairs: Sequence[tuple[int, int]] | None = None,
+    tuning: LandmarkTuning = DEFAULT,
 ) -> LandmarkSet:
     """Triangulate landmarks from features matched between nearby keyframes.
 
@@ -155,6 +168,7 @@ def triangulate(
         intrinsics: Per keyframe 3x3 K.
         binary: Hamming (True) or L2 matching.
         pairs: Keyframe pairs to match; default: :func:`select_pairs` of the cameras.
+        tuning: Matching and triangulation thresholds.
 
     Returns:
         The landmarks, one row per keypoint of every keyframe.
@@ -166,10 +180,11 @@ def triangulate(
     counts = np.zeros(int(offsets[-1]))
     linked: list[np.ndarray] = []
     matcher = hamming_matcher(binary)
-    pairs = select_pairs(cams) if pairs is None else list(pairs)
+    pairs = select_pairs(cams, tuning) if pairs is None else list(pairs)
+    lo_m, hi_m = tuning.depth_range_m
     projs = [_projection(intrinsics[i], cams[i]) for i in range(cams.shape[0])]
     for i, j in pairs:
-        m = ratio_matches(matcher, desc[i], desc[j])
+        m = ratio_matches(matcher, desc[i], desc[j], tuning.ratio_test)
         if m.shape[0] < 5:
             continue
         a = xy[i][m[:, 0]].astype(np.float64)
@@ -185,7 +200,7 @@ def triangulate(
         dist = np.abs(np.einsum("ij,ij->i", bh, lines)) / np.maximum(
             np.hypot(lines[:, 0], lines[:, 1]), 1e-12
         )
-        keep = dist < EPIPOLAR_PX
+        keep = dist < tuning.epipolar_px
         if keep.sum() < 5:
             continue
         m, a, b = m[keep], a[keep], b[keep]
@@ -202,12 +217,12 @@ def triangulate(
         )
         good = (
             np.isfinite(pts).all(axis=1)
-            & (err < MAX_REPROJECTION_PX)
-            & (za > DEPTH_RANGE_M[0])
-            & (zb > DEPTH_RANGE_M[0])
-            & (za < DEPTH_RANGE_M[1])
-            & (zb < DEPTH_RANGE_M[1])
-            & (cosp < math.cos(MIN_PARALLAX_RAD))
+            & (err < tuning.max_reprojection_px)
+            & (za > lo_m)
+            & (zb > lo_m)
+            & (za < hi_m)
+            & (zb < hi_m)
+            & (cosp < math.cos(math.radians(tuning.min_parallax_deg)))
         )
         for col, kf in ((0, i), (1, j)):
             rows = offsets[kf] + m[good, col]

@@ -19,33 +19,53 @@ taken (metres, radians).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from naoloc.geometry import Pose2D, modulo2PI, relative_pose
-from naoloc.keyframe import CameraInfo, Keyframe, camera_in_robot
-from naoloc.mapping.features import Features
-from naoloc.mapping.landmarks import hamming_matcher, planar_pose, ratio_matches, robot_matrix
+from naoloc.config import LocalizeMode, LocalizerTuning, LocalizeStrategy
+from naoloc.errors import NaolocError
+from naoloc.geometry import Pose2D, circular_mean, modulo2PI, relative_pose
+from naoloc.keyframe import Keyframe, camera_in_robot
+from naoloc.mapping.data import MapData
+from naoloc.mapping.features import FeatureExtractor, Features
+from naoloc.mapping.landmarks import (
+    hamming_matcher,
+    planar_pose,
+    query_camera,
+    ratio_matches,
+    robot_matrix,
+)
+from naoloc.mapping.planar import solve_planar
 from naoloc.mapping.vocabulary import dbow_scores
 
-if TYPE_CHECKING:
-    from naoloc.mapping.map import VisualMap
+__all__ = [
+    "CONFIDENT",
+    "Estimate",
+    "LocalizeMode",
+    "LocalizeStrategy",
+    "localize_features",
+    "localize_paper",
+    "localize_verified",
+    "map_extractor",
+    "query_camera",
+]
 
-MIN_PNP_INLIERS = 10
-PNP_REPROJECTION_PX = 4.0
-CAMERA_HEIGHT_TOLERANCE_M = 0.3
-CONFIDENCE_SCALE = 25.0  # inliers at which confidence reaches 1 - 1/e
+#: The map type the localizer reads (plain data; naoloc.mapping.VisualMap is one).
+VisualMap = MapData
+
+
+#: Defaults of ``MapConfig.tuning.localizer`` (the map's own config is what is used).
+DEFAULTS = LocalizerTuning()
 #: A PnP estimate with at least this confidence (40 inliers) is "confident": behaviours may
 #: stop looking. Unverified fallbacks never reach it (capped at FALLBACK_MAX_CONFIDENCE).
-CONFIDENT = 1.0 - math.exp(-40.0 / CONFIDENCE_SCALE)
-FALLBACK_MAX_CONFIDENCE = 0.3
+CONFIDENT = 1.0 - math.exp(-DEFAULTS.confident_inliers / DEFAULTS.confidence_scale)
+FALLBACK_MAX_CONFIDENCE = DEFAULTS.fallback_max_confidence
 #: Plausibility of a pose: no more than CLEARANCE_MAX_LANDMARKS landmarks (between the floor
-#: and 3 m up) closer than CLEARANCE_M to the robot's centre, which cannot stand in a wall.
-CLEARANCE_M = 0.25
-CLEARANCE_MAX_LANDMARKS = 4
+#: and 3 m up) closer than the clearance radius to the robot's centre.
+CLEARANCE_MAX_LANDMARKS = DEFAULTS.clearance_max_landmarks
 
 
 @dataclass(frozen=True)
@@ -83,17 +103,41 @@ class Estimate:
         return str(self.details.get("method", self.mode))
 
 
-def query_camera(kf: Keyframe) -> CameraInfo:
-    """The keyframe's camera model at the keyframe's actual image size."""
-    h, w = kf.image.shape[:2]
-    cam = kf.camera
-    return cam if (cam.width, cam.height) == (w, h) else cam.scaled(w, h)
-
-
-def _circular_mean(angles: np.ndarray, weights: np.ndarray) -> float:
-    return math.atan2(
-        float(np.sum(weights * np.sin(angles))), float(np.sum(weights * np.cos(angles)))
+def map_extractor(vmap: MapData) -> FeatureExtractor:
+    """A feature extractor with the parameters the map was built with."""
+    p = vmap.feature_params
+    return FeatureExtractor(
+        p["kind"], int(p.get("max_features", 0)), float(p.get("akaze_threshold", 0.001))
     )
+
+
+def localize_features(
+    vmap: MapData,
+    feats: Sequence[Features],
+    queries: Sequence[Keyframe],
+    mode: LocalizeMode | str = LocalizeMode.VERIFIED,
+) -> Estimate:
+    """Estimate the pose at the last query from the queries' features (see module doc).
+
+    Args:
+        vmap: The map.
+        feats: Features of each query, extracted with the map's extractor.
+        queries: The query images (odometry poses and head angles).
+        mode: ``verified`` (default) or ``paper``.
+
+    Raises:
+        NaolocError: On an unknown mode or no queries.
+    """
+    try:
+        chosen = LocalizeMode(mode)
+    except ValueError:
+        valid = ", ".join(m.value for m in LocalizeMode)
+        raise NaolocError(f"unknown localize mode {mode!r}; valid: {valid}") from None
+    if not queries or len(feats) != len(queries):
+        raise NaolocError("localize needs at least one query image and one feature set each")
+    if chosen is LocalizeMode.PAPER:
+        return localize_paper(vmap, feats, queries)
+    return localize_verified(vmap, feats, queries)
 
 
 def _to_last(queries: Sequence[Keyframe]) -> list[np.ndarray]:
@@ -168,7 +212,7 @@ def localize_paper(
         headings.append(theta_q + math.atan2(to_last[i][1, 0], to_last[i][0, 0]))
         closeness.append(max(0.0, 1.0 - math.sqrt(float(d2[j])) / math.sqrt(2.0)))
     conf = len(usable) / len(feats) * float(np.mean(closeness))
-    theta = _circular_mean(np.asarray(headings), np.ones(len(headings)))
+    theta = circular_mean(np.asarray(headings), np.ones(len(headings)))
     return Estimate(
         float(np.mean(xs)),
         float(np.mean(ys)),
@@ -215,35 +259,32 @@ def _residuals(pose: np.ndarray, mats: np.ndarray, pts: np.ndarray, px: np.ndarr
 
 
 def _refine(pose: np.ndarray, mats: np.ndarray, pts: np.ndarray, px: np.ndarray) -> np.ndarray:
-    """Gauss-Newton on (x, y, theta) over the given correspondences (numeric Jacobian)."""
-    p = pose.astype(np.float64).copy()
-    for _ in range(6):
-        uv, _z = _project(p, mats, pts)
-        r = (uv - px).ravel()
-        jac = np.empty((r.size, 3))
-        for k, step in enumerate((1e-4, 1e-4, 1e-4)):
-            dp = p.copy()
-            dp[k] += step
-            jac[:, k] = ((_project(dp, mats, pts)[0] - px).ravel() - r) / step
-        if not np.isfinite(jac).all() or not np.isfinite(r).all():
-            break
-        delta, *_ = np.linalg.lstsq(jac, -r, rcond=None)
-        p += delta
-        if np.abs(delta).max() < 1e-6:
-            break
-    return p
+    """Gauss-Newton on (x, y, theta) over the given correspondences (naoloc.mapping.planar)."""
+
+    def at(p: np.ndarray) -> np.ndarray:
+        return (_project(p, mats, pts)[0] - px).ravel()
+
+    def linearise(p: np.ndarray) -> tuple[np.ndarray, Callable[[np.ndarray], np.ndarray]]:
+        return at(p), at
+
+    fit = solve_planar(
+        linearise, pose, iterations=6, fd_step=1e-4, tol=1e-6, stop_on_nonfinite=True
+    )
+    assert fit is not None  # linearise never gives up
+    return fit.x
 
 
 def crowded_landmarks(vmap: VisualMap, x: float, y: float) -> int:
-    """Landmarks (0.05-3 m above the floor) closer than CLEARANCE_M to ``(x, y)`` (map frame).
+    """Landmarks (0.05-3 m above the floor) closer than the clearance radius to ``(x, y)``.
 
     A robot stands in free space: a pose with many landmarks within its body is a wrong one
     (e.g. PnP on a repeated poster that puts the robot in a wall).
     """
     p = vmap.kp_points
-    near = (np.abs(p[:, 0] - x) < CLEARANCE_M) & (np.abs(p[:, 1] - y) < CLEARANCE_M)
+    r = vmap.config.tuning.localizer.clearance_m
+    near = (np.abs(p[:, 0] - x) < r) & (np.abs(p[:, 1] - y) < r)
     q = p[near]
-    ok = (np.hypot(q[:, 0] - x, q[:, 1] - y) < CLEARANCE_M) & (q[:, 2] > 0.05) & (q[:, 2] < 3.0)
+    ok = (np.hypot(q[:, 0] - x, q[:, 1] - y) < r) & (q[:, 2] > 0.05) & (q[:, 2] < 3.0)
     return int(ok.sum())
 
 
@@ -259,11 +300,12 @@ def _best_plausible(
     Returns:
         The refined last-robot pose, its inlier mask over all correspondences and the number
         of implausible hypotheses passed over; None when no hypothesis reaches
-        MIN_PNP_INLIERS at a plausible pose.
+        ``min_pnp_inliers`` at a plausible pose.
     """
+    tun = vmap.config.tuning.localizer
     scored = []
     for h in hypotheses:
-        inl = _residuals(h, mm, pts, px) < PNP_REPROJECTION_PX
+        inl = _residuals(h, mm, pts, px) < tun.pnp_reprojection_px
         scored.append((int(inl.sum()), h, inl))
     scored.sort(key=lambda t: -t[0])
     rejected = 0
@@ -276,10 +318,10 @@ def _best_plausible(
             if inl.sum() < 4:
                 break
             pose = _refine(pose, mm[inl], pts[inl], px[inl])
-            inl = _residuals(pose, mm, pts, px) < PNP_REPROJECTION_PX
-        if int(inl.sum()) < MIN_PNP_INLIERS:
+            inl = _residuals(pose, mm, pts, px) < tun.pnp_reprojection_px
+        if int(inl.sum()) < tun.min_pnp_inliers:
             continue
-        if crowded_landmarks(vmap, float(pose[0]), float(pose[1])) > CLEARANCE_MAX_LANDMARKS:
+        if crowded_landmarks(vmap, float(pose[0]), float(pose[1])) > tun.clearance_max_landmarks:
             rejected += 1
             continue
         return pose, inl, rejected
@@ -290,11 +332,16 @@ def localize_verified(
     vmap: VisualMap,
     feats: Sequence[Features],
     queries: Sequence[Keyframe],
-    top_k: int = 5,
+    top_k: int | None = None,
 ) -> Estimate:
-    """Retrieval + landmark matching + PnP + joint 3-DoF refinement (see module doc)."""
+    """Retrieval + landmark matching + PnP + joint 3-DoF refinement (see module doc).
+
+    ``top_k`` retrieval candidates per query (default: the map's tuning).
+    """
     import cv2
 
+    tun = vmap.config.tuning.localizer
+    top_k = tun.candidates if top_k is None else top_k
     usable = [i for i, f in enumerate(feats) if len(f) > 0]
     if not usable:
         return no_estimate("verified", "no features")
@@ -342,8 +389,8 @@ def localize_verified(
                 img,
                 kmat,
                 None,
-                iterationsCount=100,
-                reprojectionError=PNP_REPROJECTION_PX,
+                iterationsCount=tun.pnp_iterations,
+                reprojectionError=tun.pnp_reprojection_px,
                 confidence=0.99,
                 flags=cv2.SOLVEPNP_AP3P,
             )
@@ -355,7 +402,7 @@ def localize_verified(
         t_cam_map = np.eye(4)
         t_cam_map[:3, :3], t_cam_map[:3, 3] = rot, tvec.ravel()
         t_map_cam = np.linalg.inv(t_cam_map)
-        if abs(t_map_cam[2, 3] - c_q[2, 3]) > CAMERA_HEIGHT_TOLERANCE_M:
+        if abs(t_map_cam[2, 3] - c_q[2, 3]) > tun.camera_height_tolerance_m:
             continue
         t_map_robot_last = t_map_cam @ np.linalg.inv(c_q) @ to_last[qi]
         hypotheses.append(np.array(planar_pose(t_map_robot_last)))
@@ -376,7 +423,7 @@ def localize_verified(
                 inliers_per_query=[int((inl & (qs == qi)).sum()) for qi in usable],
                 implausible_rejected=rejected,
             )
-            conf = 1.0 - math.exp(-n_inl / CONFIDENCE_SCALE)
+            conf = 1.0 - math.exp(-n_inl / tun.confidence_scale)
             return Estimate(
                 float(pose[0]), float(pose[1]), modulo2PI(float(pose[2])), conf, "verified", details
             )
@@ -395,6 +442,7 @@ def _fallback(
     """Inlier-weighted mean of candidate keyframe poses; heading from image rotation."""
     import cv2
 
+    tun = vmap.config.tuning.localizer
     xs, ys, ths, ws = [], [], [], []
     for qi, c, _n, m in votes:
         if m.shape[0] < 8:
@@ -405,7 +453,7 @@ def _fallback(
         mask: Any = None
         try:
             cv2.setRNGSeed(int(vmap.config.seed) + qi)
-            _f, mask = cv2.findFundamentalMat(a, b, cv2.FM_RANSAC, 3.0, 0.99)
+            _f, mask = cv2.findFundamentalMat(a, b, cv2.FM_RANSAC, tun.fallback_epipolar_px, 0.99)
         except cv2.error:
             mask = None
         if mask is None or mask.size != len(a):
@@ -439,11 +487,12 @@ def _fallback(
         return no_estimate("verified", "no verified match", details)
     w = np.asarray(ws)
     details.update(method="keyframes", inliers=int(w.sum()))
-    conf = FALLBACK_MAX_CONFIDENCE * (1.0 - math.exp(-float(w.max()) / CONFIDENCE_SCALE))
+    cap, scale = tun.fallback_max_confidence, tun.confidence_scale
+    conf = cap * (1.0 - math.exp(-float(w.max()) / scale))
     return Estimate(
         float(np.average(xs, weights=w)),
         float(np.average(ys, weights=w)),
-        modulo2PI(_circular_mean(np.asarray(ths), w)),
+        modulo2PI(circular_mean(np.asarray(ths), w)),
         conf,
         "verified",
         details,

@@ -1,14 +1,16 @@
 """The map file: one ``.npz`` (zip of ``.npy`` arrays) with JSON metadata inside.
 
-Layout: every numeric array of :class:`~naoloc.mapping.map.VisualMap` under its own name,
+Layout: every numeric array of :class:`~naoloc.mapping.data.MapData` under its own name,
 plus ``meta_json``: a uint8 array holding UTF-8 JSON with the format tag and version, the
 feature parameters, the training config, the user metadata, the timings and a SHA-256
 checksum over every array (name, dtype, shape and bytes). Files are written
 deterministically (stored, fixed timestamps), so a map round-trips bit for bit.
 
-Reading uses ``np.load(allow_pickle=False)`` and JSON only: nothing in a file is ever
-executed. Any truncated, foreign, tampered or newer-version file raises
-:class:`~naoloc.errors.MapFormatError` with a one-line reason.
+Reading never unpickles and parses JSON only: nothing in a file is ever executed. Every
+member is validated before it is trusted (naoloc.mapping.mapcheck: sizes from the zip
+directory before inflating, dtypes, finiteness, shapes against each other and the metadata).
+Any truncated, foreign, tampered, corrupt, oversized or newer-version file raises
+:class:`~naoloc.errors.MapFormatError` with a one-line reason naming the file.
 """
 
 from __future__ import annotations
@@ -23,38 +25,19 @@ from typing import Any
 
 import numpy as np
 
+import naoloc.mapping.mapcheck as mapcheck
 from naoloc.config import MapConfig
 from naoloc.errors import MapFormatError, NaolocError
+from naoloc.mapping.data import MapData
 from naoloc.mapping.gcs import GCSNetwork
-from naoloc.mapping.map import VisualMap
 from naoloc.mapping.vocabulary import Vocabulary
 
 FORMAT_TAG = "naoloc-map"
 FORMAT_VERSION = 1
 _ZIP_TIME = (1980, 1, 1, 0, 0, 0)
 
-# name -> (allowed dtype kinds, ndim)
-_ARRAYS: dict[str, tuple[str, int]] = {
-    "vocab_centres": ("f", 2),
-    "vocab_idf": ("f", 1),
-    "gcs_weights": ("f", 2),
-    "gcs_triangles": ("i", 2),
-    "neuron_poses": ("f", 2),
-    "neuron_views": ("f", 1),
-    "keyframe_poses": ("f", 2),
-    "refined_poses": ("f", 2),
-    "keyframe_heads": ("f", 2),
-    "keyframe_cameras": ("f", 2),
-    "histograms": ("f", 2),
-    "winners": ("i", 1),
-    "kp_offsets": ("i", 1),
-    "kp_xy": ("f", 2),
-    "kp_desc": ("uf", 2),
-    "kp_points": ("f", 2),
-}
 
-
-def _arrays_of(vmap: VisualMap) -> dict[str, np.ndarray]:
+def _arrays_of(vmap: MapData) -> dict[str, np.ndarray]:
     return {
         "vocab_centres": vmap.vocabulary.centres,
         "vocab_idf": vmap.vocabulary.idf,
@@ -85,7 +68,7 @@ def checksum(arrays: dict[str, np.ndarray]) -> str:
     return h.hexdigest()
 
 
-def map_bytes(vmap: VisualMap) -> bytes:
+def map_bytes(vmap: MapData) -> bytes:
     """The map file's bytes (deterministic for a given map)."""
     arrays = {k: np.ascontiguousarray(v) for k, v in _arrays_of(vmap).items()}
     meta = {
@@ -114,7 +97,7 @@ def map_bytes(vmap: VisualMap) -> bytes:
     return buf.getvalue()
 
 
-def save_map(vmap: VisualMap, path: str | Path) -> None:
+def save_map(vmap: MapData, path: str | Path) -> None:
     """Write a map file.
 
     Raises:
@@ -134,56 +117,26 @@ def save_map(vmap: VisualMap, path: str | Path) -> None:
         raise NaolocError(f"{path}: cannot write map file: {err.strerror or err}") from None
 
 
-def _fail(path: str, why: str) -> MapFormatError:
-    return MapFormatError(f"{path}: not a valid naoloc map: {why}")
-
-
-def _read(source: str | Path | bytes) -> tuple[dict[str, np.ndarray], str]:
-    name = "<bytes>" if isinstance(source, bytes) else str(source)
-    stream: Any = io.BytesIO(source) if isinstance(source, bytes) else source
-    try:
-        with np.load(stream, allow_pickle=False) as npz:
-            if not hasattr(npz, "files"):
-                raise _fail(name, "not an .npz archive")
-            return {k: np.asarray(npz[k]) for k in npz.files}, name
-    except MapFormatError:
-        raise
-    except FileNotFoundError:
-        raise MapFormatError(f"{name}: no such map file") from None
-    except Exception as err:  # zip, npy header, pickle refusal, truncation: all format errors
-        raise _fail(name, f"{type(err).__name__}: {str(err)[:100]}") from None
-
-
 def _check(arrays: dict[str, np.ndarray], name: str) -> dict[str, Any]:
-    raw = arrays.get("meta_json")
-    if raw is None or raw.dtype != np.uint8 or raw.ndim != 1:
-        raise _fail(name, "no metadata (meta_json)")
-    try:
-        meta = json.loads(raw.tobytes().decode("utf-8"))
-    except (UnicodeDecodeError, ValueError):
-        raise _fail(name, "metadata is not JSON") from None
-    if not isinstance(meta, dict) or meta.get("format") != FORMAT_TAG:
+    meta = mapcheck.parse_meta(arrays["meta_json"], name)
+    if meta.get("format") != FORMAT_TAG:
         raise _fail(name, f"format tag is not {FORMAT_TAG!r}")
     version = meta.get("version")
     if not isinstance(version, int) or isinstance(version, bool) or version < 1:
-        raise _fail(name, f"bad format version {version!r}")
+        raise _fail(name, f"bad format version {str(version)[:20]!r}")
     if version > FORMAT_VERSION:
         raise MapFormatError(
             f"{name}: map format version {version} is newer than this naoloc reads "
             f"({FORMAT_VERSION}); upgrade naoloc"
         )
-    for key, (kinds, ndim) in _ARRAYS.items():
-        a = arrays.get(key)
-        if a is None:
-            raise _fail(name, f"missing array {key}")
-        if a.dtype.kind not in kinds or a.ndim != ndim:
-            raise _fail(name, f"array {key} has dtype {a.dtype} and {a.ndim} dimensions")
     body = {k: v for k, v in arrays.items() if k != "meta_json"}
-    if set(body) != set(_ARRAYS):
-        raise _fail(name, "unexpected arrays " + ", ".join(sorted(set(body) - set(_ARRAYS))))
     if meta.get("checksum") != checksum(body):
         raise _fail(name, "checksum mismatch (the file was modified)")
     return meta
+
+
+def _fail(path: str, why: str) -> MapFormatError:
+    return mapcheck.fail(path, why)
 
 
 def _consistent(a: dict[str, np.ndarray], name: str) -> None:
@@ -224,37 +177,46 @@ def _consistent(a: dict[str, np.ndarray], name: str) -> None:
             raise _fail(name, why)
 
 
-def load_map(source: str | Path | bytes) -> VisualMap:
+def read_map(source: str | Path | bytes) -> MapData:
     """Read a map file (or its bytes).
 
     Raises:
         MapFormatError: On a missing, truncated, foreign, tampered or newer-version file.
     """
-    arrays, name = _read(source)
+    arrays, name = mapcheck.read_members(source)
     meta = _check(arrays, name)
     _consistent(arrays, name)
+    mapcheck.check_values(arrays, name)
+    kind = mapcheck.check_features(arrays, meta, name)
+    features = meta["features"]
+    if not isinstance(features.get("max_features", 0), int) or not isinstance(
+        features.get("akaze_threshold", 0.001), (int, float)
+    ):
+        raise _fail(name, "bad feature parameters")
     try:
         config = MapConfig.model_validate(meta["config"])
-        features = dict(meta["features"])
-        binary = bool(meta["vocabulary"]["binary"])
-        g = meta["gcs"]
-        gcs = GCSNetwork(
-            arrays["gcs_weights"],
-            arrays["gcs_triangles"].astype(np.int64),
-            int(g["inserted"]),
-            int(g["removed"]),
-            int(g["steps"]),
-        )
-        user_meta = meta.get("meta", {})
-        timings = {str(k): float(t) for k, t in dict(meta.get("timings", {})).items()}
-        if features.get("kind") not in ("akaze", "orb", "sift") or not isinstance(user_meta, dict):
-            raise ValueError("bad feature kind or metadata")
-    except Exception as err:
-        raise _fail(name, f"bad metadata: {type(err).__name__}") from None
-    return VisualMap(
+    except ValueError as err:
+        raise _fail(name, f"bad map config: {str(err).splitlines()[0][:80]}") from None
+    g = mapcheck.meta_field(meta, "gcs", dict, name)
+    counts = [g.get(k) for k in ("inserted", "removed", "steps")]
+    if not all(isinstance(c, int) and not isinstance(c, bool) and c >= 0 for c in counts):
+        raise _fail(name, "bad GCS counters in the metadata")
+    user_meta = mapcheck.meta_field(meta, "meta", dict, name) if "meta" in meta else {}
+    timings_raw = mapcheck.meta_field(meta, "timings", dict, name) if "timings" in meta else {}
+    if not all(
+        isinstance(t, (int, float)) and not isinstance(t, bool) for t in timings_raw.values()
+    ):
+        raise _fail(name, "bad timings in the metadata")
+    timings = {str(k): float(t) for k, t in timings_raw.items()}
+    binary = kind != "sift"
+    gcs = GCSNetwork(
+        arrays["gcs_weights"], arrays["gcs_triangles"], int(counts[0]), int(counts[1]),
+        int(counts[2]),
+    )  # fmt: skip
+    return MapData(
         config=config,
         meta=user_meta,
-        feature_params=features,
+        feature_params=dict(features),
         vocabulary=Vocabulary(arrays["vocab_centres"], arrays["vocab_idf"], binary),
         gcs=gcs,
         neuron_poses=arrays["neuron_poses"],
@@ -264,8 +226,8 @@ def load_map(source: str | Path | bytes) -> VisualMap:
         keyframe_heads=arrays["keyframe_heads"],
         keyframe_cameras=arrays["keyframe_cameras"],
         histograms=arrays["histograms"],
-        winners=arrays["winners"].astype(np.int64),
-        kp_offsets=arrays["kp_offsets"].astype(np.int64),
+        winners=arrays["winners"],
+        kp_offsets=arrays["kp_offsets"],
         kp_xy=arrays["kp_xy"],
         kp_desc=arrays["kp_desc"],
         kp_points=arrays["kp_points"],

@@ -22,36 +22,22 @@ Frames: all poses are robot poses in the map frame (m, rad).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
+from naoloc.config import PoseGraphTuning
+from naoloc.geometry import planar_pose, robot_matrix, se2_compose_local, se2_relative
 from naoloc.keyframe import camera_in_robot
-from naoloc.mapping.landmarks import (
-    camera_matrix_in_map,
-    hamming_matcher,
-    planar_pose,
-    ratio_matches,
-    robot_matrix,
-    triangulate,
-)
+from naoloc.mapping.landmarks import camera_poses, hamming_matcher, ratio_matches, triangulate
+from naoloc.mapping.planar import solve_planar
 from naoloc.mapping.vocabulary import dbow_scores
 
-LOCAL_WINDOW = 3  # keyframes either side used to triangulate a keyframe's landmarks
-LOOP_MIN_GAP = 6  # keyframes closer in time than this are tied by odometry only
-LOOP_CANDIDATES = 3  # retrieval candidates per keyframe
-GEOMETRIC_CANDIDATES = 3  # candidates per keyframe from the first solution's camera poses
-LOOP_MIN_INLIERS = 15
-# Odometry noise per edge: sigma_xy = c + k * d (m); sigma_theta = c + k * sqrt(|turn|) + k' d.
-SIGMA_ODO_XY = (0.002, 0.01)  # m: constant, per metre travelled
-SIGMA_ODO_TH = (0.001, 0.006, 0.002)  # rad: constant, per sqrt(rad) turned, per metre travelled
-LOOP_REPROJECTION_PX = 3.0
-LOOP_PIXEL_SIGMA = 1.0  # px: least pixel noise of a loop-closure match
-LOOP_EFFECTIVE_MATCHES = 20  # matches counted at most (their landmark errors correlate)
-HUBER_K = 2.0  # loop residuals beyond this many sigmas get a linear (Huber) loss
-SIGMA_BIAS_PRIOR = 0.05  # rad/m: weak prior of the heading bias around 0
-OUTLIER_CHI2 = 16.0  # loop closures with a larger chi-square after solving are dropped
+DEFAULT = PoseGraphTuning()
+_HOLD = 1e9  # weight that holds node 0 in place (the map frame)
+#: ``relative(a, b)``: pose ``b`` in the frame of pose ``a`` (naoloc.geometry.se2_relative).
+relative = se2_relative
 
 
 @dataclass(frozen=True)
@@ -111,21 +97,7 @@ class RefinedPoses:
     edges: tuple[Edge, ...] = ()
 
 
-def _v2t(p: np.ndarray) -> np.ndarray:
-    c, s = math.cos(p[2]), math.sin(p[2])
-    return np.array([[c, -s, p[0]], [s, c, p[1]], [0.0, 0.0, 1.0]])
-
-
-def _t2v(t: np.ndarray) -> np.ndarray:
-    return np.array([t[0, 2], t[1, 2], math.atan2(t[1, 0], t[0, 0])])
-
-
-def relative(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Pose ``b`` expressed in the frame of pose ``a`` (both ``(3,)``, same frame)."""
-    return _t2v(np.linalg.inv(_v2t(a)) @ _v2t(b))
-
-
-def _edge_terms(
+def edge_terms(
     x: np.ndarray, edges: Sequence[Edge], bias: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Residuals and Jacobians of all edges at once.
@@ -175,6 +147,7 @@ def solve_pose_graph(
     *,
     estimate_bias: bool = False,
     huber_k: float | None = None,
+    sigma_bias_prior: float = DEFAULT.sigma_bias_prior,
 ) -> GraphSolution:
     """Gauss-Newton on a 2-D pose graph, node 0 fixed.
 
@@ -185,6 +158,7 @@ def solve_pose_graph(
         estimate_bias: Also estimate one odometry heading bias (rad/m) shared by the
             odometry edges (a weak prior keeps it near 0 when unobservable).
         huber_k: Huber threshold (in sigmas) for the non-odometry edges; None: least squares.
+        sigma_bias_prior: Standard deviation of the heading bias's prior (rad/m).
 
     Returns:
         The optimised poses and heading bias.
@@ -197,8 +171,11 @@ def solve_pose_graph(
     done = 0
     for it in range(1, iterations + 1):
         done = it
-        h, g = graph_system(x, edges, bias, estimate_bias=estimate_bias, huber_k=huber_k)
-        h[:3, :3] += np.eye(3) * 1e9  # hold node 0
+        h, g = graph_system(
+            x, edges, bias, estimate_bias=estimate_bias, huber_k=huber_k,
+            sigma_bias_prior=sigma_bias_prior,
+        )  # fmt: skip
+        h[:3, :3] += np.eye(3) * _HOLD  # hold node 0
         try:
             dx = np.linalg.solve(h + np.eye(h.shape[0]) * 1e-9, -g)
         except np.linalg.LinAlgError:
@@ -210,14 +187,19 @@ def solve_pose_graph(
     return GraphSolution(x, bias, done)
 
 
-def graph_cost(x: np.ndarray, edges: Sequence[Edge], bias: float) -> float:
+def graph_cost(
+    x: np.ndarray,
+    edges: Sequence[Edge],
+    bias: float,
+    sigma_bias_prior: float = DEFAULT.sigma_bias_prior,
+) -> float:
     """Sum of the edges' squared Mahalanobis residuals plus the heading bias prior.
 
     Twice the cost whose gradient :func:`graph_system` returns (same edges, no Huber).
     """
-    cost = (bias / SIGMA_BIAS_PRIOR) ** 2
+    cost = (bias / sigma_bias_prior) ** 2
     if edges:
-        r, _, _, _ = _edge_terms(x, edges, bias)
+        r, _, _, _ = edge_terms(x, edges, bias)
         info = np.stack([e.info for e in edges])
         cost += float(np.einsum("ei,eij,ej->", r, info, r))
     return cost
@@ -230,6 +212,7 @@ def graph_system(
     *,
     estimate_bias: bool = False,
     huber_k: float | None = None,
+    sigma_bias_prior: float = DEFAULT.sigma_bias_prior,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Gauss-Newton normal equations ``H dx = -g`` of the pose-graph edges.
 
@@ -243,6 +226,7 @@ def graph_system(
         bias: Current heading bias (rad/m).
         estimate_bias: Let the odometry edges depend on the bias.
         huber_k: Huber threshold (in sigmas) for the non-odometry edges; None: least squares.
+        sigma_bias_prior: Standard deviation of the heading bias's prior (rad/m).
 
     Returns:
         ``h`` ``(3N + 1, 3N + 1)`` and ``g`` ``(3N + 1,)``.
@@ -251,14 +235,14 @@ def graph_system(
     dim = 3 * n + 1
     h = np.zeros((dim, dim))
     g = np.zeros(dim)
-    h[-1, -1] += 1.0 / SIGMA_BIAS_PRIOR**2
-    g[-1] += bias / SIGMA_BIAS_PRIOR**2
+    h[-1, -1] += 1.0 / sigma_bias_prior**2
+    g[-1] += bias / sigma_bias_prior**2
     if not edges:
         return h, g
     ia = np.array([e.a for e in edges], np.int64)
     ib = np.array([e.b for e in edges], np.int64)
     info = np.stack([e.info for e in edges])
-    r, ja, jb, jbias = _edge_terms(x, edges, bias)
+    r, ja, jb, jbias = edge_terms(x, edges, bias)
     if huber_k is not None:
         loop = np.array([not e.odometry for e in edges])
         chi2 = np.einsum("ei,eij,ej->e", r, info, r)
@@ -283,20 +267,21 @@ def graph_system(
     return h, g
 
 
-def odometry_info(z: np.ndarray) -> np.ndarray:
+def odometry_info(z: np.ndarray, tuning: PoseGraphTuning = DEFAULT) -> np.ndarray:
     """Information matrix of an odometry edge ``z`` (pose of b in a's frame)."""
     dist = math.hypot(z[0], z[1])
-    sxy = SIGMA_ODO_XY[0] + SIGMA_ODO_XY[1] * dist
-    sth = SIGMA_ODO_TH[0] + SIGMA_ODO_TH[1] * math.sqrt(abs(z[2])) + SIGMA_ODO_TH[2] * dist
+    s_xy, s_th = tuning.sigma_odo_xy, tuning.sigma_odo_theta
+    sxy = s_xy[0] + s_xy[1] * dist
+    sth = s_th[0] + s_th[1] * math.sqrt(abs(z[2])) + s_th[2] * dist
     return np.diag([1 / sxy**2, 1 / sxy**2, 1 / sth**2])
 
 
-def odometry_edges(poses: np.ndarray) -> list[Edge]:
+def odometry_edges(poses: np.ndarray, tuning: PoseGraphTuning = DEFAULT) -> list[Edge]:
     """Edges between consecutive keyframes from their odometry poses."""
     out = []
     for i in range(poses.shape[0] - 1):
         z = relative(poses[i], poses[i + 1])
-        out.append(Edge(i, i + 1, z, odometry_info(z), True, math.hypot(z[0], z[1])))
+        out.append(Edge(i, i + 1, z, odometry_info(z, tuning), True, math.hypot(z[0], z[1])))
     return out
 
 
@@ -313,18 +298,20 @@ class _LoopContext:
     points: np.ndarray  # (M, 3) local landmarks, map frame of the odometry poses
     offsets: np.ndarray
     matcher: object
+    tuning: PoseGraphTuning
 
 
 def _loop_edge(ctx: _LoopContext, i: int, j: int) -> Edge | None:
     """Relative pose of keyframe j in keyframe i's frame by PnP on i's local landmarks."""
     import cv2
 
+    tun = ctx.tuning
     m = ratio_matches(ctx.matcher, ctx.desc[j], ctx.desc[i])
-    if m.shape[0] < LOOP_MIN_INLIERS:
+    if m.shape[0] < tun.loop_min_inliers:
         return None
     obj_map = ctx.points[ctx.offsets[i] : ctx.offsets[i + 1]][m[:, 1]]
     ok_pts = np.isfinite(obj_map[:, 0])
-    if ok_pts.sum() < LOOP_MIN_INLIERS:
+    if ok_pts.sum() < tun.loop_min_inliers:
         return None
     t_ri_map = np.linalg.inv(robot_matrix(*ctx.poses[i]))
     obj = obj_map[ok_pts] @ t_ri_map[:3, :3].T + t_ri_map[:3, 3]
@@ -337,23 +324,24 @@ def _loop_edge(ctx: _LoopContext, i: int, j: int) -> Edge | None:
             ctx.intrinsics[j],
             None,
             iterationsCount=200,
-            reprojectionError=3.0,
+            reprojectionError=tun.loop_reprojection_px,
             confidence=0.999,
             flags=cv2.SOLVEPNP_SQPNP,
         )
     except cv2.error:
         return None
-    if not ok or inl is None or len(inl) < LOOP_MIN_INLIERS:
+    if not ok or inl is None or len(inl) < tun.loop_min_inliers:
         return None
     rot, _ = cv2.Rodrigues(rvec)
     t_cam_ri = np.eye(4)
     t_cam_ri[:3, :3], t_cam_ri[:3, 3] = rot, tvec.ravel()
     c_j = camera_in_robot(float(ctx.heads[j, 0]), float(ctx.heads[j, 1]), ctx.cam_index[j])
     t_ri_rj = np.linalg.inv(t_cam_ri) @ np.linalg.inv(c_j)
-    if abs(t_ri_rj[2, 3]) > 0.1:  # both robots stand on the same floor
+    if abs(t_ri_rj[2, 3]) > tun.max_height_change_m:  # both robots stand on the same floor
         return None
     sel = np.asarray(inl).ravel()
-    fit = planar_pnp(np.array(planar_pose(t_ri_rj)), obj[sel], img[sel], ctx.intrinsics[j], c_j)
+    z0 = np.array(planar_pose(t_ri_rj))
+    fit = planar_pnp(z0, obj[sel], img[sel], ctx.intrinsics[j], c_j, tun)
     if fit is None:
         return None
     return Edge(i, j, fit[0], fit[1])
@@ -370,22 +358,22 @@ def _project_planar(
         return h[:, :2] / h[:, 2:3], pc[:, 2]
 
 
-def _compose_local(z: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """``z (+) d``: the pose ``z`` moved by ``d`` expressed in its own frame."""
-    c, s = math.cos(z[2]), math.sin(z[2])
-    return np.array([z[0] + c * d[0] - s * d[1], z[1] + s * d[0] + c * d[1], z[2] + d[2]])
-
-
 def planar_pnp(
-    z0: np.ndarray, obj: np.ndarray, img: np.ndarray, kmat: np.ndarray, c_j: np.ndarray
+    z0: np.ndarray,
+    obj: np.ndarray,
+    img: np.ndarray,
+    kmat: np.ndarray,
+    c_j: np.ndarray,
+    tuning: PoseGraphTuning = DEFAULT,
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """Planar (x, y, theta) pose from 3-D to 2-D matches, and its information matrix.
 
-    Gauss-Newton on the reprojection error with the camera height and pitch fixed by the
-    head (``c_j``); points beyond LOOP_REPROJECTION_PX are left out. The information is
-    ``J^T J / sigma^2`` of the pixel residuals, with the matches counted at most
-    LOOP_EFFECTIVE_MATCHES times (landmark errors are correlated) and the residual spread
-    taken when it is larger than LOOP_PIXEL_SIGMA.
+    Gauss-Newton (naoloc.mapping.planar) on the reprojection error with the camera height
+    and pitch fixed by the head (``c_j``); points beyond ``tuning.loop_reprojection_px``
+    are left out at each iteration. The information is ``J^T J / sigma^2`` of the pixel
+    residuals, with the matches counted at most ``loop_effective_matches`` times (landmark
+    errors are correlated) and the residual spread taken when it is larger than
+    ``loop_pixel_sigma``.
 
     Args:
         z0: ``(3,)`` initial pose of the robot in the landmarks' frame (m, m, rad).
@@ -393,96 +381,96 @@ def planar_pnp(
         img: ``(n, 2)`` their pixels.
         kmat: 3x3 camera matrix.
         c_j: 4x4 camera-in-robot transform of the image.
+        tuning: Thresholds (pixels, inliers).
 
     Returns:
         ``(z, info)`` (3-vector, 3x3), or None with too few consistent matches.
     """
-    z = z0.astype(np.float64).copy()
-    keep = np.ones(obj.shape[0], bool)
-    jac = np.zeros((0, 3))
-    res = np.zeros(0)
-    for _ in range(5):
+    kept: list[int] = [obj.shape[0]]
+
+    def linearise(
+        z: np.ndarray,
+    ) -> tuple[np.ndarray, Callable[[np.ndarray], np.ndarray]] | None:
         uv, depth = _project_planar(z, obj, kmat, c_j)
         err = np.linalg.norm(uv - img, axis=1)
-        keep = np.isfinite(err) & (depth > 0.05) & (err < LOOP_REPROJECTION_PX)
-        if keep.sum() < LOOP_MIN_INLIERS:
+        keep = np.isfinite(err) & (depth > 0.05) & (err < tuning.loop_reprojection_px)
+        kept[0] = int(keep.sum())
+        if kept[0] < tuning.loop_min_inliers:
             return None
-        res = (uv[keep] - img[keep]).ravel()
-        jac = np.empty((res.size, 3))
-        for k in range(3):
-            d = np.zeros(3)
-            d[k] = 1e-5
-            uv_k, _ = _project_planar(_compose_local(z, d), obj[keep], kmat, c_j)
-            jac[:, k] = ((uv_k - img[keep]).ravel() - res) / 1e-5
-        step, *_ = np.linalg.lstsq(jac, -res, rcond=None)
-        z = _compose_local(z, step)
-        if np.abs(step).max() < 1e-7:
-            break
-    m = int(keep.sum())
-    sigma = max(LOOP_PIXEL_SIGMA, float(np.sqrt(np.mean(res**2))))
-    info = jac.T @ jac / sigma**2 * min(1.0, LOOP_EFFECTIVE_MATCHES / m)
+        obj_k, img_k = obj[keep], img[keep]
+
+        def at(zz: np.ndarray) -> np.ndarray:
+            return (_project_planar(zz, obj_k, kmat, c_j)[0] - img_k).ravel()
+
+        return (uv[keep] - img_k).ravel(), at
+
+    fit = solve_planar(
+        linearise, z0, iterations=5, fd_step=1e-5, tol=1e-7, retract=se2_compose_local
+    )
+    if fit is None:
+        return None
+    res, jac = fit.residuals, fit.jacobian
+    sigma = max(tuning.loop_pixel_sigma, float(np.sqrt(np.mean(res**2))))
+    info = jac.T @ jac / sigma**2 * min(1.0, tuning.loop_effective_matches / kept[0])
     if not np.isfinite(info).all():
         return None
-    return z, info
+    return fit.x, info
 
 
-def _retrieval_pairs(histograms: np.ndarray) -> list[tuple[int, int]]:
+def _retrieval_pairs(histograms: np.ndarray, tuning: PoseGraphTuning) -> list[tuple[int, int]]:
     """(landmark keyframe, query keyframe) pairs from TF-IDF retrieval, far apart in time."""
     n = histograms.shape[0]
+    gap = tuning.loop_min_gap
     out = []
     for j in range(n):
         scores = dbow_scores(histograms[j], histograms)
-        scores[max(0, j - LOOP_MIN_GAP + 1) : j + LOOP_MIN_GAP] = -1.0
-        for i in np.argsort(-scores, kind="stable")[:LOOP_CANDIDATES].tolist():
+        scores[max(0, j - gap + 1) : j + gap] = -1.0
+        for i in np.argsort(-scores, kind="stable")[: tuning.loop_candidates].tolist():
             if scores[i] > 0:
                 out.append((int(i), j))
     return out
 
 
-def _geometric_pairs(cams: np.ndarray) -> list[tuple[int, int]]:
+def _geometric_pairs(cams: np.ndarray, tuning: PoseGraphTuning) -> list[tuple[int, int]]:
     """Pairs far apart in time whose cameras (of a first solution) see the same place.
 
-    Each camera's look-at point 1.5 m ahead on its optical axis is compared; the closest
-    ones with views within 45 degrees pair up.
+    Each camera's look-at point ``geometric_lookahead_m`` ahead on its optical axis is
+    compared; the closest ones with views within ``geometric_max_angle_deg`` pair up.
     """
     n = cams.shape[0]
-    look = cams[:, :3, 3] + 1.5 * cams[:, :3, 2]
+    look = cams[:, :3, 3] + tuning.geometric_lookahead_m * cams[:, :3, 2]
     views = cams[:, :3, 2]
     dist = np.linalg.norm(look[:, None, :] - look[None, :, :], axis=2)
-    ok = (views @ views.T) > math.cos(math.radians(45.0))
+    ok = (views @ views.T) > math.cos(math.radians(tuning.geometric_max_angle_deg))
     idx = np.arange(n)
-    ok &= np.abs(idx[:, None] - idx[None, :]) >= LOOP_MIN_GAP
+    ok &= np.abs(idx[:, None] - idx[None, :]) >= tuning.loop_min_gap
     dist[~ok] = np.inf
     out = []
     for j in range(n):
-        for i in np.argsort(dist[j], kind="stable")[:GEOMETRIC_CANDIDATES].tolist():
-            if math.isfinite(dist[j, i]) and dist[j, i] < 1.0:
+        for i in np.argsort(dist[j], kind="stable")[: tuning.geometric_candidates].tolist():
+            if math.isfinite(dist[j, i]) and dist[j, i] < tuning.geometric_max_distance_m:
                 out.append((int(i), j))
     return out
 
 
-def _cameras(poses: np.ndarray, heads: np.ndarray, cam_index: Sequence[int]) -> np.ndarray:
-    return np.stack(
-        [
-            camera_matrix_in_map(poses[i], heads[i, 0], heads[i, 1], cam_index[i])
-            for i in range(poses.shape[0])
-        ]
-    )
-
-
 def _solve_robust(
-    init: np.ndarray, odo: list[Edge], loops: list[Edge]
+    init: np.ndarray, odo: list[Edge], loops: list[Edge], tuning: PoseGraphTuning
 ) -> tuple[GraphSolution, list[Edge]]:
     """Robust solve, drop loop closures that still disagree, solve again."""
-    sol = solve_pose_graph(init, odo + loops, estimate_bias=True, huber_k=HUBER_K)
+    prior = tuning.sigma_bias_prior
+    sol = solve_pose_graph(
+        init, odo + loops, estimate_bias=True, huber_k=tuning.huber_k, sigma_bias_prior=prior
+    )
     kept = []
     for e in loops:
         r = relative(sol.poses[e.a], sol.poses[e.b]) - e.z
         r[2] = math.remainder(r[2], 2.0 * math.pi)
-        if float(r @ e.info @ r) < OUTLIER_CHI2:
+        if float(r @ e.info @ r) < tuning.outlier_chi2:
             kept.append(e)
     if len(kept) < len(loops):
-        sol = solve_pose_graph(init, odo + kept, estimate_bias=True, huber_k=HUBER_K)
+        sol = solve_pose_graph(
+            init, odo + kept, estimate_bias=True, huber_k=tuning.huber_k, sigma_bias_prior=prior
+        )
     return sol, kept
 
 
@@ -495,6 +483,7 @@ def refine_poses(
     cam_index: Sequence[int],
     histograms: np.ndarray,
     binary: bool,
+    tuning: PoseGraphTuning = DEFAULT,
 ) -> RefinedPoses:
     """Refine survey keyframe poses with visual loop closures (see module docstring).
 
@@ -507,19 +496,22 @@ def refine_poses(
         cam_index: Per keyframe camera index.
         histograms: ``(N, V)`` TF-IDF histograms for retrieval.
         binary: Hamming (True) or L2 descriptors.
+        tuning: Loop-closure and odometry-noise settings.
 
     Returns:
         The refined poses (the odometry poses when no loop closure is found).
     """
     n = poses.shape[0]
-    cams = _cameras(poses, heads, cam_index)
-    local = [(i, j) for i in range(n) for j in range(i + 1, min(n, i + LOCAL_WINDOW + 1))]
+    cams = camera_poses(poses, heads, cam_index)
+    win = tuning.local_window
+    local = [(i, j) for i in range(n) for j in range(i + 1, min(n, i + win + 1))]
     lm = triangulate(xy, desc, cams, intrinsics, binary, pairs=local)
     offsets = np.concatenate([[0], np.cumsum([a.shape[0] for a in xy])]).astype(np.int64)
     ctx = _LoopContext(
-        poses, heads, xy, desc, intrinsics, cam_index, lm.points, offsets, hamming_matcher(binary)
-    )
-    odo = odometry_edges(poses)
+        poses, heads, xy, desc, intrinsics, cam_index, lm.points, offsets,
+        hamming_matcher(binary), tuning,
+    )  # fmt: skip
+    odo = odometry_edges(poses, tuning)
     tried: set[tuple[int, int]] = set()
     loops: list[Edge] = []
 
@@ -533,13 +525,13 @@ def refine_poses(
             if edge is not None:
                 loops.append(edge)
 
-    add(_retrieval_pairs(histograms))
+    add(_retrieval_pairs(histograms, tuning))
     if not loops:
         return RefinedPoses(poses.copy(), 0, 0.0, 0.0, tuple(odo))
-    sol, kept = _solve_robust(poses, odo, loops)
+    sol, kept = _solve_robust(poses, odo, loops, tuning)
     # Second pass: pairs that look at the same place according to the first solution.
-    add(_geometric_pairs(_cameras(sol.poses, heads, cam_index)))
-    sol, kept = _solve_robust(sol.poses, odo, loops)
+    add(_geometric_pairs(camera_poses(sol.poses, heads, cam_index), tuning))
+    sol, kept = _solve_robust(sol.poses, odo, loops, tuning)
     refined = sol.poses
     shift = float(np.max(np.hypot(*(refined[:, :2] - poses[:, :2]).T)))
     return RefinedPoses(refined, len(kept), shift, sol.heading_bias, tuple(odo + kept))

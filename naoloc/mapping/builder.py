@@ -1,0 +1,174 @@
+"""Algorithm 4: build the map from survey keyframes, then refine it geometrically.
+
+features -> vocabulary -> TF-IDF histograms -> GCS -> neuron poses (the paper); then the
+visual loop-closure pose graph (naoloc.mapping.posegraph), landmarks
+(naoloc.mapping.landmarks) and bundle adjustment (naoloc.mapping.bundle), all tuned by
+``MapConfig.tuning``.
+
+Frames: keyframe poses, neuron poses and landmarks are in the map frame (the odometry frame
+at the start of the survey: x forward, y left, theta counter-clockwise; landmarks add z up),
+metres and radians.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from naoloc.config import MapConfig
+from naoloc.errors import DatasetError
+from naoloc.geometry import circular_mean
+from naoloc.keyframe import Keyframe
+from naoloc.mapping.bundle import BundleProblem, bundle_adjust, tracks_from_links
+from naoloc.mapping.data import MapData
+from naoloc.mapping.features import FeatureExtractor, Features
+from naoloc.mapping.gcs import train_gcs
+from naoloc.mapping.landmarks import camera_poses, query_camera, triangulate
+from naoloc.mapping.posegraph import refine_poses
+from naoloc.mapping.vocabulary import train_vocabulary
+
+ProgressFn = Callable[[str, int, int], None]
+
+
+def _neuron_poses(
+    winners: np.ndarray, poses: np.ndarray, views: np.ndarray, k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Algorithm 4, line 7: each neuron's pose is the mean pose of the images it wins."""
+    out = np.full((k, 3), np.nan)
+    view = np.full(k, np.nan)
+    for n in np.unique(winners).tolist():
+        sel = winners == n
+        out[n, :2] = poses[sel, :2].mean(axis=0)
+        out[n, 2] = circular_mean(poses[sel, 2])
+        view[n] = circular_mean(views[sel])
+    return out, view
+
+
+def build_map_data(
+    keyframes: Sequence[Keyframe],
+    cfg: MapConfig,
+    *,
+    meta: dict[str, Any] | None = None,
+    progress: ProgressFn | None = None,
+    extractor: FeatureExtractor | None = None,
+) -> MapData:
+    """Algorithm 4: features -> vocabulary -> histograms -> GCS -> neuron poses; landmarks.
+
+    Args:
+        keyframes: Survey images; ``pose`` is the odometry pose in the map frame, head angles
+            and camera give the view.
+        cfg: Feature kind, GCS size, epochs, seed, vocabulary size.
+        meta: JSON-able metadata stored in the map file.
+        progress: Called as ``progress(stage, done, total)``.
+        extractor: The feature extractor to use (default: one for ``cfg.features``).
+
+    Returns:
+        The map.
+
+    Raises:
+        DatasetError: When there are no keyframes.
+    """
+    if not keyframes:
+        raise DatasetError("no keyframes to build a map from")
+    report = progress or (lambda _s, _d, _t: None)
+    n = len(keyframes)
+    t0 = time.perf_counter()
+    extractor = extractor or FeatureExtractor(cfg.features)
+    tune = cfg.tuning
+    feats: list[Features] = []
+    for i, kf in enumerate(keyframes):
+        feats.append(extractor.extract(kf.gray()))
+        report("features", i + 1, n)
+    t1 = time.perf_counter()
+    vocab = train_vocabulary(
+        [f.descriptors for f in feats], cfg.vocabulary_size, extractor.binary, cfg.seed
+    )
+    hists = vocab.histograms([f.descriptors for f in feats])
+    report("vocabulary", 1, 1)
+    t2 = time.perf_counter()
+    gcs = train_gcs(hists, cfg.neurons, cfg.epochs, cfg.seed)
+    report("gcs", 1, 1)
+    t3 = time.perf_counter()
+    poses = np.array([[kf.pose.x, kf.pose.y, kf.pose.theta] for kf in keyframes], np.float64)
+    heads = np.array([[kf.head_yaw, kf.head_pitch] for kf in keyframes], np.float64)
+    cams_info = [query_camera(kf) for kf in keyframes]
+    cameras = np.array(
+        [[c.width, c.height, c.hfov, c.vfov, c.index] for c in cams_info], np.float64
+    )
+    winners = gcs.winners(hists)
+    neuron_poses, neuron_views = _neuron_poses(winners, poses, poses[:, 2] + heads[:, 0], gcs.size)
+    xys, descs = [f.xy for f in feats], [f.descriptors for f in feats]
+    kmats = [c.matrix() for c in cams_info]
+    cam_index = [c.index for c in cams_info]
+    refined = refine_poses(
+        poses, heads, xys, descs, kmats, cam_index, hists, extractor.binary, tune.pose_graph
+    )
+    report("poses", 1, 1)
+    # Landmarks from the pose-graph poses link keypoints into tracks; bundle adjustment
+    # refines the poses with them; the landmarks are then triangulated from those poses.
+    binary = extractor.binary
+    cams = camera_poses(refined.poses, heads, cam_index)
+    lm = triangulate(xys, descs, cams, kmats, binary, tuning=tune.landmarks)
+    kp_xy = np.concatenate(xys)
+    kp_frame = np.repeat(np.arange(n), [len(f) for f in feats])
+    tracks = tracks_from_links(kp_xy.shape[0], lm.matches)
+    odometry = [e for e in refined.edges if e.odometry]
+    problem = BundleProblem(
+        refined.poses, heads, cam_index, kmats, kp_xy, kp_frame, tracks, lm.points, odometry,
+        tune.pose_graph,
+    )  # fmt: skip
+    # Odometry edges only: the loop closures' relative poses carry the errors of their
+    # odometry-triangulated landmarks (measured: they make the result worse), and tracks
+    # seen from both laps (spanning half the loop-closure gap) tie the laps. Without
+    # enough such tracks the loops are kept.
+    loop_gaps = [abs(e.b - e.a) for e in refined.edges if not e.odometry]
+    gap = int(np.median(loop_gaps)) // 2 if loop_gaps else n
+    bias = refined.heading_bias
+    adjusted = bundle_adjust(problem, tune.bundle, heading_bias=bias, long_gap=gap)
+    if adjusted.long_tracks < tune.bundle.min_long_tracks and loop_gaps:
+        problem = dataclasses.replace(problem, edges=list(refined.edges))
+        adjusted = bundle_adjust(problem, tune.bundle, heading_bias=bias, long_gap=gap)
+    final_poses = adjusted.poses
+    cams = camera_poses(final_poses, heads, cam_index)
+    lm = triangulate(xys, descs, cams, kmats, binary, tuning=tune.landmarks)
+    report("landmarks", 1, 1)
+    t4 = time.perf_counter()
+    offsets = np.concatenate([[0], np.cumsum([len(f) for f in feats])]).astype(np.int64)
+    timings = {
+        "features_s": t1 - t0,
+        "vocabulary_s": t2 - t1,
+        "gcs_s": t3 - t2,
+        "landmarks_s": t4 - t3,
+        "total_s": t4 - t0,
+    }
+    return MapData(
+        config=cfg,
+        meta={
+            **dict(meta or {}),
+            "loop_closures": refined.loops,
+            "heading_bias_rad_per_m": round(adjusted.heading_bias, 6),
+            "bundle_tracks": adjusted.tracks,
+            "bundle_long_tracks": adjusted.long_tracks,
+            "bundle_rms_px": round(adjusted.rms_px, 3),
+        },
+        feature_params=extractor.params(),
+        vocabulary=vocab,
+        gcs=gcs,
+        neuron_poses=neuron_poses,
+        neuron_views=neuron_views,
+        keyframe_poses=poses,
+        refined_poses=final_poses,
+        keyframe_heads=heads,
+        keyframe_cameras=cameras,
+        histograms=hists,
+        winners=winners,
+        kp_offsets=offsets,
+        kp_xy=np.concatenate([f.xy for f in feats]).astype(np.float32),
+        kp_desc=np.concatenate([f.descriptors for f in feats]),
+        kp_points=lm.points,
+        timings=timings,
+    )
