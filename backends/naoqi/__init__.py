@@ -3,7 +3,8 @@
 ``robot.backend: naoqi`` with ``robot.url`` (``tcp://<ip>:9559``; NAOqi 2.9+:
 ``tcps://<ip>:9503`` with ``robot.user`` and ``robot.password``) and
 ``robot.transport`` (``libqi`` = the real qi package, ``zmq`` = naoloc's pure-Python
-shim, ``auto`` = libqi when qi imports, unless the server greets with ZeroMQ).
+shim, ``qimessaging`` = libqi's wire protocol in pure Python, ``auto`` = libqi when qi
+imports, qimessaging otherwise, zmq when the server greets with ZeroMQ).
 
 ``robot.sim`` is None unless ``robot.sim_service: true`` asks for the virtual NAOqi's
 ``NaolocSim`` service (ground truth and teleport), so a real NAO never gets one.
@@ -31,7 +32,7 @@ def create(cfg: Config) -> Robot:
 
     rc = cfg.robot
     transport = resolve_transport(rc.transport)
-    if rc.transport == "auto" and transport == "libqi" and looks_like_zmq(rc.url):
+    if rc.transport == "auto" and transport != "zmq" and looks_like_zmq(rc.url):
         transport = "zmq"
     link = Link(rc.url, transport, user=rc.user, password=rc.password, curve_keys=rc.curve_keys)
     link.open()
