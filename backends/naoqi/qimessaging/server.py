@@ -337,14 +337,17 @@ class QiServer:
         if header.action < 100:
             self._generic(client, header, served, method, args)
             return
-        if client.in_flight >= MAX_IN_FLIGHT:
+        with self._lock:
+            busy = client.in_flight >= MAX_IN_FLIGHT
+            client.in_flight += 0 if busy else 1
+        if busy:
             self._error(client, header, f"more than {MAX_IN_FLIGHT} calls in flight")
             return
-        client.in_flight += 1
         try:
             self._pool.submit(self._run, client, header, served, method, args)
         except RuntimeError:  # shutting down
-            client.in_flight -= 1
+            with self._lock:
+                client.in_flight -= 1
 
     def _arguments(
         self, client: _Client, header: Header, method: Method, payload: memoryview
@@ -426,7 +429,8 @@ class QiServer:
             text = f"{type(err).__name__}: {err}".splitlines()[0]
             self._error(client, header, f"RobotError: {served.name}.{method.name}: {text}")
         finally:
-            client.in_flight -= 1
+            with self._lock:
+                client.in_flight -= 1
 
     def _directory(self, name: str, args: list[Any]) -> Any:
         with self._lock:
