@@ -17,8 +17,10 @@ import itertools
 import os
 import socket
 import ssl
+import struct
 import sys
 import threading
+import time
 import uuid
 from collections.abc import Iterable
 from concurrent.futures import ThreadPoolExecutor
@@ -50,6 +52,8 @@ from naoloc.errors import BackendError, NaolocError, ProtocolError, RobotError
 MAX_CONNECTIONS: Final = 64
 MAX_IN_FLIGHT: Final = 64  # calls per connection
 MAX_INCOMING: Final = 8 * 1024 * 1024  # bytes: clients send arguments, not images
+SEND_TIMEOUT_S: Final = 5.0  # a client that stops reading is dropped after this long
+AUTH_TIMEOUT_S: Final = 10.0  # a connection that does not authenticate is dropped
 SD_NAME: Final = "ServiceDirectory"
 _REFUSED: Final = "naoloc serve does not accept service (un)registration from clients"
 
@@ -67,10 +71,21 @@ class _Served:
 class _Client:
     conn: Connection
     caller: str
+    opened: float = field(default_factory=time.monotonic)
     authenticated: bool = False
     features: dict[str, bool] = field(default_factory=lambda: dict(capability.LOCAL))
     in_flight: int = 0
     links: dict[tuple[int, int], set[int]] = field(default_factory=dict)
+
+
+def _send_timeout(sock: socket.socket, seconds: float) -> None:
+    """Make blocking sends give up after ``seconds`` (a client that never reads)."""
+    whole = int(seconds)
+    value = struct.pack("ll", whole, int((seconds - whole) * 1e6))
+    if sys.platform == "win32":
+        value = struct.pack("L", int(seconds * 1000))
+    with contextlib.suppress(OSError):
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDTIMEO, value)
 
 
 def _directory_meta() -> MetaObject:
@@ -171,11 +186,16 @@ class QiServer:
 
     def _accept(self) -> None:
         assert self._sock is not None
+        self._sock.settimeout(1.0)
         while not self._closed.is_set():
+            self._drop_silent()
             try:
                 sock, _ = self._sock.accept()
+            except TimeoutError:
+                continue
             except OSError:
                 return
+            sock.settimeout(None)
             with self._lock:
                 full = len(self._clients) >= MAX_CONNECTIONS
             if full:
@@ -183,8 +203,21 @@ class QiServer:
                 continue
             threading.Thread(target=self._open, args=(sock,), daemon=True).start()
 
+    def _drop_silent(self) -> None:
+        """Close connections that never authenticated within :data:`AUTH_TIMEOUT_S`."""
+        now = time.monotonic()
+        with self._lock:
+            silent = [
+                c.conn
+                for c in self._clients.values()
+                if not c.authenticated and now - c.opened > AUTH_TIMEOUT_S
+            ]
+        for conn in silent:
+            conn.close("did not authenticate in time")
+
     def _open(self, sock: socket.socket) -> None:
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        _send_timeout(sock, SEND_TIMEOUT_S)
         if self._tls is not None:
             try:
                 sock.settimeout(5.0)
