@@ -177,7 +177,10 @@ class Signal:
 
 def qi_available() -> bool:
     """True when the real ``qi`` package can be imported (checked without importing it)."""
-    return importlib.util.find_spec("qi") is not None
+    try:
+        return importlib.util.find_spec("qi") is not None
+    except (ImportError, ValueError):  # blocked (an import hook, or sys.modules["qi"] = None)
+        return False
 
 
 def resolve_transport(transport: str) -> Transport:
