@@ -1,7 +1,8 @@
 """The NAOqi network backend: a Robot over a qi session (a real NAO or ``naoloc serve``).
 
 ``robot.backend: naoqi`` with ``robot.url`` (``tcp://<ip>:9559``; NAOqi 2.9+:
-``tcps://<ip>:9503`` with ``robot.user`` and ``robot.password``) and
+``tcps://<ip>:9503`` with ``robot.user`` and ``robot.password``, or the password in the
+environment variable ``NAOLOC_NAO_PASSWORD`` so it stays off disk) and
 ``robot.transport`` (``libqi`` = the real qi package, ``zmq`` = naoloc's pure-Python
 shim, ``qimessaging`` = libqi's wire protocol in pure Python, ``auto`` = libqi when qi
 imports, qimessaging otherwise, zmq when the server greets with ZeroMQ).
@@ -11,6 +12,8 @@ imports, qimessaging otherwise, zmq when the server greets with ZeroMQ).
 """
 
 from __future__ import annotations
+
+import os
 
 from naoloc.config import Config
 from naoloc.errors import BackendError
@@ -34,7 +37,8 @@ def create(cfg: Config) -> Robot:
     transport = resolve_transport(rc.transport)
     if rc.transport == "auto" and transport != "zmq" and looks_like_zmq(rc.url):
         transport = "zmq"
-    link = Link(rc.url, transport, user=rc.user, password=rc.password, curve_keys=rc.curve_keys)
+    password = rc.password or os.environ.get("NAOLOC_NAO_PASSWORD")  # keeps it off disk
+    link = Link(rc.url, transport, user=rc.user, password=password, curve_keys=rc.curve_keys)
     link.open()
     try:
         sim = None
