@@ -157,3 +157,30 @@ def test_nothing_listening_is_one_line() -> None:
     with pytest.raises(ConnectionLost, match="no NAOqi answers") as info:
         naoloc.connect(cfg)
     assert "\n" not in str(info.value)
+
+
+def test_overloads_posts_and_typed_errors_through_our_client(fake_robot: Robot) -> None:
+    from naoloc.backends.naoqi.qimessaging.client import QiSession
+
+    from naoloc.errors import HandleError, RobotError
+
+    with VirtualNaoqi(fake_robot, "tcp://127.0.0.1:0", "qimessaging") as server:
+        session = QiSession()
+        session.connect(server.endpoint)
+        try:
+            motion = session.service("ALMotion")
+            assert [str(m.params) for m in motion.metaObject().overloads("moveTo")] == [
+                "(ddd)",
+                "(m)",
+            ]
+            assert motion.moveTo(0.1, 0, 0) is True  # ints fit (ddd) better than (m)
+            assert motion.moveTo([[0.1, 0.0, 0.0]]) is True  # only (m) takes one argument
+            motion.post("move", 0.05, 0.0, 0.0)  # no answer: poll until it took effect
+            assert _wait_for(lambda: motion.moveIsActive() is True, 2.0)
+            motion.stopMove()
+            with pytest.raises(HandleError, match="handle"):  # the server's own error type
+                session.service("ALVideoDevice").getImageRemote("nope")
+            with pytest.raises(RobotError, match=r"do not match \(ddd\) or \(m\)"):
+                motion.moveTo("a", "b")
+        finally:
+            session.close()

@@ -97,6 +97,21 @@ class Channel:
             promise.setError(ConnectionLost(f"connection to {self.url} lost ({err})"))
         return future
 
+    def post(self, service: int, obj: int, method: Method, args: tuple[Any, ...]) -> None:
+        """Send a post: call without an answer (errors are not reported).
+
+        Raises:
+            RobotError: The arguments do not fit the method.
+            ConnectionLost: The connection is down.
+        """
+        try:
+            w = codec.encode(method.params, tuple(args), object_uid=self.features["ObjectPtrUID"])
+        except ProtocolError as err:
+            raise RobotError(f"{method.name}: {err}") from None
+        parts, size = w.finish()
+        mid = self._conn.next_id()
+        self._conn.send(mid, message.POST, service, obj, method.uid, parts, size)
+
     def _cancel(self, mid: int, service: int, obj: int, action: int) -> None:
         if self._conn.closed or mid not in self._pending:
             return

@@ -180,6 +180,14 @@ class RemoteObject:
         method = getattr(self, name)
         return method(*args, _async=_async)
 
+    def post(self, name: str, *args: Any) -> None:
+        """Call method ``name`` without waiting or an answer (a QiMessaging post)."""
+        overloads = self._meta.overloads(name)
+        if not overloads:
+            raise RobotError(f"{self._name} has no method {name!r}")
+        method = choose(overloads, args, f"{self._name}.{name}")
+        self._channel.post(self._service_id, self._object_id, method, args)
+
     def __getattr__(self, name: str) -> Any:
         if name.startswith("__"):
             raise AttributeError(name)
