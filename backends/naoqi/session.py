@@ -25,7 +25,8 @@ Transport = Literal["libqi", "zmq", "qimessaging"]
 
 QI_INSTALL_HINT = (
     "transport libqi needs the qi package: pip install 'naoloc[naoqi]' "
-    "(qi wheels exist only for Linux x86-64 and Python <= 3.12); or use transport zmq"
+    "(qi wheels exist only for Linux x86-64 and Python <= 3.12); or use transport "
+    "qimessaging (naoloc's own implementation of the same protocol, no qi needed)"
 )
 
 # States, spelled as qi.FutureState names.
