@@ -251,7 +251,12 @@ class _Proxy:
             except NaolocError as err:
                 raise RuntimeError(f"{type(err).__name__}: {err}") from None
             wrapped = Future(future)
-            return wrapped if _async else wrapped.value()
+            if _async:
+                return wrapped
+            value = wrapped.value()
+            if callable(getattr(value, "metaObject", None)):  # an object a method returned
+                return _Proxy(value, f"{self._name}.{name}()")
+            return value
 
         call.__name__ = name
         return call
@@ -373,18 +378,9 @@ class Session:
 
     def registerService(self, name: str, obj: Any) -> int:  # noqa: N802 - qi's name
         """Serve ``obj`` (methods marked with :func:`bind`, Signal/Property attributes)."""
-        methods = []
-        signals: dict[str, str] = {}
-        for attr in dir(obj):
-            if attr.startswith("_"):
-                continue
-            member = getattr(obj, attr)
-            declared = getattr(member, "_qi_signature", None)
-            if declared is not None:
-                method, params, returns = declared
-                methods.append((method, "(" + "".join(params) + ")", returns))
-            elif isinstance(member, Signal):
-                signals[attr] = member.signature
+        from naoloc.backends.naoqi.qimessaging.meta import describe
+
+        methods, signals = describe(obj)
         try:
             service_id: int = self._inner().registerService(
                 name, obj, methods=methods, signals=signals

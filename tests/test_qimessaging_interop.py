@@ -273,7 +273,7 @@ def test_libqi_clients_use_naoloc_serve_over_qimessaging() -> None:
             motion.move(0.05, 0.0, 0.0)
             driver.close()
             watch = watcher.service("ALMotion")
-            deadline = time.monotonic() + 3.0
+            deadline = time.monotonic() + 5.0  # 0.5 s dead-man; generous for a loaded CI
             while watch.moveIsActive() and time.monotonic() < deadline:
                 watcher.service("NaolocWatchdog").ping()
                 time.sleep(0.05)
@@ -282,3 +282,53 @@ def test_libqi_clients_use_naoloc_serve_over_qimessaging() -> None:
         finally:
             driver.close()
             watcher.close()
+
+
+class _Subscriber:
+    """What ALMemory.subscriber(key) returns: an object with a signal."""
+
+    def __init__(self) -> None:
+        self.signal = nqi.Signal("(m)")
+
+    @nqi.bind(nqi.String, [])
+    def key(self) -> str:
+        return "Touched"
+
+
+class _Memory:
+    def __init__(self) -> None:
+        self.subscribers: list[_Subscriber] = []
+
+    @nqi.bind(nqi.Object, [nqi.String])
+    def subscriber(self, key: str) -> _Subscriber:
+        self.subscribers.append(_Subscriber())
+        return self.subscribers[-1]
+
+    @nqi.bind(nqi.Void, [nqi.Dynamic])
+    def raiseEvent(self, value: object) -> None:
+        for sub in self.subscribers:
+            sub.signal(value)
+
+
+@pytest.mark.parametrize("client", ["libqi", "ours"])
+def test_objects_returned_by_our_server_carry_signals(client: str) -> None:
+    server = nqi.Session()
+    server.listenStandalone("tcp://127.0.0.1:0")
+    server.registerService("Memory", _Memory())
+    qi = pytest.importorskip("qi") if client == "libqi" else nqi
+    session = qi.Session()
+    session.connect(server.endpoints()[0])
+    try:
+        memory = session.service("Memory")
+        sub = memory.subscriber("Touched")
+        assert sub.key() == "Touched"
+        got: list[object] = []
+        sub.signal.connect(got.append)
+        memory.raiseEvent([1, "head"])
+        deadline = time.monotonic() + 2
+        while not got and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert got == [[1, "head"]]
+    finally:
+        session.close()
+        server.close()

@@ -412,6 +412,12 @@ class QiSession:
         service_id: int = self._server.register(name, obj, **kwargs)
         return service_id
 
+    def set_core(self, core: Any) -> None:
+        """Listening sessions: tell ``core.gone(caller)`` when a client disconnects."""
+        if self._server is None:
+            raise BackendError("set_core needs listenStandalone first (qimessaging)")
+        self._server.set_core(core)
+
     def unregisterService(self, service_id: int) -> None:
         """Stop serving a service (listening sessions only)."""
         if self._server is None:

@@ -162,6 +162,33 @@ def build(
     return meta
 
 
+def describe(target: Any) -> tuple[list[tuple[str, str, str]], dict[str, str]]:
+    """The methods and signals of a Python object to serve.
+
+    Methods are those marked by ``naoloc.qi.bind`` (a ``_qi_signature`` of ``(name,
+    params, returns)``); signals are attributes with ``connect`` and ``disconnect``
+    (a ``signature`` attribute gives their type, else ``(m)``).
+
+    Returns:
+        ``([(name, params tuple signature, return signature)], {signal: signature})``.
+    """
+    methods: list[tuple[str, str, str]] = []
+    signals: dict[str, str] = {}
+    for attr in dir(target):
+        if attr.startswith("_"):
+            continue
+        member = getattr(target, attr)
+        declared = getattr(member, "_qi_signature", None)
+        if declared is not None:
+            name, params, returns = declared
+            methods.append((str(name), "(" + "".join(params) + ")", str(returns)))
+        elif callable(getattr(member, "connect", None)) and callable(
+            getattr(member, "disconnect", None)
+        ):
+            signals[attr] = str(getattr(member, "signature", "(m)"))
+    return methods, signals
+
+
 def service_info_dict(value: Any) -> dict[str, Any]:
     """A decoded ServiceInfo tuple as the dict qi.Session.services() gives.
 

@@ -44,6 +44,7 @@ from naoloc.backends.naoqi.qimessaging.meta import (
     MetaObject,
     Method,
     build,
+    describe,
 )
 from naoloc.backends.naoqi.qimessaging.signature import parse
 
@@ -60,11 +61,14 @@ _REFUSED: Final = "naoloc serve does not accept service (un)registration from cl
 
 @dataclass
 class _Served:
+    """A served object: a service (object 1) or an object a method returned."""
+
     name: str
     service_id: int
     target: Any
     meta: MetaObject
-    signals: dict[int, Any] = field(default_factory=dict)
+    object_id: int = message.MAIN_OBJECT
+    hooks: list[tuple[Any, int]] = field(default_factory=list)  # (signal, link) to undo
 
 
 @dataclass
@@ -75,7 +79,8 @@ class _Client:
     authenticated: bool = False
     features: dict[str, bool] = field(default_factory=lambda: dict(capability.LOCAL))
     in_flight: int = 0
-    links: dict[tuple[int, int], set[int]] = field(default_factory=dict)
+    links: dict[tuple[int, int, int], set[int]] = field(default_factory=dict)
+    exported: set[tuple[int, int]] = field(default_factory=set)
 
 
 def _send_timeout(sock: socket.socket, seconds: float) -> None:
@@ -155,6 +160,9 @@ class QiServer:
         seed = f"{socket.gethostname()}-{os.getpid()}"
         self.machine_id = str(uuid.uuid5(uuid.NAMESPACE_DNS, seed))
         self._services[1] = _Served(SD_NAME, 1, self, _directory_meta())
+        self._objects: dict[tuple[int, int], _Served] = {}
+        self._object_ids = itertools.count(2)
+        self._core: Any = None
         self.protocol_errors = 0
 
     # ------------------------------------------------------------------ lifecycle
@@ -280,22 +288,56 @@ class QiServer:
         meta = build(table, signals=(signals or {}).items(), description=name)
         service_id = next(self._ids)
         served = _Served(name, service_id, target, meta)
-        for uid, (signal_name, _) in meta.signals.items():
-            source = getattr(target, signal_name, None)
-            if source is not None and hasattr(source, "connect"):
-                source.connect(self._emitter(service_id, uid))
-                served.signals[uid] = source
+        self._hook_signals(served)
         with self._lock:
             self._services[service_id] = served
-        self._emit(1, 106, (service_id, name))
+        self._emit(self._services[1], 106, (service_id, name))
         return service_id
+
+    def set_core(self, core: Any) -> None:
+        """Tell ``core.gone(caller)`` when a client's connection closes (dead-man)."""
+        self._core = core
+
+    def _hook_signals(self, served: _Served) -> None:
+        for uid, (signal_name, _) in served.meta.signals.items():
+            source = getattr(served.target, signal_name, None)
+            if source is not None and callable(getattr(source, "connect", None)):
+                link = source.connect(self._emitter(served, uid))
+                served.hooks.append((source, link))
+
+    def _export(self, client: _Client, owner: _Served, target: Any) -> codec.ObjectRef:
+        """Serve ``target`` (returned by a method) as a new object of ``owner``'s service."""
+        if isinstance(target, codec.ObjectRef):
+            return target
+        methods, signals = describe(target)
+        meta = build(methods, signals=signals.items(), description=type(target).__name__)
+        object_id = next(self._object_ids)
+        served = _Served(f"{owner.name} object", owner.service_id, target, meta, object_id)
+        self._hook_signals(served)
+        key = (owner.service_id, object_id)
+        with self._lock:
+            self._objects[key] = served
+            client.exported.add(key)
+        uid = hashlib.sha1(f"{self.machine_id}/{key}".encode()).digest()
+        return codec.ObjectRef(meta.to_wire(), owner.service_id, object_id, uid)
+
+    def _drop(self, key: tuple[int, int]) -> None:
+        with self._lock:
+            served = self._objects.pop(key, None)
+        if served is not None:
+            for source, link in served.hooks:
+                with contextlib.suppress(Exception):
+                    source.disconnect(link)
 
     def unregister(self, service_id: int) -> None:
         """Stop serving a service."""
         with self._lock:
             served = self._services.pop(service_id, None) if service_id != 1 else None
         if served is not None:
-            self._emit(1, 107, (service_id, served.name))
+            for source, link in served.hooks:
+                with contextlib.suppress(Exception):
+                    source.disconnect(link)
+            self._emit(self._services[1], 107, (service_id, served.name))
 
     def services_info(self) -> list[dict[str, Any]]:
         """ServiceInfo dicts of every service (the qi.Session.services() shape)."""
@@ -310,19 +352,21 @@ class QiServer:
         endpoints = [f"qi:{served.name}", *self.endpoints()]
         return (served.name, served.service_id, self.machine_id, os.getpid(), endpoints, "", uid)
 
-    def _emitter(self, service_id: int, uid: int) -> Any:
+    def _emitter(self, served: _Served, uid: int) -> Any:
         def emit(*args: Any) -> None:
-            self._emit(service_id, uid, args)
+            self._emit(served, uid, args)
 
         return emit
 
-    def _emit(self, service_id: int, uid: int, args: tuple[Any, ...]) -> None:
+    def _emit(self, served: _Served, uid: int, args: tuple[Any, ...]) -> None:
+        key = (served.service_id, served.object_id, uid)
         with self._lock:
-            served = self._services.get(service_id)
-            targets = [c for c in self._clients.values() if c.links.get((service_id, uid))]
-        if served is None or not targets:
+            targets = [c for c in self._clients.values() if c.links.get(key)]
+        if not targets:
             return
         sig = served.meta.signals[uid][1]
+        if len(sig.items) == 1 and len(args) != 1:
+            args = (list(args),)
         try:
             payload = codec.encode(sig, args).getvalue()
         except ProtocolError as err:
@@ -331,12 +375,24 @@ class QiServer:
         for client in targets:
             with contextlib.suppress(NaolocError):
                 mid = client.conn.next_id()
-                client.conn.send(mid, message.EVENT, service_id, 1, uid, [payload])
+                client.conn.send(
+                    mid, message.EVENT, served.service_id, served.object_id, uid, [payload]
+                )
 
     # ------------------------------------------------------------------ messages
     def _on_close(self, conn: Connection, reason: str) -> None:
         with self._lock:
-            self._clients.pop(conn, None)
+            client = self._clients.pop(conn, None)
+        if client is None:
+            return
+        for key in list(client.exported):
+            self._drop(key)
+        gone = getattr(self._core, "gone", None)
+        if callable(gone):
+            try:
+                gone(client.caller)
+            except Exception as err:  # the dead-man's own failure must not kill the reader
+                print(f"naoloc serve: dead-man on disconnect failed: {err}", file=sys.stderr)
 
     def _on_message(self, conn: Connection, header: Header, payload: memoryview) -> None:
         with self._lock:
@@ -353,8 +409,11 @@ class QiServer:
             self._error(client, header, "authenticate first (service 0, action 8)")
             return
         with self._lock:
-            served = self._services.get(header.service)
-        if served is None or header.object != message.MAIN_OBJECT:
+            if header.object == message.MAIN_OBJECT:
+                served = self._services.get(header.service)
+            else:
+                served = self._objects.get((header.service, header.object))
+        if served is None:
             self._error(client, header, f"no object {header.service}.{header.object}")
             return
         method = served.meta.methods.get(header.action)
@@ -429,13 +488,19 @@ class QiServer:
                 self._error(client, header, f"{served.name} has no signal {signal}")
                 return
             with self._lock:
-                client.links.setdefault((served.service_id, signal), set()).add(link)
+                key = (served.service_id, served.object_id, signal)
+                client.links.setdefault(key, set()).add(link)
             self._reply(client, header, method.returns, link)
         elif action == UNREGISTER_EVENT:
             with self._lock:
-                client.links.get((served.service_id, int(args[1])), set()).discard(int(args[2]))
+                key = (served.service_id, served.object_id, int(args[1]))
+                client.links.get(key, set()).discard(int(args[2]))
             self._reply(client, header, method.returns, None)
         elif action == TERMINATE:
+            exported = (served.service_id, int(args[0]) or served.object_id)
+            if exported in client.exported:
+                client.exported.discard(exported)
+                self._drop(exported)
             self._reply(client, header, method.returns, None)
         elif action == PROPERTIES:
             self._reply(client, header, method.returns, [])
@@ -454,6 +519,8 @@ class QiServer:
                 value = served.target.invoke(client.caller, method.name, args)
             else:
                 value = getattr(served.target, method.name)(*args)
+            if method.returns.kind == "o":
+                value = self._export(client, served, value)
             if header.type == message.CALL:
                 self._reply(client, header, method.returns, value)
         except NaolocError as err:
