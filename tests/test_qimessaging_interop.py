@@ -332,3 +332,74 @@ def test_objects_returned_by_our_server_carry_signals(client: str) -> None:
     finally:
         session.close()
         server.close()
+
+
+class _CoreMemory:
+    """A served core's memory, as the virtual NAOqi's: listeners hear every event."""
+
+    def __init__(self) -> None:
+        self.listeners: list[Any] = []
+
+    def add_listener(self, listener: Any) -> None:
+        self.listeners.append(listener)
+
+    def raiseEvent(self, key: str, value: object) -> None:
+        for listener in self.listeners:
+            listener(key, value)
+
+
+class _Core:
+    def __init__(self) -> None:
+        self.memory = _CoreMemory()
+        self.gone_callers: list[str] = []
+
+    def gone(self, caller: str) -> None:
+        self.gone_callers.append(caller)
+
+
+class _MemoryEndpoint:
+    def __init__(self, core: _Core) -> None:
+        self._core = core
+
+    def invoke(self, caller: str, method: str, args: list[Any]) -> Any:
+        if method == "raiseEvent":
+            self._core.memory.raiseEvent(*args)
+            return None
+        raise RobotError(f"ALMemory.{method}: not served here")
+
+
+@pytest.mark.parametrize("client", ["libqi", "ours"])
+def test_almemory_subscriber_signals_reach_libqi_and_our_clients(client: str) -> None:
+    from naoloc.backends.naoqi.qimessaging.server import QiServer
+
+    core = _Core()
+    server = QiServer()
+    server.listen("tcp://127.0.0.1:0")
+    server.set_core(core)
+    methods = [("subscriber", "(s)", "o"), ("raiseEvent", "(sm)", "v")]
+    server.register("ALMemory", _MemoryEndpoint(core), methods=methods)
+    qi = pytest.importorskip("qi") if client == "libqi" else nqi
+    session = qi.Session()
+    session.connect(server.endpoints()[0])
+    try:
+        memory = session.service("ALMemory")
+        touched = memory.subscriber("FrontTactilTouched")
+        other = memory.subscriber("Other")
+        got: list[object] = []
+        touched.signal.connect(got.append)
+        other.signal.connect(lambda v: got.append(("other", v)))
+        memory.raiseEvent("FrontTactilTouched", 1.0)
+        deadline = time.monotonic() + 2
+        while not got and time.monotonic() < deadline:
+            time.sleep(0.01)
+        time.sleep(0.1)
+        assert got == [1.0]
+        with pytest.raises(RuntimeError, match="key"):
+            memory.subscriber("")
+    finally:
+        session.close()
+    deadline = time.monotonic() + 2
+    while not core.gone_callers and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert core.gone_callers and core.gone_callers[0].startswith("qim-")
+    server.close()

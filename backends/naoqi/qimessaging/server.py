@@ -29,6 +29,7 @@ from typing import Any, Final
 
 from naoloc.backends.naoqi.qimessaging import capability, codec, message
 from naoloc.backends.naoqi.qimessaging.connection import Connection, parse_url
+from naoloc.backends.naoqi.qimessaging.memory import MemoryHub
 from naoloc.backends.naoqi.qimessaging.message import Header
 from naoloc.backends.naoqi.qimessaging.meta import (
     GENERIC_METHODS,
@@ -56,6 +57,7 @@ MAX_INCOMING: Final = 8 * 1024 * 1024  # bytes: clients send arguments, not imag
 SEND_TIMEOUT_S: Final = 5.0  # a client that stops reading is dropped after this long
 AUTH_TIMEOUT_S: Final = 10.0  # a connection that does not authenticate is dropped
 SD_NAME: Final = "ServiceDirectory"
+MEMORY: Final = "ALMemory"
 _REFUSED: Final = "naoloc serve does not accept service (un)registration from clients"
 
 
@@ -163,6 +165,7 @@ class QiServer:
         self._objects: dict[tuple[int, int], _Served] = {}
         self._object_ids = itertools.count(2)
         self._core: Any = None
+        self._memory: MemoryHub | None = None
         self.protocol_errors = 0
 
     # ------------------------------------------------------------------ lifecycle
@@ -291,12 +294,28 @@ class QiServer:
         self._hook_signals(served)
         with self._lock:
             self._services[service_id] = served
+        if name == MEMORY and self._memory is None:
+            self._feed_memory()
         self._emit(self._services[1], 106, (service_id, name))
         return service_id
 
+    def _feed_memory(self) -> None:
+        memory = getattr(self._core, "memory", None)
+        add_listener = getattr(memory, "add_listener", None)
+        if callable(add_listener):
+            self._memory = MemoryHub()
+            add_listener(self._memory.emit)
+
     def set_core(self, core: Any) -> None:
-        """Tell ``core.gone(caller)`` when a client's connection closes (dead-man)."""
+        """Tell ``core.gone(caller)`` when a client's connection closes (dead-man).
+
+        A core with ``memory.add_listener`` also feeds ALMemory.subscriber objects.
+        """
         self._core = core
+        with self._lock:
+            has_memory = any(s.name == MEMORY for s in self._services.values())
+        if has_memory and self._memory is None:
+            self._feed_memory()
 
     def _hook_signals(self, served: _Served) -> None:
         for uid, (signal_name, _) in served.meta.signals.items():
@@ -515,6 +534,8 @@ class QiServer:
         try:
             if served.service_id == 1:
                 value = self._directory(method.name, args)
+            elif served.name == MEMORY and method.name == "subscriber" and self._memory:
+                value = self._memory.new(args[0] if args else None)
             elif hasattr(served.target, "invoke"):
                 value = served.target.invoke(client.caller, method.name, args)
             else:
