@@ -184,3 +184,40 @@ def test_overloads_posts_and_typed_errors_through_our_client(fake_robot: Robot) 
                 motion.moveTo("a", "b")
         finally:
             session.close()
+
+
+def test_services_listed_at_other_endpoints_are_reached(monkeypatch: pytest.MonkeyPatch) -> None:
+    from naoloc.backends.naoqi.qimessaging.client import QiSession
+    from naoloc.backends.naoqi.qimessaging.server import QiServer
+
+    class Twice:
+        def twice(self, x: int) -> int:
+            return 2 * x
+
+    server = QiServer()
+    server.listen("tcp://127.0.0.1:0")
+    server.register("Twice", Twice(), methods=[("twice", "(i)", "i")])
+    port = int(server.url().rsplit(":", 1)[1])
+    dead = _free_port()
+    listed: list[list[str]] = [
+        [f"tcp://127.0.0.1:{port}"],  # the directory's own address: same connection
+        [f"tcp://127.0.0.1:{dead}", f"tcp://localhost:{port}"],  # first unreachable
+    ]
+
+    def info(served: object) -> tuple[object, ...]:
+        name, sid = served.name, served.service_id  # type: ignore[attr-defined]
+        return (name, sid, server.machine_id, 1, listed[0], "", b"")
+
+    monkeypatch.setattr(server, "_info", info)
+    try:
+        for expected_channels in (1, 2):
+            session = QiSession(connect_timeout_s=2)
+            session.connect(server.url())
+            try:
+                assert session.service("Twice").twice(4) == 8
+                assert len(session._channels) == expected_channels
+            finally:
+                session.close()
+            listed.pop(0)
+    finally:
+        server.close()

@@ -58,6 +58,15 @@ class Channel:
         """True once the connection ended."""
         return self._conn.closed
 
+    @property
+    def peer(self) -> tuple[str, int] | None:
+        """The peer's (address, port), None when unknown."""
+        try:
+            address = self._conn.sock.getpeername()
+        except OSError:
+            return None
+        return (str(address[0]), int(address[1]))
+
     def authenticate(self, user: str | None, token: str | None) -> None:
         """Send the capability map (and login); raise unless the server says done.
 
@@ -333,19 +342,39 @@ class QiSession:
         return proxy
 
     def _channel_for(self, endpoints: list[str]) -> Channel:
+        """The channel to reach a service listed at ``endpoints``.
+
+        The service directory's own connection when an endpoint is relative
+        (``qi:<name>``) or names the same peer (its URL, or its address and port, as a
+        NAO lists ``tcp://<each interface>:9559``); otherwise a new authenticated
+        connection, trying the peer's host first and loopback last.
+        """
         assert self._main is not None
-        if not endpoints or any(e.startswith("qi:") or e == self._url for e in endpoints):
+        scheme, host, port = parse_url(self._url)
+        peer = self._main.peer
+        same = {(host, port), (peer[0], peer[1])} if peer else {(host, port)}
+        usable = []
+        for endpoint in endpoints:
+            if endpoint.startswith("qi:") or endpoint == self._url:
+                return self._main
+            try:
+                e_scheme, e_host, e_port = parse_url(endpoint)
+            except BackendError:
+                continue
+            if e_scheme == scheme and (e_host, e_port) in same:
+                return self._main
+            usable.append(endpoint)
+        if not endpoints:
             return self._main
-        _, host, _ = parse_url(self._url)
-        usable = [e for e in endpoints if e.startswith(("tcp://", "tcps://"))]
-        usable.sort(key=lambda e: (urlhost(e) != host, "127.0.0.1" in e))
+        usable.sort(key=lambda e: (urlhost(e) not in (host, peer[0] if peer else host),
+                                   urlhost(e).startswith("127.")))  # fmt: skip
         for url in usable:
             with self._lock:
                 channel = self._channels.get(url)
             if channel is not None and not channel.closed:
                 return channel
             try:
-                channel = Channel(self, url, self._timeout_s)
+                channel = Channel(self, url, min(self._timeout_s, 2.0))
                 channel.authenticate(self._user, self._token)
             except NaolocError:
                 continue
