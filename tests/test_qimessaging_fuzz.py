@@ -61,9 +61,11 @@ def _frame(rng: random.Random) -> tuple[bytes, bool]:
                  "{sm}": {"a": 1}, "(s)": ("ALMotion",), "(I)": (2,), "(IIL)": (2, 100, 5),
                  "(iiiii)": (0, 1, 11, 30, 1)}[sig]  # fmt: skip
         payload = codec.encode_bytes(sig, value)
-    header = message.pack_header(
-        rng.randint(0, 2**32 - 1), len(payload), mtype, 0, service, obj, action
-    )
+    flags = rng.choice([0, 0, 0, message.FLAG_DYNAMIC_PAYLOAD, message.FLAG_RETURN_TYPE])
+    if flags == message.FLAG_DYNAMIC_PAYLOAD and rng.random() < 0.5:  # dynamic arguments
+        payload = codec.encode_bytes("m", rng.choice([(None, "x", 3), (1, 2, 3), ("a",), [2.0]]))
+    mid = rng.randint(0, 2**32 - 1)
+    header = message.pack_header(mid, len(payload), mtype, flags, service, obj, action)
     return header + payload, False
 
 

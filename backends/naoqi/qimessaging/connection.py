@@ -229,6 +229,8 @@ class Connection:
             reason = f"protocol error: {err}"
         except (OSError, ValueError) as err:
             reason = f"socket error: {getattr(err, 'strerror', None) or err}"
+        except Exception as err:  # a handler bug ends this connection, in one line
+            reason = f"internal error: {type(err).__name__}: {err}".splitlines()[0]
         self.close(reason)
 
     def close(self, reason: str = "closed") -> None:

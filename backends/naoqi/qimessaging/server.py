@@ -47,6 +47,7 @@ from naoloc.backends.naoqi.qimessaging.meta import (
     build,
     describe,
 )
+from naoloc.backends.naoqi.qimessaging.proxy import fit
 from naoloc.backends.naoqi.qimessaging.signature import parse
 
 from naoloc.errors import BackendError, NaolocError, ProtocolError, RobotError
@@ -446,7 +447,10 @@ class QiServer:
             self._error(client, header, f"{served.name}.{method.name}: bad arguments: {err}")
             return
         if header.action < 100:
-            self._generic(client, header, served, method, args)
+            try:
+                self._generic(client, header, served, method, args)
+            except (TypeError, ValueError, IndexError, KeyError) as err:
+                self._error(client, header, f"{served.name}.{method.name}: bad arguments: {err}")
             return
         with self._lock:
             busy = client.in_flight >= MAX_IN_FLIGHT
@@ -468,6 +472,11 @@ class QiServer:
             value = codec.decode("m", payload, object_uid=uid)
             if not isinstance(value, tuple | list):
                 value = (value,)
+            params = method.params.items
+            if len(value) != len(params) or not all(
+                fit(p, v) for p, v in zip(params, value, strict=True)
+            ):
+                raise ProtocolError(f"a dynamic payload that does not fit {method.params}")
         else:
             exact = not header.flags & message.FLAG_RETURN_TYPE
             value = codec.decode(method.params, payload, object_uid=uid, exact=exact)
