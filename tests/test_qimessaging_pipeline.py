@@ -6,7 +6,9 @@ installed, a qimessaging client against ``naoloc serve --transport libqi``.
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
+import io
 import json
 from pathlib import Path
 from typing import Any
@@ -38,35 +40,40 @@ SERVERS = [
 ]
 
 
-def _run(verb: list[str], capsys: pytest.CaptureFixture[str]) -> dict[str, Any]:
-    code = main(verb)
-    out, err = capsys.readouterr()
-    assert code == 0, err
-    result: dict[str, Any] = json.loads(out.strip().splitlines()[-1])
+def _run(verb: list[str]) -> dict[str, Any]:
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(verb)
+    assert code == 0, err.getvalue()
+    result: dict[str, Any] = json.loads(out.getvalue().strip().splitlines()[-1])
     return result
 
 
-def _pipeline(
-    robot: dict[str, Any], tmp: Path, name: str, capsys: pytest.CaptureFixture[str]
-) -> tuple[Path, dict[str, Any]]:
+def _pipeline(robot: dict[str, Any], tmp: Path, name: str) -> tuple[Path, dict[str, Any]]:
     cfg = tmp / f"{name}.yaml"
     cfg.write_text(yaml.safe_dump({**ROOM, "robot": robot}), encoding="utf-8")
     data, map_path = tmp / f"{name}.mcap", tmp / f"{name}.npz"
-    _run(["survey", "-c", str(cfg), "-o", str(data)], capsys)
-    _run(["build-map", "-c", str(cfg), "-d", str(data), "-o", str(map_path)], capsys)
-    found = _run(["localize", "-c", str(cfg), "-m", str(map_path), "--at", *AT], capsys)
+    _run(["survey", "-c", str(cfg), "-o", str(data)])
+    _run(["build-map", "-c", str(cfg), "-d", str(data), "-o", str(map_path)])
+    found = _run(["localize", "-c", str(cfg), "-m", str(map_path), "--at", *AT])
     return map_path, found
+
+
+@pytest.fixture(scope="module")
+def in_process(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, Any]]:
+    """The in-process result, computed once for every server transport."""
+    return _pipeline({"backend": "fake"}, tmp_path_factory.mktemp("local"), "local")
 
 
 @pytest.mark.parametrize("server_transport", SERVERS)
 def test_qimessaging_pipeline_matches_in_process(
-    server_transport: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    server_transport: str, tmp_path: Path, in_process: tuple[Path, dict[str, Any]]
 ) -> None:
-    local_map, local = _pipeline({"backend": "fake"}, tmp_path, "local", capsys)
+    local_map, local = in_process
     with served({**ROOM, "robot": {"backend": "fake"}}, server_transport) as server:
         robot = server.client_config(sim_service=True)["robot"]
         robot["transport"] = "qimessaging"
-        net_map, net = _pipeline(robot, tmp_path, "net", capsys)
+        net_map, net = _pipeline(robot, tmp_path, "net")
     a, b = load_map(local_map), load_map(net_map)
     assert a.images == b.images > 0
     np.testing.assert_array_equal(a.keyframe_poses, b.keyframe_poses)
