@@ -13,14 +13,17 @@ zmq), ``zmq://host:port`` forces zmq. Calls take ``_async=True`` and return a
 :class:`Future`; remote errors raise ``RuntimeError`` like qi. Also: ``Application``
 (``--qi-url``, a process-wide singleton like qi's), ``Promise``, ``Signal``,
 ``Property``, ``bind`` and the type names for services served with
-``listenStandalone``. Nothing here imports the real ``qi`` package.
+``listenStandalone``, ``runAsync``, ``PeriodicTask``, ``Logger`` and ``logging``.
+Nothing here imports the real ``qi`` package.
 """
 
 from __future__ import annotations
 
 import contextlib
+import logging as pylogging
 import sys
 import threading
+import time
 from collections.abc import Callable, Sequence
 from typing import Any, ClassVar, Final
 
@@ -232,6 +235,130 @@ def runAsync(function: Callable[..., Any], *args: Any, delay: int = 0) -> Future
     return promise.future()
 
 
+class _Logging:
+    """qi.logging: levels and module-level log functions over Python's logging."""
+
+    SILENT, FATAL, ERROR, WARNING, INFO, VERBOSE, DEBUG = 0, 1, 2, 3, 4, 5, 6
+    _TO_PY: Final = {0: 100, 1: 50, 2: 40, 3: 30, 4: 20, 5: 15, 6: 10}
+
+    def __init__(self) -> None:
+        self._logger = pylogging.getLogger("naoloc.qi")
+
+    def setLevel(self, level: int) -> None:  # noqa: N802 - qi's name
+        """Show messages of ``level`` (qi.logging.ERROR...) and more severe."""
+        self._logger.setLevel(self._TO_PY.get(int(level), 20))
+
+    def fatal(self, message: str, category: str = "naoloc.qi") -> None:
+        """Log a fatal message."""
+        pylogging.getLogger(category).critical(message)
+
+    def error(self, message: str, category: str = "naoloc.qi") -> None:
+        """Log an error."""
+        pylogging.getLogger(category).error(message)
+
+    def warning(self, message: str, category: str = "naoloc.qi") -> None:
+        """Log a warning."""
+        pylogging.getLogger(category).warning(message)
+
+    def info(self, message: str, category: str = "naoloc.qi") -> None:
+        """Log information."""
+        pylogging.getLogger(category).info(message)
+
+    def verbose(self, message: str, category: str = "naoloc.qi") -> None:
+        """Log a verbose message."""
+        pylogging.getLogger(category).log(15, message)
+
+    def debug(self, message: str, category: str = "naoloc.qi") -> None:
+        """Log a debug message."""
+        pylogging.getLogger(category).debug(message)
+
+
+logging = _Logging()
+
+
+class Logger:
+    """qi.Logger(category): ``info``, ``warning``, ``error``, ``fatal``, ``verbose``, ``debug``."""
+
+    def __init__(self, category: str) -> None:
+        self._category = category
+
+    def fatal(self, message: str) -> None:
+        """Log a fatal message."""
+        logging.fatal(message, self._category)
+
+    def error(self, message: str) -> None:
+        """Log an error."""
+        logging.error(message, self._category)
+
+    def warning(self, message: str) -> None:
+        """Log a warning."""
+        logging.warning(message, self._category)
+
+    def info(self, message: str) -> None:
+        """Log information."""
+        logging.info(message, self._category)
+
+    def verbose(self, message: str) -> None:
+        """Log a verbose message."""
+        logging.verbose(message, self._category)
+
+    def debug(self, message: str) -> None:
+        """Log a debug message."""
+        logging.debug(message, self._category)
+
+
+class PeriodicTask:
+    """qi.PeriodicTask: call a function every period on a thread of its own."""
+
+    def __init__(self) -> None:
+        self._callback: Callable[[], Any] | None = None
+        self._period_s = 1.0
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def setCallback(self, callback: Callable[[], Any]) -> None:  # noqa: N802 - qi's name
+        """The function to call."""
+        self._callback = callback
+
+    def setUsPeriod(self, period_us: int) -> None:  # noqa: N802 - qi's name
+        """The period, microseconds."""
+        self._period_s = max(1e-4, period_us / 1e6)
+
+    def start(self, immediate: bool = True) -> None:
+        """Start calling (at once when ``immediate``)."""
+        if self._callback is None:
+            raise RuntimeError("PeriodicTask: setCallback first")
+        if self.isRunning():
+            return
+        self._stop.clear()
+        callback = self._callback
+
+        def run() -> None:
+            if not immediate and self._stop.wait(self._period_s):
+                return
+            while not self._stop.is_set():
+                started = time.monotonic()
+                try:
+                    callback()
+                except Exception as err:  # qi logs a failing periodic callback and goes on
+                    logging.error(f"PeriodicTask callback failed: {err}")
+                self._stop.wait(max(0.0, self._period_s - (time.monotonic() - started)))
+
+        self._thread = threading.Thread(target=run, name="naoloc-qi-periodic", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        """Stop and wait for the current call to end."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout=5.0)
+        self._thread = None
+
+    def isRunning(self) -> bool:  # noqa: N802 - qi's name
+        """True while started."""
+        return self._thread is not None and self._thread.is_alive()
+
+
 class _Proxy:
     """A service proxy whose calls raise RuntimeError and return qi-style Futures."""
 
@@ -359,8 +486,6 @@ class Session:
 
     def waitForService(self, name: str, timeout: float = 5.0) -> None:  # noqa: N802
         """Return once ``name`` is served (polls; ``timeout`` in seconds)."""
-        import time
-
         deadline = time.monotonic() + timeout
         while not any(s.get("name") == name for s in self.services()):
             if time.monotonic() > deadline:

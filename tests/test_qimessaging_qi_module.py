@@ -12,6 +12,7 @@ import importlib.util
 import json
 import subprocess
 import sys
+import time
 
 import pytest
 from naoloc.backends.naoqi.testing import served
@@ -135,3 +136,26 @@ def test_zmq_scheme_forces_zmq() -> None:
             assert session.service("ALMotion").getRobotPosition(True) == [0.0, 0.0, 0.0]
         finally:
             session.close()
+
+
+def test_periodic_tasks_run_async_and_loggers() -> None:
+    calls: list[float] = []
+    task = nqi.PeriodicTask()
+    task.setCallback(lambda: calls.append(1.0))
+    task.setUsPeriod(20_000)
+    task.start(True)
+    try:
+        deadline = time.monotonic() + 2
+        while len(calls) < 3 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert task.isRunning() and len(calls) >= 3
+    finally:
+        task.stop()
+    count = len(calls)
+    time.sleep(0.1)
+    assert not task.isRunning() and len(calls) == count
+    assert nqi.runAsync(lambda a, b: a + b, 2, 3).value(2000) == 5
+    failing = nqi.runAsync(lambda: 1 / 0)
+    assert failing.hasError(2000) and "ZeroDivisionError" in failing.error()
+    nqi.logging.setLevel(nqi.logging.ERROR)
+    nqi.Logger("script").info("not shown")  # no error: qi's logger shape
