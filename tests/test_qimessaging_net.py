@@ -23,7 +23,7 @@ from naoloc.backends.naoqi.testing import served
 
 import naoloc
 from naoloc.dataset import read_dataset
-from naoloc.errors import ConnectionLost
+from naoloc.errors import ConnectionLost, RobotError
 from naoloc.robot import Robot
 
 pytestmark = pytest.mark.net
@@ -220,4 +220,33 @@ def test_services_listed_at_other_endpoints_are_reached(monkeypatch: pytest.Monk
                 session.close()
             listed.pop(0)
     finally:
+        server.close()
+
+
+def test_service_added_and_removed_reach_clients() -> None:
+    from naoloc.backends.naoqi.qimessaging.client import QiSession
+    from naoloc.backends.naoqi.qimessaging.server import QiServer
+
+    class Twice:
+        def twice(self, x: int) -> int:
+            return 2 * x
+
+    server = QiServer()
+    server.listen("tcp://127.0.0.1:0")
+    session = QiSession()
+    session.connect(server.url())
+    events: list[tuple[str, int, str]] = []
+    session.serviceRegistered.connect(lambda sid, name: events.append(("added", sid, name)))
+    session.serviceUnregistered.connect(lambda sid, name: events.append(("removed", sid, name)))
+    try:
+        sid = server.register("Twice", Twice(), methods=[("twice", "(i)", "i")])
+        assert _wait_for(lambda: len(events) == 1, 2.0)
+        assert session.service("Twice").twice(3) == 6
+        server.unregister(sid)
+        assert _wait_for(lambda: len(events) == 2, 2.0)
+        assert events == [("added", sid, "Twice"), ("removed", sid, "Twice")]
+        with pytest.raises(RobotError, match="no service 'Twice'"):
+            session.service("Twice")  # the cached proxy was dropped
+    finally:
+        session.close()
         server.close()

@@ -236,6 +236,8 @@ class QiSession:
         self._closed = False
         self.connected = Signal()
         self.disconnected = Signal()
+        self.serviceRegistered = Signal()
+        self.serviceUnregistered = Signal()
 
     # ------------------------------------------------------------------ login
     def setClientAuthenticatorFactory(self, factory: Any) -> None:
@@ -274,6 +276,7 @@ class QiSession:
         self._main = channel
         self._channels[url] = channel
         self._sd = RemoteObject(channel, message.SERVICE_DIRECTORY, 1, meta, "ServiceDirectory")
+        self._watch_directory(self._sd)
         self.connected()
         promise.setValue(None)
         return promise.future() if _async else None
@@ -382,6 +385,20 @@ class QiSession:
                 self._channels[url] = channel
             return channel
         raise ConnectionLost(f"cannot reach any endpoint of the service: {endpoints}")
+
+    def _watch_directory(self, directory: RemoteObject) -> None:
+        """Relay serviceAdded/serviceRemoved as qi's serviceRegistered/Unregistered."""
+
+        def removed(service_id: int, name: str) -> None:
+            self._proxies.pop(name, None)  # a restarted service gets a fresh proxy
+            self.serviceUnregistered(service_id, name)
+
+        for signal, callback in (
+            ("serviceAdded", self.serviceRegistered),
+            ("serviceRemoved", removed),
+        ):
+            with contextlib.suppress(NaolocError, AttributeError):
+                getattr(directory, signal).connect(callback)
 
     def waitForService(self, name: str, timeout_s: float = 5.0) -> None:
         """Return once ``name`` is registered (polls the service directory).
