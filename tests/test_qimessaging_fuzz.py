@@ -207,3 +207,42 @@ def test_client_survives_random_authentication_replies(payload: bytes, flags: in
             assert "\n" not in str(err)
         finally:
             session.close()
+
+
+def _wait_for_count(predicate: Callable[[], bool], timeout_s: float) -> bool:
+    deadline = time.monotonic() + timeout_s
+    while not predicate():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.01)
+    return True
+
+
+def test_a_flood_of_calls_is_bounded_not_queued_forever() -> None:
+    from naoloc.backends.naoqi.qimessaging.server import MAX_IN_FLIGHT, QiServer
+
+    release = threading.Event()
+
+    class Slow:
+        def wait(self) -> int:
+            release.wait(5.0)
+            return 1
+
+    server = QiServer(workers=4)
+    server.listen("tcp://127.0.0.1:0")
+    server.register("Slow", Slow(), methods=[("wait", "()", "i")])
+    session = QiSession()
+    session.connect(server.url())
+    try:
+        slow = session.service("Slow")
+        futures = [slow.wait(_async=True) for _ in range(MAX_IN_FLIGHT + 20)]
+        assert _wait_for_count(lambda: sum(f.isFinished() for f in futures) >= 20, 5.0)
+        refused = [f for f in futures if f.isFinished() and "too many calls" in f.error()]
+        assert len(refused) >= 20
+        release.set()
+        answered = [f.value(5000) for f in futures if f not in refused]
+        assert answered == [1] * len(answered) and len(answered) <= MAX_IN_FLIGHT
+    finally:
+        release.set()
+        session.close()
+        server.close()

@@ -54,7 +54,8 @@ from naoloc.errors import BackendError, NaolocError, ProtocolError, RobotError
 
 MAX_CONNECTIONS: Final = 64
 MAX_IN_FLIGHT: Final = 64  # calls per connection
-MAX_INCOMING: Final = 8 * 1024 * 1024  # bytes: clients send arguments, not images
+MAX_INCOMING: Final = 1024 * 1024  # bytes: clients send arguments, not images
+MAX_IN_FLIGHT_ALL: Final = 256  # calls of every client (bounds queued arguments' memory)
 SEND_TIMEOUT_S: Final = 5.0  # a client that stops reading is dropped after this long
 AUTH_TIMEOUT_S: Final = 10.0  # a connection that does not authenticate is dropped
 SD_NAME: Final = "ServiceDirectory"
@@ -166,6 +167,7 @@ class QiServer:
         self._objects: dict[tuple[int, int], _Served] = {}
         self._object_ids = itertools.count(2)
         self._core: Any = None
+        self._in_flight = 0
         self._memory: MemoryHub | None = None
         self.protocol_errors = 0
 
@@ -453,16 +455,18 @@ class QiServer:
                 self._error(client, header, f"{served.name}.{method.name}: bad arguments: {err}")
             return
         with self._lock:
-            busy = client.in_flight >= MAX_IN_FLIGHT
+            busy = client.in_flight >= MAX_IN_FLIGHT or self._in_flight >= MAX_IN_FLIGHT_ALL
             client.in_flight += 0 if busy else 1
+            self._in_flight += 0 if busy else 1
         if busy:
-            self._error(client, header, f"more than {MAX_IN_FLIGHT} calls in flight")
+            self._error(client, header, "too many calls in flight; wait for answers")
             return
         try:
             self._pool.submit(self._run, client, header, served, method, args)
         except RuntimeError:  # shutting down
             with self._lock:
                 client.in_flight -= 1
+                self._in_flight -= 1
 
     def _arguments(
         self, client: _Client, header: Header, method: Method, payload: memoryview
@@ -561,6 +565,7 @@ class QiServer:
         finally:
             with self._lock:
                 client.in_flight -= 1
+                self._in_flight -= 1
 
     def _directory(self, name: str, args: list[Any]) -> Any:
         with self._lock:
