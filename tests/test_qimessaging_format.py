@@ -202,3 +202,16 @@ def test_capability_login_states() -> None:
         capability.check_reply(codec.decode("{sm}", codec.encode_bytes("{sm}", refused)))
     request = capability.client_request("nao", "secret")
     assert (request["auth_user"], request["auth_token"]) == ("nao", "secret")
+
+
+def test_numpy_images_go_out_as_raw_without_a_copy() -> None:
+    np = pytest.importorskip("numpy")
+    image = np.arange(240 * 320 * 3, dtype=np.uint8).reshape(240, 320, 3)
+    parts, size = codec.encode("r", image).finish()
+    assert size == 4 + image.nbytes
+    assert any(isinstance(p, memoryview) and p.obj is image for p in parts)
+    assert bytes(codec.decode("r", b"".join(parts))) == image.tobytes()
+    strided = image[:, ::2]  # not contiguous: copied once, still right
+    assert bytes(codec.decode("r", codec.encode_bytes("r", strided))) == strided.tobytes()
+    assert codec.decode("m", codec.encode_bytes("m", np.float64(1.5))) == 1.5
+    assert codec.decode("m", codec.encode_bytes("m", np.array([1, 2]))) == [1, 2]

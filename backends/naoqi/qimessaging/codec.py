@@ -120,8 +120,11 @@ def encoder(sig: Sig) -> Encoder:
     if kind in _FORMAT:
         packer = struct.Struct("<" + _FORMAT[kind])
         integer = kind not in "bfd"
+        boolean = kind == "b"
 
         def enc_fixed(value: Any, w: Writer, depth: int, uid: bool) -> None:
+            if boolean and not isinstance(value, bool | int):
+                raise ProtocolError(f"expected a bool, got {type(value).__name__}")
             if integer and not isinstance(value, int):
                 if isinstance(value, float) and value.is_integer():
                     value = int(value)
@@ -242,10 +245,10 @@ def _enc_raw(value: Any, w: Writer, depth: int, uid: bool) -> None:
     if isinstance(value, str):
         value = value.encode("utf-8")
     elif not isinstance(value, bytes | bytearray | memoryview):
-        tobytes = getattr(value, "tobytes", None)  # numpy arrays
-        if not callable(tobytes):
-            raise ProtocolError(f"expected bytes, got {type(value).__name__}")
-        value = memoryview(value).cast("B") if getattr(value, "flags", None) else tobytes()
+        try:
+            value = memoryview(value)  # numpy arrays and other buffers, without a copy
+        except TypeError:
+            raise ProtocolError(f"expected bytes, got {type(value).__name__}") from None
     if isinstance(value, memoryview) and (value.ndim != 1 or value.itemsize != 1):
         value = value.cast("B") if value.c_contiguous else memoryview(value.tobytes())
     w.buf += _U32.pack(len(value))
@@ -259,6 +262,8 @@ def _enc_void(value: Any, w: Writer, depth: int, uid: bool) -> None:
 def _enc_dynamic(value: Any, w: Writer, depth: int, uid: bool) -> None:
     if isinstance(value, Dynamic):
         sig, value = value.sig, value.value
+    elif isinstance(value, ObjectRef):
+        sig = parse("o")
     else:
         if not isinstance(value, bool | int | float | str | list | tuple | dict | bytes):
             tolist = getattr(value, "tolist", None)
