@@ -394,9 +394,11 @@ class _Proxy:
 
 def _transport_for(url: str, transport: str | None) -> tuple[str, str]:
     from naoloc.backends.naoqi.client import looks_like_zmq
+    from naoloc.backends.naoqi.qimessaging.connection import normalize_url
 
     if url.startswith("zmq://"):
         return "zmq", "tcp://" + url[len("zmq://") :]
+    url = normalize_url(url)
     if transport in ("zmq", "qimessaging"):
         return transport, url
     if transport == "libqi":

@@ -250,3 +250,13 @@ def test_service_added_and_removed_reach_clients() -> None:
     finally:
         session.close()
         server.close()
+
+
+def test_urls_get_libqi_defaults() -> None:
+    from naoloc.backends.naoqi.qimessaging.connection import normalize_url
+
+    assert normalize_url("nao.local") == "tcp://nao.local:9559"
+    assert normalize_url("10.0.0.2:9600") == "tcp://10.0.0.2:9600"
+    assert normalize_url("tcps://nao.local") == "tcps://nao.local:9503"
+    assert normalize_url("tcp://[::1]") == "tcp://[::1]:9559"
+    assert normalize_url("tcp://h:1") == "tcp://h:1"

@@ -19,7 +19,12 @@ import threading
 from typing import Any, Final
 
 from naoloc.backends.naoqi.qimessaging import capability, codec, message
-from naoloc.backends.naoqi.qimessaging.connection import Connection, open_socket, parse_url
+from naoloc.backends.naoqi.qimessaging.connection import (
+    Connection,
+    normalize_url,
+    open_socket,
+    parse_url,
+)
 from naoloc.backends.naoqi.qimessaging.message import Header
 from naoloc.backends.naoqi.qimessaging.meta import (
     META_OBJECT,
@@ -259,6 +264,7 @@ class QiSession:
         """
         if self._main is not None or self._server is not None:
             raise BackendError("this session is already in use")
+        url = normalize_url(url)
         parse_url(url)
         self._url = url
         promise = Promise()

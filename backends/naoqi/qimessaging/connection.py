@@ -37,6 +37,18 @@ OnMessage = Callable[["Connection", Header, memoryview], None]
 OnClose = Callable[["Connection", str], None]
 
 
+def normalize_url(url: str) -> str:
+    """libqi's URL defaults: ``nao.local`` -> ``tcp://nao.local:9559``; tcps:// port 9503."""
+    text = url.strip()
+    if "://" not in text:
+        text = "tcp://" + text
+    scheme, _, rest = text.partition("://")
+    host_part = rest.split("/", 1)[0]
+    if host_part and ":" not in host_part.rsplit("]", 1)[-1]:
+        text = f"{scheme}://{host_part}:{9503 if scheme == 'tcps' else 9559}"
+    return text
+
+
 def parse_url(url: str) -> tuple[str, str, int]:
     """``tcp://host:port`` or ``tcps://host:port`` -> (scheme, host, port).
 
