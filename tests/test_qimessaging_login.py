@@ -108,3 +108,19 @@ def test_libqi_client_logs_in_to_our_tls_server(tls_url: str) -> None:
 def test_tls_needs_a_certificate() -> None:
     with pytest.raises(BackendError, match="certificate"):
         QiServer().listen("tcps://127.0.0.1:0")
+
+
+def test_the_naoloc_link_logs_in_over_qimessaging(tls_url: str) -> None:
+    from naoloc.backends.naoqi.client import Link
+
+    link = Link(tls_url, "qimessaging", user="nao", password="s3cret")
+    link.open()
+    try:
+        assert link.has_service("Twice")
+        assert link.call("Twice", "twice", 8, timeout_s=5.0) == 16
+    finally:
+        link.close()
+    refused = Link(tls_url, "qimessaging", user="nao", password="nope")
+    with pytest.raises(ConnectionLost, match="wrong user or password") as info:
+        refused.open()
+    assert "\n" not in str(info.value)

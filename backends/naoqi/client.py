@@ -104,7 +104,9 @@ class Link:
     def _connect(self, timeout_s: float) -> Any:
         session = new_session(self.transport, curve_keys=self._curve, connect_timeout_s=timeout_s)
         try:
-            if self.transport in ("libqi", "qimessaging") and self._user:
+            if self.transport == "qimessaging" and self._user:
+                session.set_login(self._user, self._password or "")
+            if self.transport == "libqi" and self._user:
                 from naoloc.backends.naoqi.libqi_transport import set_login
 
                 set_login(session, self._user, self._password or "")
