@@ -246,3 +246,77 @@ def test_a_flood_of_calls_is_bounded_not_queued_forever() -> None:
         release.set()
         session.close()
         server.close()
+
+
+class _Echo:
+    def echo(self, value: object) -> object:
+        return value
+
+    def add(self, a: int, b: float) -> float:
+        return a + b
+
+
+@pytest.fixture(scope="module")
+def echo_server() -> Iterator[str]:
+    from naoloc.backends.naoqi.qimessaging.server import QiServer
+
+    server = QiServer()
+    server.listen("tcp://127.0.0.1:0")
+    server.register("Echo", _Echo(), methods=[("echo", "(m)", "m"), ("add", "(id)", "d")])
+    try:
+        yield server.url()
+    finally:
+        server.close()
+
+
+def _read_message(sock: socket.socket) -> tuple[message.Header, bytes]:
+    head = b""
+    while len(head) < message.HEADER_SIZE:
+        chunk = sock.recv(message.HEADER_SIZE - len(head))
+        assert chunk, "the server closed the connection"
+        head += chunk
+    header = message.unpack_header(head)
+    payload = b""
+    while len(payload) < header.size:
+        payload += sock.recv(header.size - len(payload))
+    return header, payload
+
+
+_DYNAMIC_VALUES = st.recursive(
+    st.none() | st.integers(-5, 5) | st.text(max_size=4), lambda c: st.lists(c, max_size=3)
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    action=st.sampled_from([0, 1, 2, 3, 5, 6, 7, 8, 100, 101, 102, 150]),
+    service=st.sampled_from([1, 2, 3]),
+    flags=st.sampled_from([0, 1, 2]),
+    payload=st.binary(max_size=120)
+    | st.builds(lambda v: codec.encode_bytes("m", v), _DYNAMIC_VALUES),
+)
+def test_every_well_framed_call_gets_one_answer(
+    echo_server: str, action: int, service: int, flags: int, payload: bytes
+) -> None:
+    with contextlib.closing(_connect_plain(echo_server)) as sock:
+        mid = 77
+        sock.sendall(message.pack_header(mid, len(payload), 1, flags, service, 1, action) + payload)
+        header, body = _read_message(sock)
+        assert header.id == mid and header.type in (message.REPLY, message.ERROR)
+        if header.type == message.ERROR:
+            text = codec.decode("m", body)
+            assert isinstance(text, str) and "\n" not in text
+        good = codec.encode_bytes("(id)", (2, 0.5))  # the connection still works
+        sock.sendall(message.pack_header(78, len(good), 1, 0, 2, 1, 101) + good)
+        header, body = _read_message(sock)
+        assert header.id == 78 and codec.decode("d", body) == 2.5
+
+
+def _connect_plain(url: str) -> socket.socket:
+    host, port = url[len("tcp://") :].rsplit(":", 1)
+    sock = socket.create_connection((host, int(port)), timeout=5)
+    request = codec.encode_bytes("{sm}", capability.client_request())
+    sock.sendall(message.pack_header(1, len(request), 1, 0, 0, 0, 8) + request)
+    header, _ = _read_message(sock)
+    assert header.type == message.REPLY
+    return sock
