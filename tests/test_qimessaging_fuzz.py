@@ -320,3 +320,15 @@ def _connect_plain(url: str) -> socket.socket:
     header, _ = _read_message(sock)
     assert header.type == message.REPLY
     return sock
+
+
+def test_a_capability_message_is_taken_and_the_connection_goes_on(echo_server: str) -> None:
+    with contextlib.closing(_connect_plain(echo_server)) as sock:
+        caps = codec.encode_bytes("{sm}", {**capability.LOCAL, "ObjectPtrUID": False})
+        sock.sendall(message.pack_header(5, len(caps), message.CAPABILITY, 0, 0, 0, 0) + caps)
+        call = codec.encode_bytes("(I)", (0,))
+        sock.sendall(message.pack_header(6, len(call), 1, 0, 2, 1, 2) + call)  # metaObject
+        header, body = _read_message(sock)
+        assert header.id == 6 and header.type == message.REPLY
+        meta = codec.decode(codec.METAOBJECT_SIGNATURE, body, object_uid=False)
+        assert any(entry[2] == "echo" for entry in meta[0].values())

@@ -422,8 +422,14 @@ class QiServer:
         if client is None:
             return
         kind = header.type
+        if kind == message.CAPABILITY:  # a peer may announce its features at any time
+            with contextlib.suppress(ProtocolError):
+                peer = codec.decode("{sm}", payload)
+                if isinstance(peer, dict):
+                    client.features = capability.negotiated(peer)
+            return
         if kind not in (message.CALL, message.POST):
-            return  # replies, events, capabilities, cancels: nothing to do for us
+            return  # replies, events, cancels (our calls cannot be cancelled): nothing to do
         if header.service == message.SERVICE_SERVER:
             self._authenticate(client, header, payload)
             return
