@@ -84,7 +84,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, metavar="OUTDIR", type=Path)
     p = add("serve")
     p.add_argument("--listen", default="tcp://127.0.0.1:9559", metavar="URL")
-    p.add_argument("--transport", choices=("libqi", "zmq"), default=None)
+    p.add_argument("--transport", choices=("libqi", "zmq", "qimessaging"), default=None)
     p.add_argument(
         "--allow-remote", action="store_true",
         help="allow binding to a non-loopback address (zmq needs CURVE keys then)",

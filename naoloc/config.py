@@ -30,8 +30,10 @@ class RobotConfig(_Model):
         "mujoco", description="mujoco (simulator), naoqi (network) or fake (unit tests)"
     )
     url: str = Field("tcp://127.0.0.1:9559", description="NAOqi address; naoqi backend only")
-    transport: Literal["auto", "libqi", "zmq"] = Field(
-        "auto", description="naoqi only: libqi (real qi package), zmq (our shim), auto"
+    transport: Literal["auto", "libqi", "zmq", "qimessaging"] = Field(
+        "auto",
+        description="naoqi only: libqi (real qi package), zmq (our shim), "
+        "qimessaging (libqi's protocol in pure Python), auto",
     )
     user: str | None = Field(None, description="NAOqi 2.9+ (tcps://) user, usually 'nao'")
     password: SecretStr | None = Field(

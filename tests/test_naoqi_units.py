@@ -82,7 +82,7 @@ def test_error_from_text_maps_remote_errors(text: str, kind: type, message: str)
 def test_resolve_transport(monkeypatch: pytest.MonkeyPatch) -> None:
     assert shim.resolve_transport("zmq") == "zmq"
     monkeypatch.setattr(shim, "qi_available", lambda: False)
-    assert shim.resolve_transport("auto") == "zmq"
+    assert shim.resolve_transport("auto") == "qimessaging"  # no qi: naoloc's own QiMessaging
     with pytest.raises(DependencyNotInstalled, match=r"pip install 'naoloc\[naoqi\]'"):
         shim.resolve_transport("libqi")
     monkeypatch.setattr(shim, "qi_available", lambda: True)

@@ -1,15 +1,19 @@
 """The NAOqi network backend: a Robot over a qi session (a real NAO or ``naoloc serve``).
 
 ``robot.backend: naoqi`` with ``robot.url`` (``tcp://<ip>:9559``; NAOqi 2.9+:
-``tcps://<ip>:9503`` with ``robot.user`` and ``robot.password``) and
+``tcps://<ip>:9503`` with ``robot.user`` and ``robot.password``, or the password in the
+environment variable ``NAOLOC_NAO_PASSWORD`` so it stays off disk) and
 ``robot.transport`` (``libqi`` = the real qi package, ``zmq`` = naoloc's pure-Python
-shim, ``auto`` = libqi when qi imports, unless the server greets with ZeroMQ).
+shim, ``qimessaging`` = libqi's wire protocol in pure Python, ``auto`` = libqi when qi
+imports, qimessaging otherwise, zmq when the server greets with ZeroMQ).
 
 ``robot.sim`` is None unless ``robot.sim_service: true`` asks for the virtual NAOqi's
 ``NaolocSim`` service (ground truth and teleport), so a real NAO never gets one.
 """
 
 from __future__ import annotations
+
+import os
 
 from naoloc.config import Config
 from naoloc.errors import BackendError
@@ -31,9 +35,14 @@ def create(cfg: Config) -> Robot:
 
     rc = cfg.robot
     transport = resolve_transport(rc.transport)
-    if rc.transport == "auto" and transport == "libqi" and looks_like_zmq(rc.url):
+    if rc.transport == "auto" and transport != "zmq" and looks_like_zmq(rc.url):
         transport = "zmq"
-    password = None if rc.password is None else rc.password.get_secret_value()
+    # The password from the config (never written to any file) or the environment.
+    password = (
+        rc.password.get_secret_value()
+        if rc.password is not None
+        else os.environ.get("NAOLOC_NAO_PASSWORD")
+    )
     link = Link(rc.url, transport, user=rc.user, password=password, curve_keys=rc.curve_keys)
     link.open()
     try:

@@ -59,9 +59,9 @@ class Link:
     """A watched connection to a (real or virtual) NAOqi.
 
     Args:
-        url: ``tcp://host:port`` (or ``tcps://`` for NAOqi 2.9+ over libqi).
-        transport: ``libqi`` or ``zmq``.
-        user: NAOqi 2.9+ login (libqi only), or None.
+        url: ``tcp://host:port`` (or ``tcps://`` for NAOqi 2.9+ over libqi/qimessaging).
+        transport: ``libqi``, ``zmq`` or ``qimessaging``.
+        user: NAOqi 2.9+ login (libqi and qimessaging), or None.
         password: NAOqi 2.9+ password, or None.
         curve_keys: zmq only: CURVE certificate folder, or None.
     """
@@ -76,7 +76,7 @@ class Link:
         curve_keys: str | None = None,
     ) -> None:
         if transport == "zmq" and url.startswith("tcps://"):
-            raise BackendError("tcps:// (NAOqi 2.9+) needs transport libqi")
+            raise BackendError("tcps:// (NAOqi 2.9+) needs transport libqi or qimessaging")
         self.url = url
         self.transport = transport
         self._user, self._password, self._curve = user, password, curve_keys
@@ -104,12 +104,14 @@ class Link:
     def _connect(self, timeout_s: float) -> Any:
         session = new_session(self.transport, curve_keys=self._curve, connect_timeout_s=timeout_s)
         try:
+            if self.transport == "qimessaging" and self._user:
+                session.set_login(self._user, self._password or "")
             if self.transport == "libqi" and self._user:
                 from naoloc.backends.naoqi.libqi_transport import set_login
 
                 set_login(session, self._user, self._password or "")
             future = session.connect(self.url, _async=True)
-            if self.transport == "libqi":
+            if self.transport in ("libqi", "qimessaging"):
                 future.wait(int(timeout_s * 1000))
                 if not future.isFinished():
                     raise ConnectionLost(f"no NAOqi answers at {self.url} within {timeout_s} s")

@@ -4,8 +4,9 @@ naoloc talks to NAOqi through the call shapes of libqi's ``qi.Session``: ``conne
 ``close``, ``isConnected``, ``service`` (a proxy whose methods accept ``_async=True``
 and then return a future), ``services``, ``registerService``, ``listenStandalone``,
 ``endpoints`` and the ``disconnected`` signal. :func:`new_session` returns either a real
-``qi.Session`` (transport ``libqi``) or a :class:`~.zmq_transport.ZmqSession` (transport
-``zmq``), so the client and server code is written once.
+``qi.Session`` (transport ``libqi``), a :class:`~.zmq_transport.ZmqSession` (transport
+``zmq``) or a :class:`~.qimessaging.client.QiSession` (transport ``qimessaging``: libqi's
+wire protocol in pure Python), so the client and server code is written once.
 
 Futures mirror ``qi.Future``: ``wait(ms)``, ``isFinished()``, ``hasError()``,
 ``error()`` (a string), ``hasValue()``, ``value(ms)``, ``addCallback(fn)``.
@@ -20,11 +21,12 @@ from typing import Any, Literal
 
 from naoloc.errors import BackendError, ConnectionLost, DependencyNotInstalled, NaolocError
 
-Transport = Literal["libqi", "zmq"]
+Transport = Literal["libqi", "zmq", "qimessaging"]
 
 QI_INSTALL_HINT = (
     "transport libqi needs the qi package: pip install 'naoloc[naoqi]' "
-    "(qi wheels exist only for Linux x86-64 and Python <= 3.12); or use transport zmq"
+    "(qi wheels exist only for Linux x86-64 and Python <= 3.12); or use transport "
+    "qimessaging (naoloc's own implementation of the same protocol, no qi needed)"
 )
 
 # States, spelled as qi.FutureState names.
@@ -46,6 +48,7 @@ class Future:
         self._value: Any = None
         self._error: NaolocError | None = None
         self._callbacks: list[Callable[[Future], None]] = []
+        self._canceller: Callable[[], None] | None = None
 
     def _finish(self, value: Any, error: NaolocError | None) -> bool:
         with self._lock:
@@ -116,8 +119,15 @@ class Future:
                 return
         callback(self)
 
+    def _set_canceller(self, canceller: Callable[[], None]) -> None:
+        """What :meth:`cancel` does (qimessaging sends a cancel message)."""
+        self._canceller = canceller
+
     def cancel(self) -> None:
-        """Requests cannot be cancelled on the wire; kept for the qi shape."""
+        """Ask the server to cancel the call (qimessaging); a no-op on zmq."""
+        canceller = self._canceller
+        if canceller is not None and not self._done.is_set():
+            canceller()
 
 
 class Promise:
@@ -168,27 +178,31 @@ class Signal:
 
 def qi_available() -> bool:
     """True when the real ``qi`` package can be imported (checked without importing it)."""
-    return importlib.util.find_spec("qi") is not None
+    try:
+        return importlib.util.find_spec("qi") is not None
+    except (ImportError, ValueError):  # blocked (an import hook, or sys.modules["qi"] = None)
+        return False
 
 
 def resolve_transport(transport: str) -> Transport:
-    """Turn ``auto | libqi | zmq`` into a concrete transport.
+    """Turn ``auto | libqi | zmq | qimessaging`` into a concrete transport.
 
-    ``auto`` prefers libqi when the qi package is installed.
+    ``auto`` prefers libqi when the qi package is installed, otherwise naoloc's own
+    QiMessaging (the zmq greeting is detected by the caller, see ``looks_like_zmq``).
 
     Raises:
         DependencyNotInstalled: ``libqi`` without the qi package.
         BackendError: An unknown transport name.
     """
     if transport == "auto":
-        return "libqi" if qi_available() else "zmq"
+        return "libqi" if qi_available() else "qimessaging"
     if transport == "libqi":
         if not qi_available():
             raise DependencyNotInstalled(QI_INSTALL_HINT)
         return "libqi"
-    if transport == "zmq":
-        return "zmq"
-    raise BackendError(f"unknown transport {transport!r}; valid: auto, libqi, zmq")
+    if transport in ("zmq", "qimessaging"):
+        return "zmq" if transport == "zmq" else "qimessaging"
+    raise BackendError(f"unknown transport {transport!r}; valid: auto, libqi, zmq, qimessaging")
 
 
 def new_session(
@@ -197,10 +211,11 @@ def new_session(
     """A fresh, unconnected session with the qi.Session call shapes.
 
     Args:
-        transport: ``libqi`` (a real ``qi.Session``) or ``zmq`` (our shim).
+        transport: ``libqi`` (a real ``qi.Session``), ``zmq`` (our shim) or
+            ``qimessaging`` (naoloc's own libqi wire protocol, no qi package).
         curve_keys: zmq only: folder with CURVE certificates (see
             :func:`~.zmq_transport.make_curve_keys`); None = no encryption.
-        connect_timeout_s: zmq only: how long ``connect`` waits for the server's greeting.
+        connect_timeout_s: zmq and qimessaging: how long ``connect`` waits for an answer.
 
     Raises:
         DependencyNotInstalled: libqi without the qi package.
@@ -209,6 +224,10 @@ def new_session(
         from naoloc.backends.naoqi import libqi_transport
 
         return libqi_transport.new_session()
+    if transport == "qimessaging":
+        from naoloc.backends.naoqi.qimessaging.client import QiSession
+
+        return QiSession(connect_timeout_s=connect_timeout_s)
     from naoloc.backends.naoqi.zmq_transport import ZmqSession
 
     return ZmqSession(curve_keys=curve_keys, connect_timeout_s=connect_timeout_s)

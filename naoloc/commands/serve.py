@@ -2,7 +2,9 @@
 
 The robot (``robot.backend`` fake or mujoco) is served as ALMotion, ALVideoDevice and
 ALRobotPosture, plus NaolocSim (ground truth, teleport) and NaolocWatchdog (keep-alive),
-on ``--listen`` over libqi (NAOqi's own protocol) or zmq (naoloc's shim). It prints
+on ``--listen`` over libqi (NAOqi's own protocol), zmq (naoloc's shim) or qimessaging
+(NAOqi's protocol in naoloc's own pure-Python implementation: real libqi clients
+connect without libqi on the server). It prints
 one line ``naoloc serve: listening on <url> (<transport>)`` once ready, runs until
 SIGINT or SIGTERM, and stops the robot on exit.
 
