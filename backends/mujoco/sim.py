@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -130,6 +131,7 @@ class Simulation:
         self._realtime = cfg.world.sim.realtime
         self._wall0 = time.monotonic()
         self._sim0 = float(self.data.time)
+        self.clock: Any = None  # a naoloc.naoqi.loop.SimClock when served in real time
 
     # ----------------------------------------------------------------------------- joints
     def _init_joints(self) -> None:
@@ -268,6 +270,9 @@ class Simulation:
         """
         if self.closed:
             raise RobotError("the simulated robot is closed")
+        if self.clock is not None:
+            self.clock.advance(n)
+            return
         for _ in range(n):
             self._one_cycle()
         if self._realtime:
@@ -339,6 +344,15 @@ class Simulation:
             + noise[2] * odo.heading_random_walk_rad_per_sqrt_rad * math.sqrt(turn),
         )
         self.sensor_odometry = self.sensor_odometry * step
+
+    def attach_clock(self, clock: Any) -> tuple[Callable[[], None], float]:
+        """Let a real-time clock drive time (``naoloc serve``); None = deterministic again.
+
+        Returns:
+            The function that runs one ALMotion cycle, and the cycle length in seconds.
+        """
+        self.clock = clock
+        return self._one_cycle, self.cycle_s
 
     def close(self) -> None:
         """Stop the walk and refuse further service calls; safe to call twice."""

@@ -36,6 +36,10 @@ from naoloc.errors import BackendError, ConnectionLost, NaolocError, ProtocolErr
 PING_EVERY_S: Final = 0.2
 LOST_AFTER_S: Final = 0.9
 _POLL_MS: Final = 50
+REPLY_HWM: Final = 16  # unread replies kept per client before new ones are dropped
+MAX_PENDING_CALLS: Final = 64  # calls one client may have queued at once
+MAX_WORKERS: Final = 256  # (client, service) worker threads at once
+WORKER_IDLE_S: Final = 1.0
 
 
 @runtime_checkable
@@ -142,8 +146,10 @@ class ZmqSession:
         self._services: list[str] = []
         # server side
         self._objects: dict[str, Any] = {}
-        self._workers: dict[str, queue.Queue[Any]] = {}
-        self._worker_threads: list[threading.Thread] = []
+        self._core: Any = None
+        self._workers_lock = threading.Lock()
+        self._call_workers: dict[tuple[bytes, str], tuple[queue.Queue[Any], threading.Thread]] = {}
+        self._pending_calls: dict[bytes, int] = {}
         self._endpoint = ""
         self._auth: Any = None
         self.protocol_errors = 0
@@ -347,6 +353,9 @@ class ZmqSession:
         sock = self._ctx.socket(zmq.ROUTER)
         sock.setsockopt(zmq.LINGER, 0)
         sock.setsockopt(zmq.ROUTER_HANDOVER, 1)
+        # Replies a client does not read wait in zmq's queue up to this many messages,
+        # then are dropped (bounded memory per client; the call times out client-side).
+        sock.setsockopt(zmq.SNDHWM, REPLY_HWM)
         if self._curve is not None:
             from zmq.auth.thread import ThreadAuthenticator
 
@@ -378,14 +387,11 @@ class ZmqSession:
         if name in self._objects:
             raise BackendError(f"service {name!r} is already registered")
         self._objects[name] = obj
-        jobs: queue.Queue[Any] = queue.Queue()
-        self._workers[name] = jobs
-        thread = threading.Thread(
-            target=self._worker, args=(obj, jobs), name=f"naoloc-{name}", daemon=True
-        )
-        thread.start()
-        self._worker_threads.append(thread)
         return len(self._objects) + 1
+
+    def set_core(self, core: Any) -> None:
+        """Tell ``core`` (``touch(caller, heartbeat=True)``, ``gone(caller)``) who is alive."""
+        self._core = core
 
     def _reply(self, peer: bytes, header: dict[str, Any]) -> None:
         try:
@@ -396,12 +402,21 @@ class ZmqSession:
         if self._wake is not None:
             self._wake.poke()
 
-    def _worker(self, obj: Any, jobs: queue.Queue[Any]) -> None:
+    def _worker(self, key: tuple[bytes, str], obj: Any, jobs: queue.Queue[Any]) -> None:
+        """Run one client's calls to one service in order; ends after a second idle."""
+        peer = key[0]
         while True:
-            job = jobs.get()
+            try:
+                job = jobs.get(timeout=WORKER_IDLE_S)
+            except queue.Empty:
+                with self._workers_lock:
+                    if jobs.empty():
+                        self._call_workers.pop(key, None)
+                        return
+                continue
             if job is None:
                 return
-            peer, ident, method, args = job
+            ident, method, args = job
             try:
                 if isinstance(obj, Invokable):
                     value = obj.invoke(peer.hex(), method, args)
@@ -415,7 +430,46 @@ class ZmqSession:
                 self._reply(peer, {"k": "err", "i": ident, "e": [type(err).__name__, str(err)]})
             except Exception as err:  # a server bug must not kill the worker
                 message = f"{type(err).__name__}: {err}".splitlines()[0]
+                print(f"naoloc serve: {message}", file=sys.stderr, flush=True)
                 self._reply(peer, {"k": "err", "i": ident, "e": ["RobotError", message]})
+            finally:
+                with self._workers_lock:
+                    self._pending_calls[peer] = self._pending_calls.get(peer, 1) - 1
+                    if self._pending_calls[peer] <= 0:
+                        del self._pending_calls[peer]
+
+    def _dispatch_call(self, peer: bytes, ident: int, service: str, method: str, args: Any) -> None:
+        obj = self._objects.get(service)
+        if obj is None:
+            error = ["RobotError", f"unknown service {service!r}"]
+            self._reply(peer, {"k": "err", "i": ident, "e": error})
+            return
+        key = (peer, service)
+        with self._workers_lock:
+            pending = self._pending_calls.get(peer, 0)
+            if pending >= MAX_PENDING_CALLS:
+                busy = f"{service}.{method}: too many calls queued ({MAX_PENDING_CALLS})"
+                self._reply(peer, {"k": "err", "i": ident, "e": ["RobotError", busy]})
+                return
+            entry = self._call_workers.get(key)
+            if entry is None:
+                if len(self._call_workers) >= MAX_WORKERS:
+                    busy = f"{service}.{method}: the server is busy ({MAX_WORKERS} clients)"
+                    self._reply(peer, {"k": "err", "i": ident, "e": ["RobotError", busy]})
+                    return
+                jobs: queue.Queue[Any] = queue.Queue()
+                thread = threading.Thread(
+                    target=self._worker,
+                    args=(key, obj, jobs),
+                    name=f"naoloc-{service}",
+                    daemon=True,
+                )
+                self._call_workers[key] = (jobs, thread)
+                thread.start()
+            else:
+                jobs = entry[0]
+            self._pending_calls[peer] = pending + 1
+            jobs.put((ident, method, args))
 
     def _on_request(self, frames: list[Any]) -> None:
         peer = frames[0].bytes
@@ -426,18 +480,19 @@ class ZmqSession:
             print(f"naoloc serve: dropped a bad request: {err}", file=sys.stderr)
             return
         kind, ident = request["k"], request["i"]
+        core = self._core
+        if core is not None:
+            if kind == "bye":
+                core.gone(peer.hex())
+                return
+            core.touch(peer.hex(), heartbeat=True)
         if kind == "ping":
             self._reply(peer, {"k": "pong", "i": ident})
         elif kind == "hello":
             services = sorted(self._objects)
             self._reply(peer, {"k": "welcome", "i": ident, "v": {"services": services}})
         elif kind == "call":
-            jobs = self._workers.get(request["s"])
-            if jobs is None:
-                error = ["RobotError", f"unknown service {request['s']!r}"]
-                self._reply(peer, {"k": "err", "i": ident, "e": error})
-            else:
-                jobs.put((peer, ident, request["m"], request["a"]))
+            self._dispatch_call(peer, ident, request["s"], request["m"], request["a"])
 
     def _server_loop(self, sock: zmq.Socket[Any]) -> None:
         assert self._wake is not None
@@ -469,13 +524,13 @@ class ZmqSession:
         self._stop.set()
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout=2.0)
-        for jobs in self._workers.values():
+        with self._workers_lock:
+            workers, self._call_workers = list(self._call_workers.values()), {}
+        for jobs, _ in workers:
             jobs.put(None)
-        for thread in self._worker_threads:
+        for _, thread in workers:
             if thread is not threading.current_thread():
                 thread.join(timeout=2.0)
-        self._worker_threads.clear()
-        self._workers.clear()
         self._stop_auth()
         if self._wake is not None:
             self._wake.close()
