@@ -125,8 +125,8 @@ class RemoteVideo(_Remote):
         frame[6] = frame_bytes(frame[6])
         return frame
 
-    def releaseImage(self, nameId: str) -> None:
-        self._call(VIDEO, "releaseImage", str(nameId))
+    def releaseImage(self, nameId: str) -> bool:
+        return bool(self._call(VIDEO, "releaseImage", str(nameId)))
 
     def setActiveCamera(self, cameraIndex: int) -> bool:
         return bool(self._call(VIDEO, "setActiveCamera", int(cameraIndex)))
