@@ -315,15 +315,32 @@ def keyframes(
     def as_list(v: Any) -> list[Any]:
         return [v] if isinstance(v, int | float) and not isinstance(v, bool) else list(v)
 
+    n = len(joints)
+
+    def numbers(v: Any) -> bool:
+        return isinstance(v, list | tuple) and all(
+            isinstance(x, int | float) and not isinstance(x, bool) for x in v
+        )
+
     try:
-        if len(joints) == 1:
+        if n == 1:
             value_lists = [as_list(values)]
             time_lists = [as_list(times)]
         else:
-            value_lists = [as_list(v) for v in values]
-            raw_times = list(times)
-            shared = raw_times and all(isinstance(t, int | float) for t in raw_times)
-            time_lists = [raw_times] * len(joints) if shared else [as_list(t) for t in raw_times]
+            if isinstance(values, int | float) and not isinstance(values, bool):
+                value_lists = [[values]] * n
+            elif numbers(values) and len(values) in (1, n):
+                value_lists = [[v] for v in values] if len(values) == n else [list(values)] * n
+            else:
+                value_lists = [as_list(v) for v in values]
+            if isinstance(times, int | float) and not isinstance(times, bool):
+                time_lists = [[times]] * n
+            elif numbers(times) and all(len(v) == 1 for v in value_lists) and len(times) == n:
+                time_lists = [[t] for t in times]
+            elif numbers(times):
+                time_lists = [list(times)] * n
+            else:
+                time_lists = [as_list(t) for t in times]
     except TypeError:
         raise RobotError(f"{what}: values and times must be numbers or lists") from None
     if len(value_lists) != len(joints) or len(time_lists) != len(joints):
