@@ -506,9 +506,18 @@ class ZmqSession:
                     self._wake.drain()
                 if sock in events:
                     while sock.poll(0):
-                        self._on_request(sock.recv_multipart(copy=False))
+                        frames = sock.recv_multipart(copy=False)
+                        try:
+                            self._on_request(frames)
+                        except Exception as err:  # one bad message never ends the server
+                            self.protocol_errors += 1
+                            why = f"{type(err).__name__}: {err}".splitlines()[0][:200]
+                            print(f"naoloc serve: dropped a request: {why}", file=sys.stderr)
                 while self._outbox:
-                    sock.send_multipart(self._outbox.popleft(), copy=False)
+                    try:
+                        sock.send_multipart(self._outbox.popleft(), copy=False)
+                    except zmq.ZMQError as err:  # a peer that is gone
+                        print(f"naoloc serve: a reply was not sent: {err}", file=sys.stderr)
         finally:
             sock.close(0)
 
