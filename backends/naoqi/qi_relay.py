@@ -96,7 +96,7 @@ class QiRelay:
         self._wake_r.setblocking(False)
         self._sel.register(self._wake_r, selectors.EVENT_READ, "wake")
         self._lock = threading.Lock()
-        self._callers: dict[tuple[int, int], deque[str]] = {}
+        self._callers: dict[tuple[int, int], deque[tuple[str, int]]] = {}
         self._conns: set[_Conn] = set()
         self._stop = threading.Event()
         self.dropped_replies = 0
@@ -109,12 +109,22 @@ class QiRelay:
         """The connection that sent the oldest unanswered call to ``(service, action)``."""
         with self._lock:
             queue = self._callers.get((service, action))
-            return queue.popleft() if queue else "qi-unknown"
+            return queue.popleft()[0] if queue else "qi-unknown"
 
-    def _note_call(self, conn: _Conn, service: int, action: int) -> None:
+    def _note_call(self, conn: _Conn, ident: int, service: int, action: int) -> None:
+        if service <= SERVICE_DIRECTORY:
+            return
         with self._lock:
             queue = self._callers.setdefault((service, action), deque(maxlen=1024))
-            queue.append(conn.name)
+            queue.append((conn.name, ident))
+
+    def _note_answer(self, conn: _Conn, ident: int, service: int, action: int) -> None:
+        """A call was answered: forget it if the service never asked who made it."""
+        with self._lock:
+            queue = self._callers.get((service, action))
+            if queue:
+                with contextlib.suppress(ValueError):
+                    queue.remove((conn.name, ident))
 
     # ------------------------------------------------------------------ loop
     def _run(self) -> None:
@@ -231,12 +241,14 @@ class QiRelay:
                 self._log(f"naoloc serve: refused {what} from {conn.name}")
                 continue
             if kind in (TYPE_CALL, TYPE_POST):
-                self._note_call(conn, service, action)
+                self._note_call(conn, ident, service, action)
             conn.to_upstream += raw
 
     def _parse_upstream(self, conn: _Conn) -> None:
         for fields, raw in self._messages(conn.from_upstream):
             kind = fields[4]
+            if kind in (TYPE_REPLY, TYPE_ERROR):
+                self._note_answer(conn, fields[1], fields[6], fields[8])
             if kind in (TYPE_REPLY, TYPE_ERROR) and len(conn.to_client) > MAX_UNREAD_BYTES:
                 self.dropped_replies += 1
                 if self.dropped_replies == 1 or self.dropped_replies % 100 == 0:

@@ -184,6 +184,10 @@ class MemoryFront:
         """The key's value now (changes are delivered through subscriber signals)."""
         return self.getData(key)
 
+    def subscriber(self, eventName: Any) -> Any:
+        """Signals need an object-capable transport: libqi serves them (see libqi_transport)."""
+        raise RobotError("subscriber signals are served over libqi; on this transport poll getData")
+
     def subscribeToEvent(self, name: Any, callbackModule: Any, callbackMethod: Any) -> None:
         """NAOqi 1 callbacks into a client module are not supported over this server."""
         raise RobotError(
