@@ -31,9 +31,11 @@ FAST = 4.0
 CONFIG = {"robot": {"backend": "fake"}, "world": {"room": {"size_m": [8.0, 8.0], "seed": 1}}}
 
 
-def run_script(name: str, server: ServedProcess, speed: float) -> subprocess.CompletedProcess[str]:
+def run_script(
+    name: str, server: ServedProcess, speed: float, extra: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
     """Run one corpus script against ``server``."""
-    env = dict(os.environ, NAOLOC_SPEED=str(speed))
+    env = dict(os.environ, NAOLOC_SPEED=str(speed), **(extra or {}))
     env.setdefault("NAOLOC_QI_MODULE", "qi")
     return subprocess.run(
         [sys.executable, str(CORPUS / name), server.url],
@@ -60,6 +62,24 @@ def test_corpus_script(name: str, fast_server: ServedProcess) -> None:
     )
     assert "OK" in result.stdout
     assert "Traceback" not in fast_server.stderr()
+
+
+HAS_NAOLOC_QI = __import__("importlib.util").util.find_spec("naoloc.qi") is not None
+NEEDS_OBJECTS = {"memory_events.py"}  # ALMemory.subscriber returns an object: not over zmq
+
+
+@pytest.fixture(scope="module")
+def zmq_server() -> Iterator[ServedProcess]:
+    with served(CONFIG, "zmq", speed=FAST) as server:
+        yield server
+
+
+@pytest.mark.skipif(not HAS_NAOLOC_QI, reason="naoloc.qi is not in this tree")
+@pytest.mark.parametrize("name", [s for s in SCRIPTS if s not in NEEDS_OBJECTS])
+def test_corpus_script_through_naoloc_qi_over_zmq(name: str, zmq_server: ServedProcess) -> None:
+    env = {"NAOLOC_QI_MODULE": "naoloc.qi"}
+    result = run_script(name, zmq_server, FAST, env)
+    assert result.returncode == 0, f"{name}:\n{result.stdout}\n{result.stderr}"
 
 
 def test_walk_sleep_at_real_time() -> None:

@@ -397,7 +397,8 @@ class VirtualNaoqi:
             else:
                 self._session = new_session(transport, curve_keys=curve_keys)
                 self._session.listenStandalone(url)
-                self._session.set_core(self.core)
+                if hasattr(self._session, "set_core"):  # liveness per client (zmq, qimessaging)
+                    self._session.set_core(self.core)
                 for name in names:
                     self._session.registerService(name, ServiceEndpoint(self.core, name))
         except NaolocError:

@@ -40,6 +40,17 @@ REPLY_HWM: Final = 16  # unread replies kept per client before new ones are drop
 MAX_PENDING_CALLS: Final = 64  # calls one client may have queued at once
 MAX_WORKERS: Final = 256  # (client, service) worker threads at once
 WORKER_IDLE_S: Final = 1.0
+THREADS_PER_LANE: Final = 4  # parallel calls of one client to one service
+
+
+class _Lane:
+    """One client's calls to one service: a queue and up to THREADS_PER_LANE workers."""
+
+    def __init__(self) -> None:
+        self.jobs: queue.Queue[Any] = queue.Queue()
+        self.threads = 0
+        self.busy = 0
+        self.handles: list[threading.Thread] = []
 
 
 @runtime_checkable
@@ -148,7 +159,7 @@ class ZmqSession:
         self._objects: dict[str, Any] = {}
         self._core: Any = None
         self._workers_lock = threading.Lock()
-        self._call_workers: dict[tuple[bytes, str], tuple[queue.Queue[Any], threading.Thread]] = {}
+        self._call_workers: dict[tuple[bytes, str], _Lane] = {}
         self._pending_calls: dict[bytes, int] = {}
         self._endpoint = ""
         self._auth: Any = None
@@ -402,20 +413,26 @@ class ZmqSession:
         if self._wake is not None:
             self._wake.poke()
 
-    def _worker(self, key: tuple[bytes, str], obj: Any, jobs: queue.Queue[Any]) -> None:
-        """Run one client's calls to one service in order; ends after a second idle."""
+    def _worker(self, key: tuple[bytes, str], obj: Any, lane: _Lane) -> None:
+        """Run one client's calls to one service; ends after a second idle."""
         peer = key[0]
         while True:
             try:
-                job = jobs.get(timeout=WORKER_IDLE_S)
+                job = lane.jobs.get(timeout=WORKER_IDLE_S)
             except queue.Empty:
                 with self._workers_lock:
-                    if jobs.empty():
-                        self._call_workers.pop(key, None)
+                    if lane.jobs.empty():
+                        lane.threads -= 1
+                        with contextlib.suppress(ValueError):
+                            lane.handles.remove(threading.current_thread())
+                        if lane.threads == 0 and self._call_workers.get(key) is lane:
+                            del self._call_workers[key]
                         return
                 continue
             if job is None:
                 return
+            with self._workers_lock:
+                lane.busy += 1
             ident, method, args = job
             try:
                 if isinstance(obj, Invokable):
@@ -434,6 +451,7 @@ class ZmqSession:
                 self._reply(peer, {"k": "err", "i": ident, "e": ["RobotError", message]})
             finally:
                 with self._workers_lock:
+                    lane.busy -= 1
                     self._pending_calls[peer] = self._pending_calls.get(peer, 1) - 1
                     if self._pending_calls[peer] <= 0:
                         del self._pending_calls[peer]
@@ -451,25 +469,27 @@ class ZmqSession:
                 busy = f"{service}.{method}: too many calls queued ({MAX_PENDING_CALLS})"
                 self._reply(peer, {"k": "err", "i": ident, "e": ["RobotError", busy]})
                 return
-            entry = self._call_workers.get(key)
-            if entry is None:
+            lane = self._call_workers.get(key)
+            if lane is None:
                 if len(self._call_workers) >= MAX_WORKERS:
                     busy = f"{service}.{method}: the server is busy ({MAX_WORKERS} clients)"
                     self._reply(peer, {"k": "err", "i": ident, "e": ["RobotError", busy]})
                     return
-                jobs: queue.Queue[Any] = queue.Queue()
+                lane = _Lane()
+                self._call_workers[key] = lane
+            self._pending_calls[peer] = pending + 1
+            lane.jobs.put((ident, method, args))
+            # A blocking call (moveTo) must not hold up the same client's next call.
+            if lane.busy + lane.jobs.qsize() > lane.threads and lane.threads < THREADS_PER_LANE:
+                lane.threads += 1
                 thread = threading.Thread(
                     target=self._worker,
-                    args=(key, obj, jobs),
+                    args=(key, obj, lane),
                     name=f"naoloc-{service}",
                     daemon=True,
                 )
-                self._call_workers[key] = (jobs, thread)
+                lane.handles.append(thread)
                 thread.start()
-            else:
-                jobs = entry[0]
-            self._pending_calls[peer] = pending + 1
-            jobs.put((ident, method, args))
 
     def _on_request(self, frames: list[Any]) -> None:
         peer = frames[0].bytes
@@ -534,12 +554,14 @@ class ZmqSession:
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout=2.0)
         with self._workers_lock:
-            workers, self._call_workers = list(self._call_workers.values()), {}
-        for jobs, _ in workers:
-            jobs.put(None)
-        for _, thread in workers:
-            if thread is not threading.current_thread():
-                thread.join(timeout=2.0)
+            lanes, self._call_workers = list(self._call_workers.values()), {}
+        for lane in lanes:
+            for _ in lane.handles:
+                lane.jobs.put(None)
+        for lane in lanes:
+            for thread in lane.handles:
+                if thread is not threading.current_thread():
+                    thread.join(timeout=2.0)
         self._stop_auth()
         if self._wake is not None:
             self._wake.close()
