@@ -112,7 +112,6 @@ class ServedRobot:
         if speed is not None and isinstance(robot.sim, ClockHost):
             clock = SimClock(self.loop, speed, log)
             self.loop.run(clock.attach, robot.sim)
-            self.loop.clock = clock
             self.clock = clock
         ctx = self.ctx
         self.motion = MotionFront(robot.motion, ctx)
@@ -334,8 +333,7 @@ class ServedRobot:
         except NaolocError as err:
             self._log(f"naoloc serve: could not stop the robot: {err}")
         if self.clock is not None and isinstance(self.robot.sim, ClockHost):
-            self.robot.sim.attach_clock(None)
-            self.loop.clock = None
+            self.clock.detach(self.robot.sim)
             self.clock = None
 
 

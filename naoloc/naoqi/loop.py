@@ -192,10 +192,18 @@ class SimClock:
         self.dropped_cycles = 0
 
     def attach(self, host: ClockHost) -> None:
-        """Drive ``host``'s time from now on (call on the loop thread)."""
+        """Drive ``host``'s time from now on; run it on the loop thread (``loop.run``)."""
         self._step, self.cycle_s = host.attach_clock(self)
         self._wall0 = time.monotonic()
         self.cycles = 0
+        self._loop.clock = self
+
+    def detach(self, host: ClockHost) -> None:
+        """Give ``host`` back its deterministic time; run it on the loop thread."""
+        host.attach_clock(None)
+        self._step = None
+        if self._loop.clock is self:
+            self._loop.clock = None
 
     def due(self) -> int:
         """Cycles the wall clock allows now that have not run yet (may be negative)."""
