@@ -118,6 +118,9 @@ class ServedRobot:
         self.video = VideoFront(robot.video, ctx)
         self.posture = PostureFront(robot.posture, ctx)
         self.memory = companions.MemoryFront(ctx, self._joint_angles, self._stiffnesses)
+        self.motion.on_move_failed = lambda value: self.memory.raiseEvent(
+            "ALMotion/MoveFailed", value
+        )
         tts = companions.TextToSpeechFront(ctx, self.memory)
         self.fronts: dict[str, Any] = {
             MOTION: self.motion,

@@ -52,6 +52,7 @@ class MotionFront:
         self._breath: dict[str, bool] = {}
         self._idle: dict[str, bool] = {}
         self._motion_config: dict[str, Any] = {}
+        self.on_move_failed: Any = None  # called with NAOqi's MoveFailed value on a failed walk
 
     # ------------------------------------------------------------------ helpers
     def _run(self, method: str, *args: Any) -> Any:
@@ -258,6 +259,10 @@ class MotionFront:
         result, task = self._blocking("moveTo", "walk", "moveTo", *bargs)
         with self._lock:
             replaced = gen != self._walk_gen
+        if not result and not replaced and not task.stopped.is_set() and self.on_move_failed:
+            # NAOqi raises ALMotion/MoveFailed: [cause, status, [x, y, theta] where it stopped]
+            where = self._run("getRobotPosition", False)
+            self.on_move_failed(["Internal stop", 1, [float(v) for v in where]])
         return bool(result) and not replaced and not task.stopped.is_set()
 
     def move(self, *args: Any) -> None:

@@ -41,4 +41,13 @@ assert memory.getData("Device/SubDeviceList/HeadYaw/Hardness/Actuator/Value") ==
 assert "Device/SubDeviceList/HeadYaw/Position/Sensor/Value" in memory.getDataListName()
 expect_error(lambda: memory.getData("no/such/key"), "ALMemory.getData", "no/such/key")
 motion.setAngles("HeadYaw", 0.0, 1.0)
+failures: list[object] = []
+failed = threading.Event()
+sub_fail = a.service("ALMemory").subscriber("ALMotion/MoveFailed")
+sub_fail.signal.connect(lambda value: (failures.append(value), failed.set()))
+start = motion.getRobotPosition(False)[0]
+assert motion.moveTo(-3.0, 0.0, 0.0) is False  # backwards into the wall behind
+assert failed.wait(5), "no ALMotion/MoveFailed event"
+assert failures[0][0] == "Internal stop" and len(failures[0][2]) == 3, failures
+assert motion.moveTo(start - motion.getRobotPosition(False)[0], 0.0, 0.0) is True  # back
 print("OK")
