@@ -113,6 +113,7 @@ class ServedRobot:
             clock = SimClock(self.loop, speed, log)
             self.loop.run(clock.attach, robot.sim)
             self.clock = clock
+            self.ctx.clocked, self.ctx.cycle_s = True, clock.cycle_s
         ctx = self.ctx
         self.motion = MotionFront(robot.motion, ctx)
         self.video = VideoFront(robot.video, ctx)

@@ -22,6 +22,9 @@ class FrontContext:
     Attributes:
         run: ``run(function, *args, **kwargs)`` on the robot thread for the current client.
         speed: Simulated seconds per wall second.
+        clocked: True when a real-time clock drives the robot (blocking walks then wait
+            off the robot thread).
+        cycle_s: The robot's control cycle (s, simulated).
         log: One-line notices (stderr of ``naoloc serve``).
         tasks: The task table shared by every service.
         caller: The client of the current call (per thread).
@@ -29,6 +32,8 @@ class FrontContext:
 
     run: Callable[..., Any]
     speed: float = 1.0
+    clocked: bool = False
+    cycle_s: float = 0.02
     log: Callable[[str], None] = print
     tasks: TaskTable = field(default_factory=TaskTable)
     _local: threading.local = field(default_factory=threading.local)

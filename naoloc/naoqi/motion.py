@@ -265,6 +265,21 @@ class MotionFront:
             self.on_move_failed(["Internal stop", 1, [float(v) for v in where]])
         return bool(result) and not replaced and not task.stopped.is_set()
 
+    def _walk_on_the_clock(self, bargs: tuple[Any, ...]) -> tuple[Any, Task]:
+        """Start the walk, then wait on this thread while the clock walks it.
+
+        The robot thread stays free, so other clients' calls (and their blocking calls)
+        run while this moveTo waits, as on NAOqi.
+        """
+        task = self._ctx.tasks.start("moveTo", "walk", self._stopper("walk"), self._ctx.caller)
+        try:
+            future = self._ctx.run(self._b.moveTo, *bargs, _async=True)
+            while not self._ctx.run(future.isFinished):
+                self._ctx.sleep_sim(self._ctx.cycle_s)
+            return self._ctx.run(future.value), task
+        finally:
+            self._ctx.tasks.end(task)
+
     def move(self, *args: Any) -> None:
         """Walk at a velocity (m/s, m/s, rad/s; FRAME_ROBOT) until changed; non-blocking.
 

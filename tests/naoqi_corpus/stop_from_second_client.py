@@ -21,6 +21,12 @@ thread = threading.Thread(target=walk)
 thread.start()
 time.sleep(1.0 / speed())
 assert motion.moveIsActive() is True
+head = stopper.service("ALMotion")
+t0 = time.time()
+head.angleInterpolationWithSpeed("HeadYaw", 1.0, 0.5)  # 1 rad at 4.1 rad/s: 0.25 s
+assert (time.time() - t0) * speed() < 2.0, "a blocking head move waited for the walk"
+assert motion.moveIsActive() is True, "the head move ended the walk"
+head.angleInterpolationWithSpeed("HeadYaw", 0.0, 1.0)
 stopped_at = time.time()
 stopper.service("ALMotion").stopMove()
 thread.join(10)
