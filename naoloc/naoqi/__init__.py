@@ -8,5 +8,6 @@ rendering and pose; this package supplies NAOqi's rules in front of them:
 - :mod:`.tasks` ALMotion's task model (task ids, ``wait``, ``stop``, ``isRunning``);
 - :mod:`.video` ALVideoDevice's subscriber bookkeeping;
 - :mod:`.motion` and :mod:`.posture` ALMotion and ALRobotPosture in front of a backend;
-- :mod:`.companions` ALMemory, ALTextToSpeech, ALLeds and the other companion services.
+- :mod:`.memory`, :mod:`.speech` and :mod:`.companions` ALMemory, speech, ALLeds and the
+  other companion services.
 """
