@@ -89,6 +89,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--allow-remote", action="store_true",
         help="allow binding to a non-loopback address (zmq needs CURVE keys then)",
     )  # fmt: skip
+    p.add_argument(
+        "--speed", type=_pose, default=1.0, metavar="K",
+        help="simulated seconds per wall second (default 1.0, as a NAO)",
+    )  # fmt: skip
     p = add("demo", config=False)
     p.add_argument("-c", "--config", default=None, metavar="CFG", help="default: paper room")
     p.add_argument("-o", "--output", type=Path, default=Path("runs/demo"), metavar="OUTDIR")

@@ -131,8 +131,8 @@ class VideoDevice(Protocol):
         """The NAOqi image array (see :class:`naoloc.image.Frame`)."""
         ...
 
-    def releaseImage(self, nameId: str) -> None:
-        """Give the image buffer back (a no-op for remote images)."""
+    def releaseImage(self, nameId: str) -> bool:
+        """Give the image buffer back (a no-op for remote images); True."""
         ...
 
     def setActiveCamera(self, cameraIndex: int) -> bool:
@@ -264,24 +264,14 @@ class Robot:
 
 
 def expand_joint_names(names: Names) -> list[str]:
-    """Expand a joint name, a chain name ("Head", "Body", ...) or a list into joint names.
+    """Expand a joint, a chain ("Head", "LArm"...), a group ("Body", "JointActuators"...) or a list.
 
     Raises:
-        RobotError: For a name that is neither a joint nor a chain.
+        RobotError: For a name that is neither a joint nor a chain or group.
     """
-    from naoloc.constants import CHAINS, JOINT_NAMES
-    from naoloc.errors import RobotError
+    from naoloc.naoqi.rules import expand_names
 
-    items = [names] if isinstance(names, str) else list(names)
-    out: list[str] = []
-    for item in items:
-        if item in CHAINS:
-            out.extend(CHAINS[item])
-        elif item in JOINT_NAMES:
-            out.append(item)
-        else:
-            raise RobotError(f"unknown joint or chain name {item!r}")
-    return out
+    return expand_names(names)
 
 
 def pose_of(motion: Motion, use_sensors: bool = True) -> Pose2D:

@@ -230,7 +230,7 @@ def test_camera_errors() -> None:
         with pytest.raises(RobotError, match="camera index"):
             robot.video.subscribeCamera("x", 2, kQVGA, kRGBColorSpace, 30)
         with pytest.raises(RobotError, match="fps"):
-            robot.video.subscribeCamera("x", 0, kQVGA, kRGBColorSpace, 25)
+            robot.video.subscribeCamera("x", 0, kQVGA, kRGBColorSpace, 31)  # NAOqi: 1-30
         with pytest.raises(HandleError, match="'nope'"):
             robot.video.getResolution("nope")
 

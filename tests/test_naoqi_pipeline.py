@@ -54,7 +54,8 @@ def test_network_pipeline_matches_in_process(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     local_map, local = _pipeline({"backend": "fake"}, tmp_path, "local", capsys)
-    with served({**ROOM, "robot": {"backend": "fake"}}, "zmq") as server:
+    # The server's clock at 50 x real time: the survey's walking would take minutes at 1.0.
+    with served({**ROOM, "robot": {"backend": "fake"}}, "zmq", speed=50.0) as server:
         robot = server.client_config(sim_service=True)["robot"]
         net_map, net = _pipeline(robot, tmp_path, "net", capsys)
     a, b = load_map(local_map), load_map(net_map)

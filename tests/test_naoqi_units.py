@@ -104,18 +104,27 @@ def test_select_overload_checks_and_converts() -> None:
     with pytest.raises(RobotError, match="no method"):
         select_overload(MOTION, "__init__", [])
     with pytest.raises(RobotError, match="unknown service"):
-        select_overload("ALTextToSpeech", "say", ["hi"])
+        select_overload("NoSuchService", "say", ["hi"])
+    assert select_overload("ALTextToSpeech", "say", ["hi"]) == ["hi"]
 
 
-def test_every_signature_names_a_method_of_the_robot_protocols() -> None:
-    from naoloc.robot import Motion, Posture, SimControl, VideoDevice
+def test_every_signature_names_a_method_the_server_implements(fake_robot: Robot) -> None:
+    from naoloc.backends.naoqi.signatures import MODULE_METHODS, SIM, WATCHDOG
 
-    for service, protocol in [
-        ("ALMotion", Motion), ("ALVideoDevice", VideoDevice),
-        ("ALRobotPosture", Posture), ("NaolocSim", SimControl),
-    ]:  # fmt: skip
-        for method in SERVICES[service]:
-            assert callable(getattr(protocol, method, None)), (service, method)
+    core = ServedRobot(fake_robot, log=lambda _: None)
+    try:
+        for service, methods in SERVICES.items():
+            if service in (SIM, WATCHDOG):
+                target: object = fake_robot.sim
+            else:
+                target = core.fronts[service]
+            for method in methods:
+                if method in MODULE_METHODS or (service, method) == ("ALMemory", "subscriber"):
+                    continue
+                if service != WATCHDOG:
+                    assert callable(getattr(target, method, None)), (service, method)
+    finally:
+        core.stop()
 
 
 @pytest.fixture
@@ -127,8 +136,16 @@ def fake_robot() -> Iterator[Robot]:
 
 def test_deadman_stops_the_motion_of_a_silent_client(fake_robot: Robot) -> None:
     core = ServedRobot(fake_robot, deadman_s=0.2, log=lambda _: None)
+    try:
+        _silent_client_is_stopped(core)
+    finally:
+        core.stop()
+
+
+def _silent_client_is_stopped(core: ServedRobot) -> None:
     motion = ServiceEndpoint(core, "ALMotion")
-    watchdog = WatchdogEndpoint(core)
+    watchdog = WatchdogEndpoint(core, "NaolocWatchdog")
+    core.touch("driver", heartbeat=True)
     motion.invoke("driver", "move", [0.1, 0, 0])
     assert motion.invoke("observer", "moveIsActive", []) is True
     assert core.check_deadman() is False  # the driver spoke just now
@@ -143,10 +160,17 @@ def test_deadman_stops_the_motion_of_a_silent_client(fake_robot: Robot) -> None:
 
 def test_deadman_spares_a_client_that_keeps_pinging(fake_robot: Robot) -> None:
     core = ServedRobot(fake_robot, deadman_s=0.2, log=lambda _: None)
+    try:
+        _pinging_client_is_spared(core)
+    finally:
+        core.stop()
+
+
+def _pinging_client_is_spared(core: ServedRobot) -> None:
     motion = ServiceEndpoint(core, "ALMotion")
     motion.invoke("driver", "move", [0.1, 0, 0])
     for _ in range(15):
-        WatchdogEndpoint(core).invoke("driver", "ping", [])
+        WatchdogEndpoint(core, "NaolocWatchdog").invoke("driver", "ping", [])
         time.sleep(0.02)
         assert core.check_deadman() is False
     motion.invoke("driver", "move", [0, 0, 0])  # a zero velocity ends the lasting motion
@@ -163,7 +187,8 @@ def test_loopback_policy() -> None:
     with pytest.raises(BackendError, match="CURVE"):
         check_listen("tcp://0.0.0.0:9559", "zmq", True, None)
     check_listen("tcp://0.0.0.0:9559", "zmq", True, "/keys")
-    check_listen("tcp://0.0.0.0:9559", "libqi", True, None)
+    with pytest.raises(BackendError, match="libqi off loopback"):  # no login: refused
+        check_listen("tcp://0.0.0.0:9559", "libqi", True, None)
     with pytest.raises(BackendError, match="tcp://HOST:PORT"):
         check_listen("ipc:///tmp/x", "zmq", False, None)
 

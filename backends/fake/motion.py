@@ -37,6 +37,7 @@ from naoloc.constants import (
 from naoloc.errors import MotionError, RobotError
 from naoloc.geometry import Pose2D
 from naoloc.kinematics import position6d
+from naoloc.naoqi import rules
 from naoloc.robot import Angles, Names, expand_joint_names
 
 _IGNORED_MOVE_CONFIG = ("StepHeight", "TorsoWx", "TorsoWy")
@@ -104,19 +105,11 @@ def _move_limits(config: Any) -> SpeedLimits:
 
 
 def _as_floats(values: Angles, count: int, what: str) -> list[float]:
-    if isinstance(values, int | float):
-        return [float(values)] * count
-    out = [float(v) for v in values]
-    if len(out) != count:
-        raise RobotError(f"{what}: {count} joint names but {len(out)} values")
-    return out
+    return rules.per_joint(values, count, what)
 
 
 def _fraction(value: float, what: str) -> float:
-    value = float(value)
-    if not 0.0 < value <= 1.0 or math.isnan(value):
-        raise RobotError(f"{what}: speed fraction must be in (0, 1], got {value}")
-    return value
+    return rules.fraction(value, f"{what}: speed fraction")
 
 
 class FakeMotion:
@@ -163,6 +156,12 @@ class FakeMotion:
         for joint, value in zip(joints, values, strict=True):
             w.stiffness[joint] = min(max(value, 0.0), 1.0)
         w.tick()
+
+    def getStiffnesses(self, names: Names) -> list[float]:
+        """Stiffness in [0, 1] of joints or chains."""
+        w = self._world
+        w.tick()
+        return [float(w.stiffness[j]) for j in expand_joint_names(names)]
 
     def moveInit(self) -> None:
         """Take the walk-ready posture (StandInit) when awake; blocking. Does nothing at rest."""
@@ -230,7 +229,7 @@ class FakeMotion:
         """Walk at a normalised velocity, each component in [-1, 1] of the maximum speed."""
         w = self._world
         w.check_open()
-        fx, fy, ft = (min(max(float(v), -1.0), 1.0) for v in (x, y, theta))
+        (fx, fy, ft), _ = rules.velocity((x, y, theta), True, "moveToward")
         self._velocity(fx * WALK_SPEED, fy * WALK_SPEED_Y, ft * WALK_SPEED_THETA)
 
     def _velocity(self, vx: float, vy: float, wz: float) -> None:
@@ -357,26 +356,7 @@ def _parse_move_to(
     config = kwargs.pop("moveConfig", None)
     if kwargs:
         raise RobotError(f"moveTo: unexpected keyword arguments {sorted(kwargs)}")
-    try:
-        if len(args) in (3, 4) and all(isinstance(a, int | float) for a in args[:3]):
-            if len(args) == 4:
-                config = args[3]
-            points = [(float(args[0]), float(args[1]), float(args[2]))]
-        elif len(args) in (1, 2):
-            if len(args) == 2:
-                config = args[1]
-            raw = list(args[0])
-            if raw and isinstance(raw[0], int | float):
-                raw = [raw]  # a single [x, y, theta]
-            points = [(float(p[0]), float(p[1]), float(p[2])) for p in raw if len(p) == 3]
-            if len(points) != len(raw) or not points:
-                raise ValueError
-        else:
-            raise ValueError
-    except (TypeError, ValueError, IndexError):
-        raise RobotError(
-            "moveTo takes (x, y, theta[, moveConfig]) or ([[x, y, theta], ...][, moveConfig])"
-        ) from None
-    if not all(math.isfinite(v) for p in points for v in p):
-        raise RobotError("moveTo: targets must be finite numbers")
-    return points, config
+    if config is not None:
+        args = (*args, config)
+    points, checked = rules.move_to_points(args)
+    return [(p[0], p[1], p[2]) for p in points], checked or None

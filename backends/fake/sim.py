@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import Any
 
 from naoloc.backends.fake.world import ROBOT_RADIUS_M, FakeWorld
 
@@ -67,3 +69,7 @@ class FakeSim:
     def sim_time(self) -> float:
         """Simulated seconds since the backend started."""
         return self._world.time_s
+
+    def attach_clock(self, clock: Any) -> tuple[Callable[[], None], float]:
+        """Let a real-time clock drive time (``naoloc serve``); None = deterministic again."""
+        return self._world.attach_clock(clock)

@@ -17,8 +17,6 @@ from naoloc.backends.fake.render import RoomRenderer
 from naoloc.backends.fake.world import FakeWorld
 
 from naoloc.constants import (
-    CAMERA_FPS,
-    COLORSPACE_LAYERS,
     FOV_V5,
     FOV_V6,
     RESOLUTIONS,
@@ -28,9 +26,10 @@ from naoloc.constants import (
 from naoloc.errors import HandleError, RobotError
 from naoloc.image import Frame, frame_to_naoqi, from_rgb
 from naoloc.kinematics import optical_from_camera
+from naoloc.naoqi import rules
 from naoloc.simulated.camera_model import CameraModel, Motion
 
-MAX_SUBSCRIBERS = 64
+MAX_SUBSCRIBERS = rules.MAX_SUBSCRIBERS
 
 
 @dataclass
@@ -51,9 +50,7 @@ class Subscription:
 
 
 def _check_camera(index: int) -> int:
-    if int(index) not in (kTopCamera, kBottomCamera):
-        raise RobotError(f"camera index {index} does not exist on NAO (0 top, 1 bottom)")
-    return int(index)
+    return rules.camera_index(index)
 
 
 class FakeVideo:
@@ -90,22 +87,15 @@ class FakeVideo:
         """
         w = self._world
         w.check_open()
-        camera = _check_camera(cameraIndex)
-        if int(resolution) not in RESOLUTIONS:
-            raise RobotError(f"unknown resolution id {resolution}; valid: {sorted(RESOLUTIONS)}")
-        if int(colorSpace) not in COLORSPACE_LAYERS:
-            raise RobotError(
-                f"unknown colorspace id {colorSpace}; valid: {sorted(COLORSPACE_LAYERS)}"
-            )
-        if int(fps) not in CAMERA_FPS:
-            raise RobotError(f"fps must be one of {list(CAMERA_FPS)}, got {fps}")
+        camera = rules.camera_index(cameraIndex)
+        resolution, colorspace, fps = rules.subscription(resolution, colorSpace, fps)
         if len(self._subs) >= MAX_SUBSCRIBERS:
             raise RobotError(f"too many camera subscribers ({MAX_SUBSCRIBERS}); unsubscribe some")
         handle, n = str(name), 0
         while handle in self._subs:
             n += 1
             handle = f"{name}_{n}"
-        self._subs[handle] = Subscription(camera, int(resolution), int(colorSpace), int(fps))
+        self._subs[handle] = Subscription(camera, int(resolution), colorspace, int(fps))
         w.tick()
         return handle
 
@@ -174,16 +164,20 @@ class FakeVideo:
             (float(om[0]), float(om[1]), float(om[2])), (float(v[0]), float(v[1]), float(v[2]))
         )
 
-    def releaseImage(self, nameId: str) -> None:
-        """No-op for remote images (checks the handle)."""
+    def releaseImage(self, nameId: str) -> bool:
+        """No-op for remote images (checks the handle); True."""
         self._sub(nameId)
         self._world.tick()
+        return True
 
     def setActiveCamera(self, cameraIndex: int) -> bool:
-        """Select the active camera; True on success."""
+        """Select the active camera; True on success, False for a camera NAO does not have."""
         self._world.check_open()
-        self._active = _check_camera(cameraIndex)
         self._world.tick()
+        try:
+            self._active = rules.camera_index(cameraIndex)
+        except RobotError:
+            return False
         return True
 
     def getActiveCamera(self) -> int:

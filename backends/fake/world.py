@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from naoloc.backends.fake.joints import STANDING, joint_limits, posture_angles
@@ -86,6 +87,7 @@ class FakeWorld:
         self.joint_target = dict(self.joint_cmd)
         self.joint_speed = dict.fromkeys(JOINT_NAMES, 0.0)
         self.closed = False
+        self.clock: Any = None  # a naoloc.naoqi.loop.SimClock when served in real time
 
     # -- clock ---------------------------------------------------------------------------
 
@@ -101,6 +103,9 @@ class FakeWorld:
     def tick(self, cycles: int = 1) -> None:
         """Check the robot is open and advance simulated time by whole ALMotion cycles."""
         self.check_open()
+        if self.clock is not None:
+            self.clock.advance(cycles)
+            return
         for _ in range(cycles):
             self._cycle()
 
@@ -115,7 +120,16 @@ class FakeWorld:
         while not done():
             if self._cycles >= limit:
                 raise MotionError(f"{what} did not finish within {MAX_BLOCKING_S:.0f} s")
-            self._cycle()
+            if self.clock is not None:
+                self.clock.advance(1)
+                self.check_open()
+            else:
+                self._cycle()
+
+    def attach_clock(self, clock: Any) -> tuple[Callable[[], None], float]:
+        """Let ``clock`` drive time (None = deterministic); returns the cycle and its length (s)."""
+        self.clock = clock
+        return self._cycle, self.dt
 
     def _cycle(self) -> None:
         self._step_joints()

@@ -19,6 +19,7 @@ from naoloc import kinematics
 from naoloc.constants import POSTURES as POSTURE_NAMES
 from naoloc.errors import MotionError, RobotError
 from naoloc.geometry import Pose2D, pose2DInverse
+from naoloc.naoqi import rules
 from naoloc.robot import Angles, Names, expand_joint_names
 
 _SETTLE_CYCLES = 5  # cycles of standing still after a move, for the body to come to rest
@@ -26,23 +27,41 @@ _MAX_POSTURE_S = 30.0  # a posture change never takes longer than this (simulate
 
 
 def _floats(values: Angles, count: int, what: str) -> list[float]:
-    if isinstance(values, int | float):
-        return [float(values)] * count
-    out = [float(v) for v in values]
-    if len(out) == 1 and count > 1:
-        return out * count
-    if len(out) != count:
-        raise RobotError(f"{what}: {count} joint names but {len(out)} values")
-    if not all(math.isfinite(v) for v in out):
-        raise RobotError(f"{what}: values must be finite, got {out}")
-    return out
+    return rules.per_joint(values, count, what)
 
 
 def _fraction(value: float, what: str) -> float:
-    f = float(value)
-    if not (0.0 < f <= 1.0):
-        raise RobotError(f"{what}: speed fraction must be in (0, 1], got {value}")
-    return f
+    return rules.fraction(value, f"{what}: speed fraction")
+
+
+class _WalkFuture:
+    """A libqi-like future of ``moveTo(..., _async=True)``; waiting runs the simulation."""
+
+    def __init__(self, motion: MujocoMotion, reached: bool | None) -> None:
+        self._motion = motion
+        self._immediate = reached
+
+    def isFinished(self) -> bool:
+        """True once the walk ended (does not advance time)."""
+        return self._immediate is not None or self._motion._sim.walk.mode != "target"
+
+    def value(self, timeout: int | None = None) -> bool:
+        """Run the simulation until the walk ends; True when the target was reached."""
+        if self._immediate is not None:
+            return self._immediate
+        return self._motion._finish_walk()
+
+    def wait(self, timeout: int | None = None) -> None:
+        """Run the simulation until the walk ends."""
+        self.value()
+
+    def hasError(self, timeout: int | None = None) -> bool:
+        """Always False: a failed walk is a False result."""
+        return False
+
+    def cancel(self) -> None:
+        """Stop the walk."""
+        self._motion.stopMove()
 
 
 class MujocoMotion:
@@ -131,18 +150,23 @@ class MujocoMotion:
         Raises:
             RobotError: For arguments that are not one of the forms above.
         """
-        if kwargs.get("_async"):
-            raise RobotError("moveTo: _async is not supported by the simulator; use move()")
-        unknown = set(kwargs) - {"_async"}
-        if unknown:
-            raise RobotError(f"moveTo: unexpected keyword arguments {sorted(unknown)}")
+        run_async = bool(kwargs.pop("_async", False))
+        if kwargs:
+            raise RobotError(f"moveTo: unexpected keyword arguments {sorted(kwargs)}")
         points = self._parse_move_to(args)
         sim = self._sim
         if not self._ready_to_walk():
             sim.cycle()
-            return False
+            return _WalkFuture(self, False) if run_async else False  # type: ignore[return-value]
         start = sim.sensor_odometry  # open loop on odometry, as NAO's walk
         sim.walk.set_goals([start * p for p in points], start)
+        if run_async:
+            sim.cycle()
+            return _WalkFuture(self, None)  # type: ignore[return-value]
+        return self._finish_walk()
+
+    def _finish_walk(self) -> bool:
+        sim = self._sim
         while sim.walk.mode == "target":
             sim.cycle()
         sim.cycle(_SETTLE_CYCLES)
@@ -152,24 +176,8 @@ class MujocoMotion:
 
     @staticmethod
     def _parse_move_to(args: Sequence[Any]) -> list[Pose2D]:
-        try:
-            if len(args) in (3, 4) and all(isinstance(a, int | float) for a in args[:3]):
-                points = [Pose2D(float(args[0]), float(args[1]), float(args[2]))]
-            elif len(args) in (1, 2) and isinstance(args[0], Sequence) and args[0]:
-                first = args[0]
-                if all(isinstance(a, int | float) for a in first) and len(first) == 3:
-                    points = [Pose2D.from_list(first)]
-                else:
-                    points = [Pose2D.from_list(p) for p in first]
-            else:
-                raise ValueError
-        except (TypeError, ValueError):
-            raise RobotError(
-                "moveTo takes (x, y, theta), (x, y, theta, moveConfig) or [[x, y, theta], ...]"
-            ) from None
-        if not all(math.isfinite(v) for p in points for v in p):
-            raise RobotError("moveTo: the target must be finite")
-        return points
+        points, _ = rules.move_to_points(args)  # the moveConfig is checked, then not used
+        return [Pose2D(*p) for p in points]
 
     def move(self, x: float, y: float, theta: float) -> None:
         """Walk at a velocity (m/s, m/s, rad/s; FRAME_ROBOT), clipped to the walk's limits."""
@@ -184,9 +192,7 @@ class MujocoMotion:
 
     def moveToward(self, x: float, y: float, theta: float) -> None:
         """Walk at a normalised velocity, each component in [-1, 1]; non-blocking."""
-        vals = [float(x), float(y), float(theta)]
-        if not all(math.isfinite(v) and -1.0 <= v <= 1.0 for v in vals):
-            raise RobotError(f"moveToward: each component must be in [-1, 1], got {vals}")
+        vals, _ = rules.velocity((x, y, theta), True, "moveToward")
         lim = self._sim.walk.limits
         self.move(vals[0] * lim.vx, vals[1] * lim.vy, vals[2] * lim.wz)
 
@@ -329,8 +335,7 @@ class MujocoPosture:
         Raises:
             RobotError: For a name that is not a predefined posture.
         """
-        if postureName not in POSTURES:
-            raise RobotError(f"unknown posture {postureName!r}; valid: {', '.join(POSTURE_NAMES)}")
+        rules.posture_name(postureName)
         frac = _fraction(maxSpeedFraction, "goToPosture")
         if not self._sim.awake:
             self._sim.cycle()

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -138,6 +139,7 @@ class Simulation:
         self._realtime = cfg.world.sim.realtime
         self._wall0 = time.monotonic()
         self._sim0 = float(self.data.time)
+        self.clock: Any = None  # a naoloc.naoqi.loop.SimClock when served in real time
 
     @property
     def command_odometry(self) -> Pose2D:
@@ -326,6 +328,9 @@ class Simulation:
         """
         if self.closed:
             raise RobotError("the simulated robot is closed")
+        if self.clock is not None:
+            self.clock.advance(n)
+            return
         for _ in range(n):
             self._one_cycle()
         if self._realtime:
@@ -388,6 +393,15 @@ class Simulation:
             out[self.joint_index[f"{side}KneePitch"]] = 2 * lift
             out[self.joint_index[f"{side}AnklePitch"]] = -lift
         return out
+
+    def attach_clock(self, clock: Any) -> tuple[Callable[[], None], float]:
+        """Let a real-time clock drive time (``naoloc serve``); None = deterministic again.
+
+        Returns:
+            The function that runs one ALMotion cycle, and the cycle length in seconds.
+        """
+        self.clock = clock
+        return self._one_cycle, self.cycle_s
 
     def close(self) -> None:
         """Stop the walk and refuse further service calls; safe to call twice."""

@@ -21,8 +21,6 @@ from naoloc.backends.mujoco.gl import import_mujoco
 from naoloc.backends.mujoco.sim import CAMERA_NAMES, Simulation
 
 from naoloc.constants import (
-    CAMERA_FPS,
-    COLORSPACE_LAYERS,
     RESOLUTION_NAMES,
     RESOLUTIONS,
     k4VGA,
@@ -31,6 +29,7 @@ from naoloc.constants import (
 )
 from naoloc.errors import HandleError, RenderError, RobotError
 from naoloc.image import from_rgb
+from naoloc.naoqi import rules
 from naoloc.simulated.camera_model import CameraModel, Motion
 
 # mujoco reads MUJOCO_GL when first imported: import_mujoco chooses the platform first.
@@ -80,29 +79,23 @@ class MujocoVideo:
         Raises:
             RobotError: For an unknown camera, resolution, colorspace or frame rate.
         """
-        if cameraIndex not in (kTopCamera, kBottomCamera):
-            raise RobotError(f"camera index {cameraIndex} does not exist (0 top, 1 bottom)")
-        if resolution not in RESOLUTIONS:
-            raise RobotError(f"unknown resolution id {resolution}; valid: {sorted(RESOLUTIONS)}")
+        camera = rules.camera_index(cameraIndex)
+        resolution, colorspace, fps = rules.subscription(resolution, colorSpace, fps)
+        if len(self._subs) >= rules.MAX_SUBSCRIBERS:
+            raise RobotError(
+                f"too many camera subscribers ({rules.MAX_SUBSCRIBERS}); unsubscribe some"
+            )
         w, h = RESOLUTIONS[resolution]
         if w > MAX_SIZE[0] or h > MAX_SIZE[1]:
             raise RobotError(
                 f"resolution {RESOLUTION_NAMES[resolution]} is not supported by the simulator "
                 "(k4VGA at most)"
             )
-        if colorSpace not in COLORSPACE_LAYERS:
-            raise RobotError(
-                f"unknown colorspace id {colorSpace}; valid: {sorted(COLORSPACE_LAYERS)}"
-            )
-        if fps not in CAMERA_FPS:
-            raise RobotError(f"fps must be one of {list(CAMERA_FPS)}, got {fps}")
         handle, k = str(name), 0
         while handle in self._subs:
             k += 1
             handle = f"{name}_{k}"
-        self._subs[handle] = Subscription(
-            int(cameraIndex), int(resolution), int(colorSpace), int(fps)
-        )
+        self._subs[handle] = Subscription(camera, int(resolution), colorspace, int(fps))
         self._sim.cycle()
         return handle
 
@@ -117,17 +110,19 @@ class MujocoVideo:
         self._sim.cycle()
         return self._subs.pop(nameId, None) is not None
 
-    def releaseImage(self, nameId: str) -> None:
-        """Give the image buffer back (a no-op for remote images)."""
+    def releaseImage(self, nameId: str) -> bool:
+        """Give the image buffer back (a no-op for remote images); True."""
         self._sub(nameId)
         self._sim.cycle()
+        return True
 
     def setActiveCamera(self, cameraIndex: int) -> bool:
-        """Select the active camera; True when it exists."""
+        """Select the active camera; True on success, False for a camera NAO does not have."""
         self._sim.cycle()
-        if cameraIndex not in (kTopCamera, kBottomCamera):
+        try:
+            self._active = rules.camera_index(cameraIndex)
+        except RobotError:
             return False
-        self._active = int(cameraIndex)
         return True
 
     def getActiveCamera(self) -> int:
@@ -137,11 +132,13 @@ class MujocoVideo:
 
     def getHorizontalFOV(self, cameraIndex: int) -> float:
         """Horizontal field of view in radians."""
+        rules.camera_index(cameraIndex)
         self._sim.cycle()
         return self._sim.fov[0]
 
     def getVerticalFOV(self, cameraIndex: int) -> float:
         """Vertical field of view in radians."""
+        rules.camera_index(cameraIndex)
         self._sim.cycle()
         return self._sim.fov[1]
 
@@ -162,6 +159,12 @@ class MujocoVideo:
         sub = self._sub(nameId)
         self._sim.cycle()
         return sub.camera
+
+    def getFrameRate(self, nameId: str) -> int:
+        """Frame rate of a subscription (frames per second)."""
+        sub = self._sub(nameId)
+        self._sim.cycle()
+        return sub.fps
 
     # ------------------------------------------------------------------ images
     def _renderer(self, width: int, height: int) -> tuple[Any, np.ndarray]:

@@ -56,12 +56,15 @@ class RemoteMotion(_Remote):
     def moveTo(self, *args: Any, **kwargs: Any) -> bool:
         if kwargs:
             raise RobotError(f"moveTo takes positional arguments only, got {sorted(kwargs)}")
-        if len(args) == 3:
-            return bool(self._block(MOTION, "moveTo", *(float(a) for a in args)))
-        if len(args) == 1:
+        if len(args) in (3, 4):
+            xyz = [float(a) for a in args[:3]]
+            return bool(self._block(MOTION, "moveTo", *xyz, *[_config(a) for a in args[3:]]))
+        if len(args) in (1, 2):
             points = [[float(v) for v in p] for p in args[0]]
-            return bool(self._block(MOTION, "moveTo", points))
-        raise RobotError("moveTo takes (x, y, theta) or ([[x, y, theta], ...])")
+            return bool(self._block(MOTION, "moveTo", points, *[_config(a) for a in args[1:]]))
+        raise RobotError(
+            "moveTo takes (x, y, theta[, moveConfig]) or ([[x, y, theta], ...][, moveConfig])"
+        )
 
     def move(self, x: float, y: float, theta: float) -> None:
         self._call(MOTION, "move", float(x), float(y), float(theta))
@@ -133,8 +136,8 @@ class RemoteVideo(_Remote):
         frame[6] = frame_bytes(frame[6])
         return frame
 
-    def releaseImage(self, nameId: str) -> None:
-        self._call(VIDEO, "releaseImage", str(nameId))
+    def releaseImage(self, nameId: str) -> bool:
+        return bool(self._call(VIDEO, "releaseImage", str(nameId)))
 
     def setActiveCamera(self, cameraIndex: int) -> bool:
         return bool(self._call(VIDEO, "setActiveCamera", int(cameraIndex)))
@@ -202,3 +205,9 @@ def _plain(value: Any) -> Any:
     if isinstance(value, int | float):
         return float(value)
     return [v if isinstance(v, str) else float(v) for v in value]
+
+
+def _config(value: Any) -> list[list[Any]]:
+    """A moveConfig as ``[[name, value], ...]`` (what the wire carries)."""
+    pairs = value.items() if isinstance(value, dict) else value
+    return [[str(k), float(v)] for k, v in pairs]

@@ -80,6 +80,7 @@ def served(
     *,
     listen: str = "tcp://127.0.0.1:0",
     start_timeout_s: float = 60.0,
+    speed: float | None = None,
 ) -> Iterator[ServedProcess]:
     """Start ``naoloc serve -c <config> --listen <listen> --transport <transport>``.
 
@@ -88,6 +89,7 @@ def served(
         transport: ``libqi`` or ``zmq``.
         listen: Listen URL; port 0 picks a free port.
         start_timeout_s: Longest wait for the "listening on" line.
+        speed: ``--speed`` (simulated seconds per wall second); None = the default 1.0.
 
     Yields:
         The running server; on exit it gets SIGTERM (SIGKILL after 5 s).
@@ -101,6 +103,8 @@ def served(
         err_path = Path(tmp) / "stderr.txt"
         cmd = [sys.executable, "-m", "naoloc.cli", "serve", "-c", str(cfg_path)]
         cmd += ["--listen", listen, "--transport", transport]
+        if speed is not None:
+            cmd += ["--speed", repr(float(speed))]
         env = dict(os.environ)
         env.setdefault("MUJOCO_GL", "egl")
         with err_path.open("w", encoding="utf-8") as err_file:

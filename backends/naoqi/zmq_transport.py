@@ -36,6 +36,21 @@ from naoloc.errors import BackendError, ConnectionLost, NaolocError, ProtocolErr
 PING_EVERY_S: Final = 0.2
 LOST_AFTER_S: Final = 0.9
 _POLL_MS: Final = 50
+REPLY_HWM: Final = 16  # unread replies kept per client before new ones are dropped
+MAX_PENDING_CALLS: Final = 64  # calls one client may have queued at once
+MAX_WORKERS: Final = 256  # (client, service) worker threads at once
+WORKER_IDLE_S: Final = 1.0
+THREADS_PER_LANE: Final = 4  # parallel calls of one client to one service
+
+
+class _Lane:
+    """One client's calls to one service: a queue and up to THREADS_PER_LANE workers."""
+
+    def __init__(self) -> None:
+        self.jobs: queue.Queue[Any] = queue.Queue()
+        self.threads = 0
+        self.busy = 0
+        self.handles: list[threading.Thread] = []
 
 
 @runtime_checkable
@@ -142,8 +157,10 @@ class ZmqSession:
         self._services: list[str] = []
         # server side
         self._objects: dict[str, Any] = {}
-        self._workers: dict[str, queue.Queue[Any]] = {}
-        self._worker_threads: list[threading.Thread] = []
+        self._core: Any = None
+        self._workers_lock = threading.Lock()
+        self._call_workers: dict[tuple[bytes, str], _Lane] = {}
+        self._pending_calls: dict[bytes, int] = {}
         self._endpoint = ""
         self._auth: Any = None
         self.protocol_errors = 0
@@ -347,6 +364,9 @@ class ZmqSession:
         sock = self._ctx.socket(zmq.ROUTER)
         sock.setsockopt(zmq.LINGER, 0)
         sock.setsockopt(zmq.ROUTER_HANDOVER, 1)
+        # Replies a client does not read wait in zmq's queue up to this many messages,
+        # then are dropped (bounded memory per client; the call times out client-side).
+        sock.setsockopt(zmq.SNDHWM, REPLY_HWM)
         if self._curve is not None:
             from zmq.auth.thread import ThreadAuthenticator
 
@@ -378,14 +398,11 @@ class ZmqSession:
         if name in self._objects:
             raise BackendError(f"service {name!r} is already registered")
         self._objects[name] = obj
-        jobs: queue.Queue[Any] = queue.Queue()
-        self._workers[name] = jobs
-        thread = threading.Thread(
-            target=self._worker, args=(obj, jobs), name=f"naoloc-{name}", daemon=True
-        )
-        thread.start()
-        self._worker_threads.append(thread)
         return len(self._objects) + 1
+
+    def set_core(self, core: Any) -> None:
+        """Tell ``core`` (``touch(caller, heartbeat=True)``, ``gone(caller)``) who is alive."""
+        self._core = core
 
     def _reply(self, peer: bytes, header: dict[str, Any]) -> None:
         try:
@@ -396,12 +413,27 @@ class ZmqSession:
         if self._wake is not None:
             self._wake.poke()
 
-    def _worker(self, obj: Any, jobs: queue.Queue[Any]) -> None:
+    def _worker(self, key: tuple[bytes, str], obj: Any, lane: _Lane) -> None:
+        """Run one client's calls to one service; ends after a second idle."""
+        peer = key[0]
         while True:
-            job = jobs.get()
+            try:
+                job = lane.jobs.get(timeout=WORKER_IDLE_S)
+            except queue.Empty:
+                with self._workers_lock:
+                    if lane.jobs.empty():
+                        lane.threads -= 1
+                        with contextlib.suppress(ValueError):
+                            lane.handles.remove(threading.current_thread())
+                        if lane.threads == 0 and self._call_workers.get(key) is lane:
+                            del self._call_workers[key]
+                        return
+                continue
             if job is None:
                 return
-            peer, ident, method, args = job
+            with self._workers_lock:
+                lane.busy += 1
+            ident, method, args = job
             try:
                 if isinstance(obj, Invokable):
                     value = obj.invoke(peer.hex(), method, args)
@@ -415,7 +447,49 @@ class ZmqSession:
                 self._reply(peer, {"k": "err", "i": ident, "e": [type(err).__name__, str(err)]})
             except Exception as err:  # a server bug must not kill the worker
                 message = f"{type(err).__name__}: {err}".splitlines()[0]
+                print(f"naoloc serve: {message}", file=sys.stderr, flush=True)
                 self._reply(peer, {"k": "err", "i": ident, "e": ["RobotError", message]})
+            finally:
+                with self._workers_lock:
+                    lane.busy -= 1
+                    self._pending_calls[peer] = self._pending_calls.get(peer, 1) - 1
+                    if self._pending_calls[peer] <= 0:
+                        del self._pending_calls[peer]
+
+    def _dispatch_call(self, peer: bytes, ident: int, service: str, method: str, args: Any) -> None:
+        obj = self._objects.get(service)
+        if obj is None:
+            error = ["RobotError", f"unknown service {service!r}"]
+            self._reply(peer, {"k": "err", "i": ident, "e": error})
+            return
+        key = (peer, service)
+        with self._workers_lock:
+            pending = self._pending_calls.get(peer, 0)
+            if pending >= MAX_PENDING_CALLS:
+                busy = f"{service}.{method}: too many calls queued ({MAX_PENDING_CALLS})"
+                self._reply(peer, {"k": "err", "i": ident, "e": ["RobotError", busy]})
+                return
+            lane = self._call_workers.get(key)
+            if lane is None:
+                if len(self._call_workers) >= MAX_WORKERS:
+                    busy = f"{service}.{method}: the server is busy ({MAX_WORKERS} clients)"
+                    self._reply(peer, {"k": "err", "i": ident, "e": ["RobotError", busy]})
+                    return
+                lane = _Lane()
+                self._call_workers[key] = lane
+            self._pending_calls[peer] = pending + 1
+            lane.jobs.put((ident, method, args))
+            # A blocking call (moveTo) must not hold up the same client's next call.
+            if lane.busy + lane.jobs.qsize() > lane.threads and lane.threads < THREADS_PER_LANE:
+                lane.threads += 1
+                thread = threading.Thread(
+                    target=self._worker,
+                    args=(key, obj, lane),
+                    name=f"naoloc-{service}",
+                    daemon=True,
+                )
+                lane.handles.append(thread)
+                thread.start()
 
     def _on_request(self, frames: list[Any]) -> None:
         peer = frames[0].bytes
@@ -426,18 +500,19 @@ class ZmqSession:
             print(f"naoloc serve: dropped a bad request: {err}", file=sys.stderr)
             return
         kind, ident = request["k"], request["i"]
+        core = self._core
+        if core is not None:
+            if kind == "bye":
+                core.gone(peer.hex())
+                return
+            core.touch(peer.hex(), heartbeat=True)
         if kind == "ping":
             self._reply(peer, {"k": "pong", "i": ident})
         elif kind == "hello":
             services = sorted(self._objects)
             self._reply(peer, {"k": "welcome", "i": ident, "v": {"services": services}})
         elif kind == "call":
-            jobs = self._workers.get(request["s"])
-            if jobs is None:
-                error = ["RobotError", f"unknown service {request['s']!r}"]
-                self._reply(peer, {"k": "err", "i": ident, "e": error})
-            else:
-                jobs.put((peer, ident, request["m"], request["a"]))
+            self._dispatch_call(peer, ident, request["s"], request["m"], request["a"])
 
     def _server_loop(self, sock: zmq.Socket[Any]) -> None:
         assert self._wake is not None
@@ -451,9 +526,18 @@ class ZmqSession:
                     self._wake.drain()
                 if sock in events:
                     while sock.poll(0):
-                        self._on_request(sock.recv_multipart(copy=False))
+                        frames = sock.recv_multipart(copy=False)
+                        try:
+                            self._on_request(frames)
+                        except Exception as err:  # one bad message never ends the server
+                            self.protocol_errors += 1
+                            why = f"{type(err).__name__}: {err}".splitlines()[0][:200]
+                            print(f"naoloc serve: dropped a request: {why}", file=sys.stderr)
                 while self._outbox:
-                    sock.send_multipart(self._outbox.popleft(), copy=False)
+                    try:
+                        sock.send_multipart(self._outbox.popleft(), copy=False)
+                    except zmq.ZMQError as err:  # a peer that is gone
+                        print(f"naoloc serve: a reply was not sent: {err}", file=sys.stderr)
         finally:
             sock.close(0)
 
@@ -469,13 +553,15 @@ class ZmqSession:
         self._stop.set()
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout=2.0)
-        for jobs in self._workers.values():
-            jobs.put(None)
-        for thread in self._worker_threads:
-            if thread is not threading.current_thread():
-                thread.join(timeout=2.0)
-        self._worker_threads.clear()
-        self._workers.clear()
+        with self._workers_lock:
+            lanes, self._call_workers = list(self._call_workers.values()), {}
+        for lane in lanes:
+            for _ in lane.handles:
+                lane.jobs.put(None)
+        for lane in lanes:
+            for thread in lane.handles:
+                if thread is not threading.current_thread():
+                    thread.join(timeout=2.0)
         self._stop_auth()
         if self._wake is not None:
             self._wake.close()

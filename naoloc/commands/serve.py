@@ -8,8 +8,12 @@ connect without libqi on the server). It prints
 one line ``naoloc serve: listening on <url> (<transport>)`` once ready, runs until
 SIGINT or SIGTERM, and stops the robot on exit.
 
+The simulation runs continuously at ``--speed`` times real time (default 1.0, as a
+NAO), so a client that sleeps sees the robot walk; see :mod:`naoloc.naoqi.loop`.
+
 Security: only loopback addresses unless ``--allow-remote``; on zmq a non-loopback
-address also needs CURVE keys (``robot.curve_keys``).
+address also needs CURVE keys (``robot.curve_keys``); libqi is refused off loopback
+(no NAOqi 2.9 login). Clients can never (un)register services.
 """
 
 from __future__ import annotations
@@ -57,6 +61,11 @@ def check_listen(url: str, transport: str, allow_remote: bool, curve_keys: str |
             "serving zmq off loopback needs CURVE keys: set robot.curve_keys "
             "(create them with naoloc.backends.naoqi.zmq_transport.make_curve_keys)"
         )
+    if transport == "libqi":
+        raise BackendError(
+            "serving libqi off loopback needs NAOqi 2.9 logins over tcps://, which naoloc "
+            "serve does not implement: use --transport zmq with robot.curve_keys"
+        )
 
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
@@ -70,6 +79,9 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     transport = resolve_transport(args.transport or cfg.robot.transport)
     url: str = args.listen
     check_listen(url, transport, bool(args.allow_remote), cfg.robot.curve_keys)
+    speed = float(getattr(args, "speed", 1.0) or 1.0)
+    if not 0.0 < speed <= 1000.0:
+        raise BackendError(f"--speed must be in (0, 1000], got {speed:g}")
     stop = threading.Event()
 
     def on_signal(signum: int, frame: Any) -> None:
@@ -83,7 +95,12 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         robot = robot_thread.run(connect, cfg)
         try:
             with VirtualNaoqi(
-                robot, url, transport, curve_keys=cfg.robot.curve_keys, thread=robot_thread
+                robot,
+                url,
+                transport,
+                curve_keys=cfg.robot.curve_keys,
+                thread=robot_thread,
+                speed=speed,
             ) as server:
                 print(f"naoloc serve: listening on {server.endpoint} ({transport})", flush=True)
                 while not stop.wait(0.2):
@@ -94,6 +111,8 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
                     "backend": cfg.robot.backend,
                     "calls": server.core.calls,
                     "deadman_stops": server.core.deadman_stops,
+                    "speed": speed,
+                    "errors": server.core.errors,
                 }
         finally:
             robot_thread.run(robot.close)

@@ -1,0 +1,51 @@
+"""What every corpus script shares: the qi module (injectable), the URL and the clock speed.
+
+The scripts are written against the ``qi`` API as NAO programmers write them. The
+module is ``qi`` unless ``NAOLOC_QI_MODULE`` names another one with the same API (for
+example ``naoloc.qi``); the robot's URL is ``argv[1]`` (``--qi-url`` style default
+``tcp://127.0.0.1:9559``); ``NAOLOC_SPEED`` is the server's ``--speed`` so that
+expectations in simulated seconds can be turned into wall seconds.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import sys
+from typing import Any
+
+
+def qi_module() -> Any:
+    """The qi-compatible module under test."""
+    return importlib.import_module(os.environ.get("NAOLOC_QI_MODULE", "qi"))
+
+
+def url() -> str:
+    """The robot's URL (first argument)."""
+    return sys.argv[1] if len(sys.argv) > 1 else "tcp://127.0.0.1:9559"
+
+
+def speed() -> float:
+    """Simulated seconds per wall second of the server."""
+    return float(os.environ.get("NAOLOC_SPEED", "1.0"))
+
+
+def session() -> Any:
+    """A connected session."""
+    s = qi_module().Session()
+    s.connect(url())
+    return s
+
+
+def expect_error(call: Any, *words: str) -> str:
+    """Run ``call()``; it must raise a RuntimeError of one line containing ``words``."""
+    try:
+        call()
+    except RuntimeError as err:
+        text = str(err)
+        assert "\n" not in text.strip(), f"a multi-line error: {text!r}"
+        assert ".py" not in text and "Traceback" not in text, f"a server path: {text!r}"
+        for word in words:
+            assert word in text, f"{word!r} not in {text!r}"
+        return text
+    raise AssertionError(f"no error; expected one about {words}")
