@@ -9,13 +9,13 @@ STAMP := $(VENV)/.installed
 export MUJOCO_GL ?= egl
 export PYOPENGL_PLATFORM ?= egl
 
-.PHONY: demo test lint typecheck venv sysdeps clean bench
+.PHONY: demo test lint typecheck venv sysdeps clean bench wheel check-wheel
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml setup.py constraints.txt
 	@tools/check_python.sh $(PYTHON)
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --disable-pip-version-check --upgrade pip
-	$(PY) -m pip install --quiet --disable-pip-version-check -e ".[sim,naoqi,dev]"
+	$(PY) -m pip install --quiet --disable-pip-version-check -c constraints.txt -e ".[sim,naoqi,dev]"
 	@touch $(STAMP)
 
 venv: sysdeps $(STAMP)
@@ -42,5 +42,12 @@ bench: venv
 	$(PY) tools/bench_sim.py
 	$(PY) tools/bench_net.py
 
+# The wheel, installed in a fresh venv outside the checkout beside dm_control (what CI runs).
+wheel: venv
+	$(PY) -m build --wheel --outdir dist . >/dev/null
+
+check-wheel: venv
+	tools/check_wheel.sh
+
 clean:
-	rm -rf $(VENV) runs .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) runs dist build .pytest_cache .mypy_cache .ruff_cache

@@ -38,6 +38,17 @@ def _pose(text: str) -> float:
     return value
 
 
+CONFIG_HELP = "a YAML file, or a shipped config: paper_room, lab_room, nao"
+LIVE_PORT = 8765
+
+
+def _add_live(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--live", nargs="?", type=int, const=LIVE_PORT, default=None, metavar="PORT",
+        help=f"stream to Foxglove over a WebSocket on 127.0.0.1:PORT (default {LIVE_PORT})",
+    )  # fmt: skip
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argparse parser for every verb."""
     parser = argparse.ArgumentParser(
@@ -50,11 +61,12 @@ def build_parser() -> argparse.ArgumentParser:
     def add(verb: str, config: bool = True) -> argparse.ArgumentParser:
         p = sub.add_parser(verb, help=VERBS[verb], description=VERBS[verb])
         if config:
-            p.add_argument("-c", "--config", required=True, metavar="CFG", help="YAML config")
+            p.add_argument("-c", "--config", required=True, metavar="CFG", help=CONFIG_HELP)
         return p
 
     p = add("survey")
     p.add_argument("-o", "--output", required=True, metavar="DATASET.mcap", type=Path)
+    _add_live(p)
     p = add("build-map")
     p.add_argument("-d", "--dataset", required=True, metavar="DATASET.mcap", type=Path)
     p.add_argument("-o", "--output", required=True, metavar="MAP.npz", type=Path)
@@ -66,6 +78,7 @@ def build_parser() -> argparse.ArgumentParser:
             help="teleport there first (room frame, m and rad; simulator only)",
         )  # fmt: skip
         p.add_argument("--png", type=Path, default=None, help="write a picture of the result")
+        _add_live(p)
     p = add("evaluate")
     p.add_argument("--protocol", choices=("paper", "random"), default="random")
     p.add_argument("-n", type=int, default=40, help="test poses (random protocol)")
@@ -75,6 +88,14 @@ def build_parser() -> argparse.ArgumentParser:
         "--studies", default="none", metavar="LIST",
         help="extra studies: none, all, or a comma list of compare,robustness",
     )  # fmt: skip
+    p.add_argument(
+        "--executor", choices=("local", "ray"), default="local",
+        help="local: a process pool on this machine; ray: tasks on a Ray cluster (extra 'ray')",
+    )  # fmt: skip
+    p.add_argument(
+        "--ray-address", default=None, metavar="ADDR",
+        help="Ray cluster to join (e.g. ray://host:10001); default: start a local one",
+    )  # fmt: skip
     p.add_argument("-o", "--output", required=True, metavar="OUTDIR", type=Path)
     p = add("serve")
     p.add_argument("--listen", default="tcp://127.0.0.1:9559", metavar="URL")
@@ -83,8 +104,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--allow-remote", action="store_true",
         help="allow binding to a non-loopback address (zmq needs CURVE keys then)",
     )  # fmt: skip
+    _add_live(p)
     p = add("demo", config=False)
-    p.add_argument("-c", "--config", default=None, metavar="CFG", help="default: paper room")
+    p.add_argument("-c", "--config", default="paper_room", metavar="CFG", help=CONFIG_HELP)
     p.add_argument("-o", "--output", type=Path, default=Path("runs/demo"), metavar="OUTDIR")
     return parser
 
@@ -108,10 +130,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     verb: str = args.verb
     try:
         config_src = getattr(args, "config", None)
-        if verb == "demo" and config_src is None:
-            config_src = Path(__file__).resolve().parent.parent / "configs" / "sim_paper_room.yaml"
-            if not Path(config_src).is_file():
-                config_src = None
         cfg = load_config(config_src)
         result = _run_verb(verb, args, cfg)
     except KeyboardInterrupt:
