@@ -30,6 +30,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     from naoloc.behaviours.localize import localize
     from naoloc.cli import write_resolved_config
     from naoloc.commands.survey import config_path_for, interruptible
+    from naoloc.live import live_from_args, show_estimate, show_map, watch
     from naoloc.mapping import load_map
     from naoloc.plots import plot_localization
     from naoloc.progress import Progress
@@ -39,10 +40,12 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     png: Path | None = args.png
     if png is not None:
         write_resolved_config(cfg, config_path_for(png))
-    with interruptible(), connect(cfg) as robot:
+    with interruptible(), live_from_args(args) as live, connect(cfg) as robot:
         teleport_if_asked(robot, args.at)
+        show_map(live, vmap)
         with Progress(None, "localize") as bar:
-            loc = localize(robot, vmap, cfg, on_step=lambda note: bar.update(1, note))
+            loc = localize(watch(robot, live), vmap, cfg, on_step=lambda n: bar.update(1, n))
+        show_estimate(live, loc.estimate)
     summary = loc.summary()
     est = loc.estimate
     line = (

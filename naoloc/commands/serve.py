@@ -61,6 +61,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """Serve until SIGINT/SIGTERM; return the summary printed as the last JSON line."""
     from naoloc.backends.naoqi.server import RobotThread, VirtualNaoqi
     from naoloc.backends.naoqi.session import resolve_transport
+    from naoloc.live import live_from_args, watch
     from naoloc.registry import connect
 
     if cfg.robot.backend == "naoqi":
@@ -68,6 +69,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     transport = resolve_transport(args.transport or cfg.robot.transport)
     url: str = args.listen
     check_listen(url, transport, bool(args.allow_remote), cfg.robot.curve_keys)
+    live = live_from_args(args)
     stop = threading.Event()
 
     def on_signal(signum: int, frame: Any) -> None:
@@ -81,7 +83,11 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         robot = robot_thread.run(connect, cfg)
         try:
             with VirtualNaoqi(
-                robot, url, transport, curve_keys=cfg.robot.curve_keys, thread=robot_thread
+                watch(robot, live),
+                url,
+                transport,
+                curve_keys=cfg.robot.curve_keys,
+                thread=robot_thread,
             ) as server:
                 print(f"naoloc serve: listening on {server.endpoint} ({transport})", flush=True)
                 while not stop.wait(0.2):
@@ -97,6 +103,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
             robot_thread.run(robot.close)
     finally:
         robot_thread.close()
+        live.close()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
     return summary

@@ -15,11 +15,14 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
+import numpy as np
+
 from naoloc.behaviours.survey import SurveyResult, frames_per_lap, survey
 from naoloc.config import Config
 from naoloc.dataset import DatasetWriter
 from naoloc.geometry import Pose2D
 from naoloc.keyframe import Keyframe
+from naoloc.live import NO_LIVE, LiveView, live_from_args, watch
 from naoloc.progress import Progress
 from naoloc.registry import connect
 from naoloc.robot import Robot
@@ -54,7 +57,11 @@ def config_path_for(output: Path) -> Path:
 
 
 def record_survey(
-    robot: Robot, cfg: Config, output: Path, progress: Progress | None = None
+    robot: Robot,
+    cfg: Config,
+    output: Path,
+    progress: Progress | None = None,
+    live: LiveView = NO_LIVE,
 ) -> tuple[SurveyResult, int]:
     """Run the survey on ``robot`` and write every frame to ``output`` as it is taken.
 
@@ -65,17 +72,22 @@ def record_survey(
         cfg: The resolved config (stored in the dataset).
         output: The ``.mcap`` file.
         progress: Progress bar advanced per frame.
+        live: Shows the keyframe poses as they are taken (``--live``).
 
     Returns:
         The survey summary and the number of frames written.
     """
     holder: dict[str, DatasetWriter] = {}
+    taken: list[tuple[float, float, float]] = []
 
     def on_start(meta: dict[str, Any]) -> None:
         holder["w"] = DatasetWriter(output, config=cfg.to_dict(), meta=meta)
 
     def on_frame(keyframe: Keyframe, lap: int, odometry: Pose2D) -> None:
         holder["w"].write(keyframe, lap=lap, odometry=odometry)
+        if live is not NO_LIVE:
+            taken.append((keyframe.pose.x, keyframe.pose.y, keyframe.pose.theta))
+            live.map(np.asarray(taken))
 
     try:
         result = survey(
@@ -96,8 +108,9 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     write_resolved_config(cfg, config_path_for(output))
     sides = cfg.survey_sides()
     expected = frames_per_lap(sides, cfg.survey.step_m) * cfg.survey.laps
-    with interruptible(), connect(cfg) as robot, Progress(expected, "survey") as bar:
-        result, frames = record_survey(robot, cfg, output, bar)
+    live = live_from_args(args)
+    with interruptible(), live, connect(cfg) as robot, Progress(expected, "survey") as bar:
+        result, frames = record_survey(watch(robot, live), cfg, output, bar, live)
     wall, par = result.wall, result.parallax
     detected = ""
     if wall is not None:
