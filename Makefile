@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml setup.py constraints.txt
 	@tools/check_python.sh $(PYTHON)
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --disable-pip-version-check --upgrade pip
-	$(PY) -m pip install --quiet --disable-pip-version-check -c constraints.txt -e ".[sim,naoqi,dev]"
+	$(PY) -m pip install --quiet --disable-pip-version-check -c constraints.txt -e ".[sim,naoqi,dev,ray]"
 	@touch $(STAMP)
 
 venv: sysdeps $(STAMP)

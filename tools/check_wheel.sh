@@ -4,8 +4,13 @@
 # outside the checkout: pip check, one mujoco installed once, dm_control renders, naoloc demo,
 # naoloc survey -c paper_room, and a smoke subset of the tests against the installed package.
 #
-#   tools/check_wheel.sh                 # what .ci/run calls after `make test`
-#   EXTRA="mujoco<4" tools/check_wheel.sh  # the same beside MuJoCo 3.x
+#   tools/check_wheel.sh              # what .ci/run calls after `make test` (MuJoCo 3.x)
+#   EXTRA= tools/check_wheel.sh       # exactly `pip install <wheel>[sim] dm_control` (MuJoCo 4)
+#
+# EXTRA defaults to "mujoco<4": dm_control 1.0.50 allows mujoco 4.0.0 in its metadata but its
+# physics fails on it (MjModel has no flex_vertedge), so beside dm_control a user wants 3.x;
+# `make test` covers naoloc on 4.x. With EXTRA= dm_control's own failure on 4.x is reported,
+# not counted against naoloc.
 #
 # Prints one line per step with its wall time; exits non-zero on the first failure.
 set -euo pipefail
@@ -19,8 +24,12 @@ t0=$(date +%s)
 step() { echo "check_wheel: $1 ($(( $(date +%s) - t0 )) s)"; }
 fail() { echo "check_wheel: FAILED: $1 (logs in $work)" >&2; exit 1; }
 
-# 1. Build the wheel (isolated build: the setuptools of pyproject's build-system).
-"$py" -m pip wheel --quiet --no-deps --wheel-dir "$work/dist" "$repo" >"$work/build.log" 2>&1 \
+# 1. Build the wheel (isolated build: the setuptools of pyproject's build-system) from a clean
+#    copy of the tree, so that no stale build/ folder of the checkout can leak into it.
+mkdir "$work/src"
+tar -C "$repo" --exclude=.git --exclude=.venv --exclude=build --exclude=dist --exclude=runs \
+  --exclude='*.egg-info' --exclude=__pycache__ -cf - . | tar -C "$work/src" -xf -
+"$py" -m pip wheel --quiet --no-deps --wheel-dir "$work/dist" "$work/src" >"$work/build.log" 2>&1 \
   || fail "wheel build: $(tail -n 3 "$work/build.log")"
 wheel=$(ls "$work"/dist/naoloc-*.whl)
 if grep -qi "warning" "$work/build.log"; then fail "the wheel build printed warnings"; fi
@@ -48,11 +57,12 @@ step "the wheel has every file of naoloc/, backends/*/ and configs/"
 # 3. A fresh venv outside the checkout: the wheel with its sim extra, next to dm_control.
 "$py" -m venv "$work/venv"
 vpy="$work/venv/bin/python"
+EXTRA=${EXTRA-mujoco<4}
 # shellcheck disable=SC2086
-"$vpy" -m pip install --quiet "$wheel[sim]" dm_control ${EXTRA:-} >"$work/install.log" 2>&1 \
+"$vpy" -m pip install --quiet "$wheel[sim]" dm_control ${EXTRA} >"$work/install.log" 2>&1 \
   || fail "pip install: $(grep -v '^WARNING: Location' "$work/install.log" | tail -n 3)"
 "$vpy" -m pip check >"$work/check.log" 2>&1 || fail "pip check: $(cat "$work/check.log")"
-step "installed $(basename "$wheel")[sim] dm_control ${EXTRA:-}; pip check passes"
+step "installed $(basename "$wheel")[sim] dm_control ${EXTRA}; pip check passes"
 
 cd "$work"  # from here on, nothing may come from the checkout
 "$vpy" - <<'EOF' || fail "mujoco, dm_control and naoloc do not coexist"
@@ -71,13 +81,20 @@ owners = sorted(hashes.get("mujoco/__init__.py", {}))
 import naoloc
 assert "site-packages" in naoloc.__file__, naoloc.__file__
 from dm_control import suite
-env = suite.load("cartpole", "swingup")
-env.reset()
-pixels = env.physics.render(height=48, width=64)
-assert pixels.shape == (48, 64, 3) and pixels.any()
+try:
+    env = suite.load("cartpole", "swingup")
+    env.reset()
+    pixels = env.physics.render(height=48, width=64)
+    assert pixels.shape == (48, 64, 3) and pixels.any()
+    dm = "renders"
+except Exception as err:
+    if int(mujoco.__version__.split(".")[0]) < 4:
+        raise
+    dm = f"FAILS on mujoco {mujoco.__version__} by itself ({type(err).__name__}: {err})"
 from naoloc.backends.mujoco.gl import loaded_platform
-print(f"check_wheel: mujoco {mujoco.__version__} (from {', '.join(owners)}; {loaded_platform(mujoco)}),"
-      f" dm_control {md.version('dm_control')} renders, naoloc {naoloc.__version__}")
+print(f"check_wheel: mujoco {mujoco.__version__} (from {', '.join(owners)}; "
+      f"{loaded_platform(mujoco)}), dm_control {md.version('dm_control')} {dm}, "
+      f"naoloc {naoloc.__version__}")
 EOF
 step "mujoco installed once; dm_control renders"
 
