@@ -65,14 +65,25 @@ def build_parser() -> argparse.ArgumentParser:
         return p
 
     p = add("survey")
-    p.add_argument("-o", "--output", required=True, metavar="DATASET.mcap", type=Path)
+    p.add_argument(
+        "-o", "--output", required=True, metavar="DATASET.mcap", type=Path,
+        help="the dataset to write (its resolved config goes beside it)",
+    )  # fmt: skip
     _add_live(p)
     p = add("build-map")
-    p.add_argument("-d", "--dataset", required=True, metavar="DATASET.mcap", type=Path)
-    p.add_argument("-o", "--output", required=True, metavar="MAP.npz", type=Path)
+    p.add_argument(
+        "-d", "--dataset", required=True, metavar="DATASET.mcap", type=Path,
+        help="a survey's dataset",
+    )  # fmt: skip
+    p.add_argument(
+        "-o", "--output", required=True, metavar="MAP.npz", type=Path,
+        help="the map to write (a picture of it goes beside it)",
+    )  # fmt: skip
     for verb in ("localize", "go-home"):
         p = add(verb)
-        p.add_argument("-m", "--map", required=True, metavar="MAP.npz", type=Path)
+        p.add_argument(
+            "-m", "--map", required=True, metavar="MAP.npz", type=Path, help="a built map"
+        )  # fmt: skip
         p.add_argument(
             "--at", nargs=3, type=_pose, metavar=("X", "Y", "THETA"),
             help="teleport there first (room frame, m and rad; simulator only)",
@@ -80,9 +91,12 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--png", type=Path, default=None, help="write a picture of the result")
         _add_live(p)
     p = add("evaluate")
-    p.add_argument("--protocol", choices=("paper", "random"), default="random")
+    p.add_argument(
+        "--protocol", choices=("paper", "random"), default="random",
+        help="paper: the seed's Tables 1-3; random: N poses 0.6-1.4 m from the walls",
+    )  # fmt: skip
     p.add_argument("-n", type=int, default=40, help="test poses (random protocol)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0, help="seed of the test poses")
     p.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
     p.add_argument(
         "--studies", default="none", metavar="LIST",
@@ -96,10 +110,19 @@ def build_parser() -> argparse.ArgumentParser:
         "--ray-address", default=None, metavar="ADDR",
         help="Ray cluster to join (e.g. ray://host:10001); default: start a local one",
     )  # fmt: skip
-    p.add_argument("-o", "--output", required=True, metavar="OUTDIR", type=Path)
+    p.add_argument(
+        "-o", "--output", required=True, metavar="OUTDIR", type=Path,
+        help="folder for summary.json, report.md, PNGs, surveys and maps",
+    )  # fmt: skip
     p = add("serve")
-    p.add_argument("--listen", default="tcp://127.0.0.1:9559", metavar="URL")
-    p.add_argument("--transport", choices=("libqi", "zmq"), default=None)
+    p.add_argument(
+        "--listen", default="tcp://127.0.0.1:9559", metavar="URL",
+        help="address to serve on (port 0 picks a free one)",
+    )  # fmt: skip
+    p.add_argument(
+        "--transport", choices=("libqi", "zmq"), default=None,
+        help="default: robot.transport of the config",
+    )  # fmt: skip
     p.add_argument(
         "--allow-remote", action="store_true",
         help="allow binding to a non-loopback address (zmq needs CURVE keys then)",
@@ -107,7 +130,10 @@ def build_parser() -> argparse.ArgumentParser:
     _add_live(p)
     p = add("demo", config=False)
     p.add_argument("-c", "--config", default="paper_room", metavar="CFG", help=CONFIG_HELP)
-    p.add_argument("-o", "--output", type=Path, default=Path("runs/demo"), metavar="OUTDIR")
+    p.add_argument(
+        "-o", "--output", type=Path, default=Path("runs/demo"), metavar="OUTDIR",
+        help="folder for the dataset, the map and the pictures",
+    )  # fmt: skip
     return parser
 
 
