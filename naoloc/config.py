@@ -1,4 +1,4 @@
-"""Typed configuration: every key of CONTRACT.md with a default, unknown keys rejected.
+"""Typed configuration: every key (listed in docs/cli.md) with a default, unknown keys rejected.
 
 A config comes from a YAML file (read with ``yaml.safe_load`` only), a dict, or a
 :class:`Config`. Errors are one line naming the file and the key path, e.g.
@@ -191,7 +191,7 @@ class GoHomeConfig(_Model):
 
 
 class Config(_Model):
-    """The whole naoloc configuration (CONTRACT.md). Every key has a default."""
+    """The whole naoloc configuration (docs/cli.md lists every key). Every key has a default."""
 
     robot: RobotConfig = RobotConfig()
     world: WorldConfig = WorldConfig()
