@@ -91,10 +91,7 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--png", type=Path, default=None, help="write a picture of the result")
         _add_live(p)
     p = add("evaluate")
-    p.add_argument(
-        "--protocol", choices=("paper", "random"), default="random",
-        help="paper: the seed's Tables 1-3; random: N poses 0.6-1.4 m from the walls",
-    )  # fmt: skip
+    p.add_argument("--protocol", choices=("paper", "random"), default="random")
     p.add_argument("-n", type=int, default=40, help="test poses (random protocol)")
     p.add_argument("--seed", type=int, default=0, help="seed of the test poses")
     p.add_argument("--workers", type=int, default=None, help="processes (default: cores)")

@@ -29,7 +29,7 @@ import dataclasses
 import math
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -296,7 +296,7 @@ def show_map(view: LiveView, vmap: Any) -> None:
 
 def estimate_pose(estimate: Any) -> tuple[float, float, float] | None:
     """``(x, y, theta)`` of an estimate, or None when it is a miss (no pose, confidence 0)."""
-    if estimate is None:
+    if estimate is None or getattr(estimate, "found", True) is False:
         return None
     values = (getattr(estimate, "x", None), getattr(estimate, "y", None))
     theta = getattr(estimate, "theta", None)
@@ -311,6 +311,25 @@ def show_estimate(view: LiveView, estimate: Any) -> None:
     3 x 3 covariance of x, y, theta, when it has one)."""
     covariance = (getattr(estimate, "details", None) or {}).get("covariance")
     view.estimate(estimate_pose(estimate), covariance=covariance)
+
+
+def follow_rounds(
+    view: LiveView, then: Callable[[int, Any], None] | None = None
+) -> Callable[[int, Any], None]:
+    """An ``on_round(tries, localization)`` callback for go-home that shows each estimate and
+    the path of estimates so far (misses leave the path as it was), then calls ``then``."""
+    walked: list[tuple[float, float, float]] = []
+
+    def on_round(tries: int, localization: Any) -> None:
+        show_estimate(view, localization.estimate)
+        pose = estimate_pose(localization.estimate)
+        if pose is not None:
+            walked.append(pose)
+            view.path(walked)
+        if then is not None:
+            then(tries, localization)
+
+    return on_round
 
 
 class _WatchedVideo:

@@ -17,7 +17,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     from naoloc.cli import write_resolved_config
     from naoloc.commands.localize import teleport_if_asked
     from naoloc.commands.survey import config_path_for, interruptible
-    from naoloc.live import estimate_pose, live_from_args, show_estimate, show_map, watch
+    from naoloc.live import follow_rounds, live_from_args, show_map, watch
     from naoloc.mapping import load_map
     from naoloc.plots import plot_localization
     from naoloc.progress import Progress
@@ -28,15 +28,8 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     if png is not None:
         write_resolved_config(cfg, config_path_for(png))
 
-    walked: list[tuple[float, float, float]] = []
-
     def report(tries: int, loc: Localization) -> None:
         est = loc.estimate
-        show_estimate(live, est)
-        pose = estimate_pose(est)
-        if pose is not None:
-            walked.append(pose)
-            live.path(walked)
         extra = "" if loc.error_m is None else f", error {loc.error_m:.2f} m"
         bar.update(1, f"walk {tries}")
         print(
@@ -48,7 +41,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     with interruptible(), live_from_args(args) as live, connect(cfg) as robot, bar:
         teleport_if_asked(robot, args.at)
         show_map(live, vmap)
-        result = go_home(watch(robot, live), vmap, cfg, on_round=report)
+        result = go_home(watch(robot, live), vmap, cfg, on_round=follow_rounds(live, report))
     summary = result.summary()
     verdict = "reached" if result.reached else "gave up after"
     line = f"go-home: {verdict} {result.tries} walks"
