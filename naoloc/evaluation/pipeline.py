@@ -411,10 +411,12 @@ def _write_outputs(
     room_size: tuple[float, float],
     protocol: str,
 ) -> None:
+    from naoloc.config import load_config
     from naoloc.mapping import load_map
-    from naoloc.plots import room_corners
+    from naoloc.plots import furniture_footprints, room_corners
 
     poly = room_corners(origin, room_size)
+    furniture = furniture_footprints(load_config(summary["config"]), origin)
     shown = [v.map_name for v in plan.variants if v.study == "paper" and v.mode == "paper"]
     shown = shown or [plan.main.map_name] + [
         v.map_name for v in plan.variants if v.name.startswith("neurons-") and v.mode == "paper"
@@ -429,13 +431,13 @@ def _write_outputs(
                 vmap.neuron_poses,
             )
         )
-    figures.plot_maps(outdir / "map.png", panels, poly)
+    figures.plot_maps(outdir / "map.png", panels, poly, furniture)
     main_recs = [r for r in records if r["variant"] == plan.main.name]
     figures.plot_estimates(
         outdir / "estimates.png", main_recs,
         f"{protocol} protocol, {plan.main.description}\nmedian "
         f"{summary['median_error_m']} m, p90 {summary['p90_error_m']} m",
-        poly, np.array(summary["survey"]["keyframe_poses"]),
+        poly, np.array(summary["survey"]["keyframe_poses"]), furniture,
     )  # fmt: skip
     curves: dict[str, list[float]] = {}
     for v in plan.variants:
