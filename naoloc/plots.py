@@ -129,7 +129,7 @@ def _draw_map(
     if neurons.size:
         ok = np.all(np.isfinite(neurons), axis=1)
         ax.plot(
-            neurons[ok, 0], neurons[ok, 1], "o", mfc="none", mec="magenta", ms=5,
+            neurons[ok, 0], neurons[ok, 1], "o", mfc="none", mec="tab:red", ms=5,
             label=f"neurons ({int(ok.sum())} with images)",
         )  # fmt: skip
     ax.plot([0.0], [0.0], "k*", ms=12, label="map origin")
