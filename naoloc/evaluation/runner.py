@@ -150,7 +150,9 @@ class RayExecutor:
 
     Each task runs ``fn(task)`` in a Ray worker process, one CPU each; results come back
     in the order of ``tasks`` and are the same as the local pool's (tasks carry their
-    configs and seeds). A local cluster binds to 127.0.0.1 with the dashboard off. On a
+    configs and seeds). A local cluster advertises 127.0.0.1 and has no dashboard; Ray's
+    own GCS, raylet and worker gRPC servers still listen on every interface (measured with
+    Ray 2.60, which protects them with its default token authentication). On a
     remote cluster every node needs naoloc installed (``pip install 'naoloc[sim,ray]'``) and
     the outputs folder on a shared filesystem.
 
