@@ -11,14 +11,13 @@ export PYOPENGL_PLATFORM ?= egl
 
 .PHONY: demo test lint typecheck venv sysdeps clean bench wheel check-wheel
 
-# Editable "compat" mode: a .pth file puts the checkout on sys.path (naoloc/backends/__init__.py
-# finds backends/ from there), without the meta path finder setuptools warns about.
+# Editable: setup.py then declares only naoloc/ and setuptools adds the checkout to sys.path
+# with a .pth file (naoloc/backends/__init__.py finds backends/ from there); it prints nothing.
 $(STAMP): pyproject.toml setup.py constraints.txt
 	@tools/check_python.sh $(PYTHON)
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --disable-pip-version-check --upgrade pip
-	$(PY) -m pip install --quiet --disable-pip-version-check -c constraints.txt \
-		--config-settings editable_mode=compat -e ".[sim,naoqi,dev,ray]"
+	$(PY) -m pip install --quiet --disable-pip-version-check -c constraints.txt -e ".[sim,naoqi,dev,ray]"
 	@touch $(STAMP)
 
 venv: sysdeps $(STAMP)
