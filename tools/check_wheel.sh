@@ -96,7 +96,7 @@ print(f"check_wheel: mujoco {mujoco.__version__} (from {', '.join(owners)}; "
       f"{loaded_platform(mujoco)}), dm_control {md.version('dm_control')} {dm}, "
       f"naoloc {naoloc.__version__}")
 EOF
-step "mujoco installed once; dm_control renders"
+step "one copy of mujoco; dm_control checked"
 
 naoloc="$work/venv/bin/naoloc"
 "$naoloc" survey -c paper_room -o "$work/s.mcap" >"$work/survey.out" 2>"$work/survey.err" \
