@@ -30,8 +30,8 @@ demo: venv
 	$(VENV)/bin/naoloc demo -o runs/demo
 
 lint: venv
-	$(VENV)/bin/ruff check naoloc backends tests tools
-	$(VENV)/bin/ruff format --check naoloc backends tests tools
+	$(VENV)/bin/ruff check naoloc backends tests tools setup.py
+	$(VENV)/bin/ruff format --check naoloc backends tests tools setup.py
 
 typecheck: venv
 	$(VENV)/bin/mypy naoloc backends
