@@ -19,9 +19,9 @@ pytestmark = pytest.mark.skipif(not TOOL.is_file(), reason="needs the checkout's
 
 FAKE = {
     "robot": {"backend": "fake"},
-    "world": {"room": {"size_m": [4.0, 4.0], "seed": 3}},
-    "survey": {"laps": 1},
-    "map": {"neurons": 30, "epochs": 30},
+    "world": {"room": {"size_m": [3.2, 3.2], "seed": 5}},
+    "survey": {"laps": 1, "step_m": 0.3, "wall_offset_m": 0.9},
+    "map": {"neurons": 12, "epochs": 12, "vocabulary_size": 48},
 }
 
 
