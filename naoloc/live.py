@@ -307,9 +307,19 @@ def estimate_pose(estimate: Any) -> tuple[float, float, float] | None:
 
 
 def show_estimate(view: LiveView, estimate: Any) -> None:
-    """Show a :class:`naoloc.mapping.localizer.Estimate` (its ``details['covariance']``, a
-    3 x 3 covariance of x, y, theta, when it has one)."""
+    """Show a :class:`naoloc.mapping.localizer.Estimate` with its 3 x 3 covariance of x, y,
+    theta: ``details['covariance']``, else what the localize JSON line reports (when known)."""
     covariance = (getattr(estimate, "details", None) or {}).get("covariance")
+    if covariance is None and estimate_pose(estimate) is not None:
+        try:  # the uncertainty the localize JSON line reports, where the code has it
+            import importlib
+
+            behaviour = importlib.import_module("naoloc.behaviours.localize")
+            known = getattr(behaviour, "estimate_covariance", None)
+            fields: dict[str, Any] = known(estimate) if known is not None else {}
+            covariance = fields.get("covariance")
+        except Exception:  # no covariance is shown as zero (unknown), never invented
+            covariance = None
     view.estimate(estimate_pose(estimate), covariance=covariance)
 
 
