@@ -9,13 +9,11 @@ edit anywhere:
   with every folder below it; never a generic top-level package named ``backends``;
 - ``configs/*.yaml`` as ``naoloc/configs/`` (the named configs of ``-c``).
 
-Every non-Python file inside these folders is shipped as package data. An editable install
-(``pip install -e .``) declares only ``naoloc/`` (see the end of this file).
+Every non-Python file inside these folders is shipped as package data.
 """
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from setuptools import find_namespace_packages, setup
@@ -46,19 +44,12 @@ for package, folder in folders.items():
     if data:
         package_data[package] = data
 
-if "editable_wheel" in sys.argv:
-    # An editable install puts the checkout itself on sys.path (setuptools' plain .pth
-    # strategy, which prints nothing): naoloc/backends/__init__.py then finds backends/ and
-    # naoloc.config finds configs/, so only the naoloc/ tree is declared here.
-    naoloc_only = sorted(p for p in folders if folders[p].startswith("naoloc"))
-    setup(packages=naoloc_only, package_dir={"": "."}, package_data={"naoloc": ["py.typed"]})
-else:
-    setup(
-        packages=sorted(folders),
-        package_dir={
-            "naoloc": "naoloc",
-            "naoloc.configs": "configs",
-            **{p: d for p, d in folders.items() if p.count(".") == 2 and d.startswith("backends/")},
-        },
-        package_data=package_data,
-    )
+setup(
+    packages=sorted(folders),
+    package_dir={
+        "naoloc": "naoloc",
+        "naoloc.configs": "configs",
+        **{p: d for p, d in folders.items() if p.count(".") == 2 and d.startswith("backends/")},
+    },
+    package_data=package_data,
+)
