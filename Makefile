@@ -9,13 +9,17 @@ STAMP := $(VENV)/.installed
 export MUJOCO_GL ?= egl
 export PYOPENGL_PLATFORM ?= egl
 
-.PHONY: demo test lint typecheck venv sysdeps clean bench
+.PHONY: demo test lint typecheck venv sysdeps clean bench wheel check-wheel
 
-$(STAMP): pyproject.toml
+# Editable (setuptools' meta path finder: only naoloc.* is importable, never a top-level
+# "backends"). PYTHONWARNINGS hides exactly setuptools' notice that an editable install is one;
+# a real packaging warning still shows (and tools/check_wheel.sh fails on one).
+$(STAMP): pyproject.toml setup.py constraints.txt
 	@tools/check_python.sh $(PYTHON)
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --disable-pip-version-check --upgrade pip
-	$(PY) -m pip install --quiet --disable-pip-version-check -e ".[sim,naoqi,dev]"
+	PYTHONWARNINGS="ignore:Editable installation" $(PY) -m pip install --quiet \
+		--disable-pip-version-check -c constraints.txt -e ".[sim,naoqi,dev,ray]"
 	@touch $(STAMP)
 
 venv: sysdeps $(STAMP)
@@ -28,8 +32,8 @@ demo: venv
 	$(VENV)/bin/naoloc demo -o runs/demo
 
 lint: venv
-	$(VENV)/bin/ruff check naoloc backends tests tools
-	$(VENV)/bin/ruff format --check naoloc backends tests tools
+	$(VENV)/bin/ruff check naoloc backends tests tools setup.py
+	$(VENV)/bin/ruff format --check naoloc backends tests tools setup.py
 
 typecheck: venv
 	$(VENV)/bin/mypy naoloc backends
@@ -42,5 +46,12 @@ bench: venv
 	$(PY) tools/bench_sim.py
 	$(PY) tools/bench_net.py
 
+# The wheel, installed in a fresh venv outside the checkout beside dm_control (what CI runs).
+wheel: venv
+	$(PY) -m build --wheel --outdir dist . >/dev/null
+
+check-wheel: venv
+	tools/check_wheel.sh
+
 clean:
-	rm -rf $(VENV) runs .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) runs dist build .pytest_cache .mypy_cache .ruff_cache

@@ -44,6 +44,17 @@ def _pose(text: str) -> float:
     return value
 
 
+CONFIG_HELP = "a YAML file, or a shipped config: paper_room, lab_room, nao"
+LIVE_PORT = 8765
+
+
+def _add_live(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--live", nargs="?", type=int, const=LIVE_PORT, default=None, metavar="PORT",
+        help=f"stream to Foxglove over a WebSocket on 127.0.0.1:PORT (default {LIVE_PORT})",
+    )  # fmt: skip
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argparse parser for every verb."""
     parser = argparse.ArgumentParser(
@@ -56,35 +67,65 @@ def build_parser() -> argparse.ArgumentParser:
     def add(verb: str, config: bool = True) -> argparse.ArgumentParser:
         p = sub.add_parser(verb, help=VERBS[verb], description=VERBS[verb])
         if config:
-            p.add_argument("-c", "--config", required=True, metavar="CFG", help="YAML config")
+            p.add_argument("-c", "--config", required=True, metavar="CFG", help=CONFIG_HELP)
         return p
 
     p = add("survey")
-    p.add_argument("-o", "--output", required=True, metavar="DATASET.mcap", type=Path)
+    p.add_argument(
+        "-o", "--output", required=True, metavar="DATASET.mcap", type=Path,
+        help="the dataset to write (its resolved config goes beside it)",
+    )  # fmt: skip
+    _add_live(p)
     p = add("build-map")
-    p.add_argument("-d", "--dataset", required=True, metavar="DATASET.mcap", type=Path)
-    p.add_argument("-o", "--output", required=True, metavar="MAP.npz", type=Path)
+    p.add_argument(
+        "-d", "--dataset", required=True, metavar="DATASET.mcap", type=Path,
+        help="a survey's dataset",
+    )  # fmt: skip
+    p.add_argument(
+        "-o", "--output", required=True, metavar="MAP.npz", type=Path,
+        help="the map to write (a picture of it goes beside it)",
+    )  # fmt: skip
     for verb in ("localize", "go-home"):
         p = add(verb)
-        p.add_argument("-m", "--map", required=True, metavar="MAP.npz", type=Path)
+        p.add_argument(
+            "-m", "--map", required=True, metavar="MAP.npz", type=Path, help="a built map"
+        )  # fmt: skip
         p.add_argument(
             "--at", nargs=3, type=_pose, metavar=("X", "Y", "THETA"),
             help="teleport there first (room frame, m and rad; simulator only)",
         )  # fmt: skip
         p.add_argument("--png", type=Path, default=None, help="write a picture of the result")
+        _add_live(p)
     p = add("evaluate")
     p.add_argument("--protocol", choices=("paper", "random", "anywhere"), default="random")
     p.add_argument("-n", type=int, default=40, help="test poses (random protocol)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0, help="seed of the test poses")
     p.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
     p.add_argument(
         "--studies", default="none", metavar="LIST",
         help="extra studies: none, all, or a comma list of compare,robustness",
     )  # fmt: skip
-    p.add_argument("-o", "--output", required=True, metavar="OUTDIR", type=Path)
+    p.add_argument(
+        "--executor", choices=("local", "ray"), default="local",
+        help="local: a process pool on this machine; ray: tasks on a Ray cluster (extra 'ray')",
+    )  # fmt: skip
+    p.add_argument(
+        "--ray-address", default=None, metavar="ADDR",
+        help="Ray cluster to join (e.g. ray://host:10001); default: start a local one",
+    )  # fmt: skip
+    p.add_argument(
+        "-o", "--output", required=True, metavar="OUTDIR", type=Path,
+        help="folder for summary.json, report.md, PNGs, surveys and maps",
+    )  # fmt: skip
     p = add("serve")
-    p.add_argument("--listen", default="tcp://127.0.0.1:9559", metavar="URL")
-    p.add_argument("--transport", choices=("libqi", "zmq", "qimessaging"), default=None)
+    p.add_argument(
+        "--listen", default="tcp://127.0.0.1:9559", metavar="URL",
+        help="address to serve on (port 0 picks a free one)",
+    )  # fmt: skip
+    p.add_argument(
+        "--transport", choices=("libqi", "zmq", "qimessaging"), default=None,
+        help="default: robot.transport of the config",
+    )  # fmt: skip
     p.add_argument(
         "--allow-remote", action="store_true",
         help="allow binding to a non-loopback address (zmq needs CURVE keys then)",
@@ -93,9 +134,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--speed", type=_pose, default=1.0, metavar="K",
         help="simulated seconds per wall second (default 1.0, as a NAO)",
     )  # fmt: skip
+    _add_live(p)
     p = add("demo", config=False)
-    p.add_argument("-c", "--config", default=None, metavar="CFG", help="default: paper room")
-    p.add_argument("-o", "--output", type=Path, default=Path("runs/demo"), metavar="OUTDIR")
+    p.add_argument("-c", "--config", default="paper_room", metavar="CFG", help=CONFIG_HELP)
+    p.add_argument(
+        "-o", "--output", type=Path, default=Path("runs/demo"), metavar="OUTDIR",
+        help="folder for the dataset, the map and the pictures",
+    )  # fmt: skip
     return parser
 
 
@@ -129,10 +174,6 @@ def _with_notes(text: str, err: BaseException) -> str:
 def _main(verb: str, args: argparse.Namespace) -> int:
     try:
         config_src = getattr(args, "config", None)
-        if verb == "demo" and config_src is None:
-            config_src = Path(__file__).resolve().parent.parent / "configs" / "sim_paper_room.yaml"
-            if not Path(config_src).is_file():
-                config_src = None
         cfg = load_config(config_src)
         result = _run_verb(verb, args, cfg)
     except KeyboardInterrupt as err:

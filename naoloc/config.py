@@ -1,4 +1,4 @@
-"""Typed configuration: every key of CONTRACT.md with a default, unknown keys rejected.
+"""Typed configuration: every key (listed in docs/cli.md) with a default, unknown keys rejected.
 
 A config comes from a YAML file (read with ``yaml.safe_load`` only), a dict, or a
 :class:`Config`. Errors are one line naming the file and the key path, e.g.
@@ -441,7 +441,7 @@ class GoHomeConfig(_Model):
 
 
 class Config(_Model):
-    """The whole naoloc configuration (CONTRACT.md). Every key has a default."""
+    """The whole naoloc configuration (docs/cli.md lists every key). Every key has a default."""
 
     robot: RobotConfig = RobotConfig()
     world: WorldConfig = WorldConfig()
@@ -554,6 +554,8 @@ def load_config(source: str | Path | dict[str, Any] | Config | None) -> Config:
     if isinstance(source, dict):
         return _validate(source, "<dict>")
     path = Path(source)
+    if not path.exists() and is_config_name(str(source)):
+        return load_shipped_config(str(source))
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -568,3 +570,52 @@ def load_config(source: str | Path | dict[str, Any] | Config | None) -> Config:
         problem = getattr(err, "problem", None) or "invalid YAML"
         raise ConfigError(f"{path}:{where}: {problem}") from None
     return _validate(data, str(path))
+
+
+# Named configs shipped in the package (``-c paper_room``): configs/*.yaml of the checkout,
+# installed as naoloc/configs/*.yaml. The name is the file's stem without "sim_".
+
+
+def _shipped_dir() -> Any:
+    """The folder of shipped configs: inside the installed package, else the checkout's."""
+    import importlib.resources
+
+    installed = importlib.resources.files("naoloc").joinpath("configs")
+    if installed.is_dir():
+        return installed
+    return Path(__file__).resolve().parent.parent / "configs"
+
+
+def shipped_configs() -> dict[str, Any]:
+    """Named configs shipped in the package: name -> file (a Traversable), sorted by name."""
+    folder = _shipped_dir()
+    if not folder.is_dir():
+        return {}
+    found = {}
+    for entry in folder.iterdir():
+        if entry.name.endswith(".yaml"):
+            found[entry.name[: -len(".yaml")].removeprefix("sim_")] = entry
+    return dict(sorted(found.items()))
+
+
+def is_config_name(text: str) -> bool:
+    """True when ``text`` looks like a config name, not a path (no folder, no extension)."""
+    return bool(text) and "/" not in text and "\\" not in text and "." not in text
+
+
+def load_shipped_config(name: str) -> Config:
+    """Load a config shipped in the package by name (``paper_room``, ``lab_room``, ``nao``).
+
+    Raises:
+        ConfigError: One line listing the shipped names when ``name`` is none of them.
+    """
+    shipped = shipped_configs()
+    entry = shipped.get(name.removeprefix("sim_"))
+    if entry is None:
+        names = ", ".join(shipped) or "none"
+        raise ConfigError(f"{name}: no such config file or shipped config (shipped: {names})")
+    try:
+        data = yaml.safe_load(entry.read_text(encoding="utf-8"))
+    except yaml.YAMLError as err:
+        raise ConfigError(f"{name}: shipped config is not valid YAML: {err}") from None
+    return _validate(data, f"{name} (configs/{entry.name})")

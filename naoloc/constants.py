@@ -1,6 +1,6 @@
 """NAOqi constants in one place: frames, cameras, resolutions, colorspaces, joints.
 
-Values follow the NAOqi 2.x documentation (see docs/naoqi.md in shared docs).
+Values follow the NAOqi 2.x API reference of ALMotion, ALVideoDevice and ALRobotPosture.
 """
 
 from __future__ import annotations

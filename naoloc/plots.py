@@ -50,6 +50,45 @@ def room_outline(meta: dict[str, Any]) -> np.ndarray | None:
     return room_corners(origin, size)
 
 
+def furniture_footprints(
+    cfg: Any, origin_room_pose: Sequence[float] | None
+) -> list[tuple[str, np.ndarray]]:
+    """Furniture of a simulated room as ``(name, (5, 2) closed polygon)`` in the map frame (m).
+
+    The MuJoCo backend generates its furniture from the config (``world.room``); other
+    backends have none. Building the layout does not import mujoco.
+
+    Args:
+        cfg: The room's :class:`naoloc.config.Config`.
+        origin_room_pose: Pose of the map origin in the room frame ``[x, y, theta]``
+            (the survey's start), or None when unknown (then nothing is returned).
+    """
+    if origin_room_pose is None or cfg.robot.backend != "mujoco" or not cfg.world.room.furniture:
+        return []
+    from naoloc.backends.mujoco.room import build_layout
+
+    o = Pose2D.from_list(origin_room_pose)
+    out = []
+    for f in build_layout(cfg).furniture:
+        x0, y0, x1, y1 = f.rect
+        corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, y0)]
+        poly = [relative_pose(o, Pose2D(x, y)) for x, y in corners]
+        out.append((f.name, np.array([[p.x, p.y] for p in poly])))
+    return out
+
+
+def draw_furniture(ax: Axes, furniture: Sequence[tuple[str, np.ndarray]] | None) -> None:
+    """Fill furniture footprints (map frame) in grey, labelled once with their count."""
+    for i, (_, poly) in enumerate(furniture or ()):
+        label = f"furniture ({len(furniture or ())})" if i == 0 else None
+        ax.fill(poly[:, 0], poly[:, 1], color="0.8", ec="0.45", lw=0.8, label=label, zorder=1)
+
+
+def legend_outside(ax: Axes, fontsize: int = 8) -> None:
+    """The legend to the right of the axes, never over the data."""
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize=fontsize)
+
+
 def new_figure(width: float, height: float, dpi: int = 100) -> Any:
     """A matplotlib Figure on its own Agg canvas (no pyplot, no global figure state)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -75,10 +114,13 @@ def save_figure(fig: Any, path: Path) -> Path:
     return path
 
 
-def _draw_map(ax: Axes, vmap: VisualMap) -> None:
+def _draw_map(
+    ax: Axes, vmap: VisualMap, furniture: Sequence[tuple[str, np.ndarray]] | None = None
+) -> None:
     outline = room_outline(vmap.meta)
     if outline is not None:
         ax.plot(outline[:, 0], outline[:, 1], "-", color="0.3", lw=2, label="room walls")
+    draw_furniture(ax, furniture)
     path = np.asarray(vmap.keyframe_poses, dtype=float)
     if len(path):
         ax.plot(path[:, 0], path[:, 1], "-", color="tab:blue", lw=0.8, alpha=0.6)
@@ -105,26 +147,32 @@ def _arrow(ax: Axes, pose: Pose2D, color: str, label: str) -> None:
     )  # fmt: skip
 
 
-def plot_map(vmap: VisualMap, path: str | Path, title: str | None = None) -> Path:
+def plot_map(
+    vmap: VisualMap,
+    path: str | Path,
+    title: str | None = None,
+    furniture: Sequence[tuple[str, np.ndarray]] | None = None,
+) -> Path:
     """Draw a map like the paper's Fig. 14: neuron poses over the survey path and the room.
 
     Args:
         vmap: The map.
         path: PNG file to write.
         title: Figure title; default a summary of the map.
+        furniture: Footprints to draw (:func:`furniture_footprints`), map frame.
 
     Returns:
         The path written.
     """
-    fig = new_figure(7.0, 7.0)
+    fig = new_figure(9.0, 7.0)
     ax = fig.add_subplot(1, 1, 1)
-    _draw_map(ax, vmap)
+    _draw_map(ax, vmap, furniture)
     ax.set_title(
         title
         or f"{vmap.images} images, {len(vmap.neuron_poses)} neurons, "
         f"{vmap.distinct_poses} distinct poses"
     )
-    ax.legend(loc="best", fontsize=8)
+    legend_outside(ax)
     fig.tight_layout()
     return save_figure(fig, Path(path))
 
@@ -137,6 +185,7 @@ def plot_localization(
     truth: Pose2D | None = None,
     queries: Sequence[Keyframe] = (),
     title: str | None = None,
+    furniture: Sequence[tuple[str, np.ndarray]] | None = None,
 ) -> Path:
     """Draw an estimate (and the truth, if known) on the map, with the query images.
 
@@ -147,16 +196,17 @@ def plot_localization(
         truth: True pose in the map frame, when known.
         queries: The images used, shown in a strip below the map (at most 10).
         title: Figure title; default the estimate and error.
+        furniture: Footprints to draw (:func:`furniture_footprints`), map frame.
 
     Returns:
         The path written.
     """
     shown = list(queries)[:10]
     rows = 2 if shown else 1
-    fig = new_figure(8.0, 8.0 + (1.6 if shown else 0.0))
+    fig = new_figure(10.0, 8.0 + (1.6 if shown else 0.0))
     grid = fig.add_gridspec(rows, max(1, len(shown)), height_ratios=[5, 1][:rows])
     ax = fig.add_subplot(grid[0, :])
-    _draw_map(ax, vmap)
+    _draw_map(ax, vmap, furniture)
     if estimate.found:
         est = Pose2D(estimate.x, estimate.y, estimate.theta)
         _arrow(ax, est, "tab:green", f"estimate (confidence {estimate.confidence:.2f})")
@@ -168,7 +218,7 @@ def plot_localization(
         if estimate.found:
             text += f", error {est.distance(truth):.2f} m"
     ax.set_title(title or text)
-    ax.legend(loc="best", fontsize=8)
+    legend_outside(ax)
     for i, kf in enumerate(shown):
         sub = fig.add_subplot(grid[1, i])
         img = kf.image if kf.image.ndim == 2 else kf.image[..., ::-1]
@@ -181,33 +231,55 @@ def plot_localization(
 
 def plot_estimates(
     vmap: VisualMap,
-    pairs: Sequence[tuple[Pose2D, Pose2D | None]],
+    pairs: Sequence[tuple[Pose2D | None, Pose2D | None]],
     path: str | Path,
     title: str | None = None,
+    furniture: Sequence[tuple[str, np.ndarray]] | None = None,
 ) -> Path:
     """Draw several estimates on the map, each joined to its truth when known.
 
+    A miss (no estimate: None or a non-finite pose) is drawn at its truth with its own
+    marker and counted in the legend; it is never drawn as an estimate.
+
     Args:
         vmap: The map.
-        pairs: ``(estimate, truth)`` poses in the map frame; truth may be None.
+        pairs: ``(estimate, truth)`` poses in the map frame; either may be None.
         path: PNG file to write.
         title: Figure title.
+        furniture: Footprints to draw (:func:`furniture_footprints`), map frame.
 
     Returns:
         The path written.
     """
-    fig = new_figure(7.0, 7.0)
+    fig = new_figure(9.0, 7.0)
     ax = fig.add_subplot(1, 1, 1)
-    _draw_map(ax, vmap)
+    _draw_map(ax, vmap, furniture)
+
+    def found(p: Pose2D | None) -> bool:
+        return p is not None and math.isfinite(p.x) and math.isfinite(p.y)
+
+    hits = [(e, t) for e, t in pairs if found(e)]
+    misses = [t for e, t in pairs if not found(e)]
     for i, (est, truth) in enumerate(pairs):
-        first = i == 0
-        ax.plot([est.x], [est.y], "s", color="tab:green", ms=7, label="estimate" if first else None)
-        if truth is not None:
-            ax.plot([truth.x], [truth.y], "kx", ms=9, mew=2, label="truth" if first else None)
+        if truth is None:
+            continue
+        ax.plot([truth.x], [truth.y], "kx", ms=9, mew=2, label="truth" if i == 0 else None)
+        ax.annotate(str(i + 1), (truth.x, truth.y), textcoords="offset points", xytext=(5, 5))
+        if found(est):
+            assert est is not None
             ax.plot([truth.x, est.x], [truth.y, est.y], "-", color="tab:green", lw=1)
-            ax.annotate(str(i + 1), (truth.x, truth.y), textcoords="offset points", xytext=(5, 5))
-    ax.set_title(title or f"{len(pairs)} localizations")
-    ax.legend(loc="best", fontsize=8)
+    if hits:
+        xs = [e.x for e, _ in hits if e is not None]
+        ys = [e.y for e, _ in hits if e is not None]
+        ax.plot(xs, ys, "s", color="tab:green", ms=7, label=f"estimate ({len(hits)})")
+    shown = [t for t in misses if t is not None]
+    if misses:
+        ax.plot(
+            [t.x for t in shown], [t.y for t in shown], "o", mfc="none", mec="magenta",
+            mew=2, ms=14, label=f"no estimate ({len(misses)}), at the truth",
+        )  # fmt: skip
+    ax.set_title(title or f"{len(pairs)} localizations, {len(misses)} without an estimate")
+    legend_outside(ax)
     fig.tight_layout()
     return save_figure(fig, Path(path))
 

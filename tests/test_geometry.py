@@ -1,4 +1,4 @@
-"""Pose2D against almath's formulas (docs/naoqi.md)."""
+"""Pose2D against almath's formulas (as the NAOqi 2.x almath reference defines them)."""
 
 from __future__ import annotations
 

@@ -32,9 +32,9 @@ def create(cfg: Config) -> Robot:
         RenderError: No headless OpenGL (names the Debian packages to install).
         BackendError: The generated room does not compile.
     """
-    from naoloc.backends.mujoco.gl import missing_message, probe, select_gl
+    from naoloc.backends.mujoco.gl import check_loaded, missing_message, probe, select_gl
 
-    select_gl()
+    chosen = select_gl()
     try:
         importlib.import_module("OpenGL")
         mujoco = importlib.import_module("mujoco")
@@ -46,6 +46,7 @@ def create(cfg: Config) -> Robot:
     except ImportError as err:  # e.g. the GL platform library cannot be loaded
         raise RenderError(f"{missing_message()} ({type(err).__name__}: {err})") from None
 
+    check_loaded(mujoco, chosen)
     probe(mujoco)
 
     from naoloc.backends.mujoco.motion import MujocoMotion, MujocoPosture

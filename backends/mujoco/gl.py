@@ -1,8 +1,10 @@
 """Choose the headless OpenGL platform before mujoco is imported: EGL, else OSMesa.
 
-MuJoCo and PyOpenGL read ``MUJOCO_GL`` and ``PYOPENGL_PLATFORM`` when they are first
-imported, so the choice must be made before that and cannot change afterwards in the
-same process. A value the user already set is respected.
+MuJoCo and PyOpenGL read ``MUJOCO_GL`` and ``PYOPENGL_PLATFORM`` once, when they are first
+imported, so the choice is made by setting those variables in ``os.environ`` before that
+(as dm_control does) and cannot change afterwards in the same process. A value the user
+already set is respected. Nothing is reloaded: a process that imported mujoco before naoloc
+chose a platform gets a one-line error saying what to set. Works with mujoco 3.x and 4.x.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from naoloc.errors import RenderError
 
 EGL_PACKAGES = "libegl1 libegl-mesa0 libgl1-mesa-dri"
 OSMESA_PACKAGES = "libosmesa6"
+HEADLESS = ("egl", "osmesa")
 
 
 def missing_message() -> str:
@@ -31,19 +34,30 @@ def probe(mujoco: Any) -> None:
     """Create and free a tiny OpenGL context, so that a machine that cannot render fails early.
 
     Args:
-        mujoco: The imported mujoco module.
+        mujoco: The imported mujoco module (3.x or 4.x: both export ``GLContext``).
 
     Raises:
         RenderError: One line naming the packages to install.
     """
     try:
-        context = mujoco.rendering.classic.gl_context.GLContext(16, 16)
+        context = mujoco.GLContext(16, 16)
         context.make_current()
         context.free()
     except Exception as err:  # GL failures come as many different exception types
         why = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
         backend = os.environ.get("MUJOCO_GL", "")
         raise RenderError(f"{missing_message()}; MUJOCO_GL={backend} failed: {why}") from None
+
+
+def loaded_platform(mujoco: Any) -> str:
+    """The GL platform an imported mujoco resolved (``egl``, ``osmesa``, ``glfw``...), or "".
+
+    mujoco picks its ``GLContext`` class from ``MUJOCO_GL`` at import; the class's module
+    (``mujoco.egl``, ``mujoco.osmesa``, ``mujoco.glfw``) names the platform in 3.x and 4.x.
+    """
+    context = getattr(mujoco, "GLContext", None)
+    module = getattr(context, "__module__", "") or ""
+    return module.rsplit(".", 1)[-1] if module.startswith("mujoco.") else ""
 
 
 def select_gl(strict: bool = True) -> str:
@@ -76,32 +90,33 @@ def select_gl(strict: bool = True) -> str:
         else:
             return ""
         os.environ["MUJOCO_GL"] = chosen
-    if chosen in ("egl", "osmesa") and "OpenGL" not in sys.modules:
+    if chosen in HEADLESS and "OpenGL" not in sys.modules:
         os.environ["PYOPENGL_PLATFORM"] = chosen
-    _reresolve_late_import(chosen)
     return chosen
+
+
+def check_loaded(mujoco: Any, chosen: str) -> None:
+    """Fail in one line when mujoco was imported before ``MUJOCO_GL`` was set to ``chosen``.
+
+    Raises:
+        RenderError: mujoco already resolved another platform (e.g. GLFW, which needs a
+            display); names the variable to set before the first import.
+    """
+    loaded = loaded_platform(mujoco)
+    if chosen in HEADLESS and loaded and loaded != chosen:
+        raise RenderError(
+            f"mujoco was imported with the {loaded} platform before naoloc chose {chosen}: "
+            f"set MUJOCO_GL={chosen} PYOPENGL_PLATFORM={chosen} in the environment "
+            "(or before the first `import mujoco`)"
+        )
 
 
 def import_mujoco() -> Any:
     """Choose the headless GL platform (not strict), then import and return ``mujoco``.
 
     Imported by name so that type checkers never confuse it with this package's folder.
+    Rendering fails later with :func:`check_loaded`'s message when mujoco was imported
+    earlier with another platform; physics works either way.
     """
     select_gl(strict=False)
     return importlib.import_module("mujoco")
-
-
-def _reresolve_late_import(chosen: str) -> None:
-    """Let mujoco pick up ``chosen`` if it was imported before MUJOCO_GL was set.
-
-    mujoco resolves its GL context class once, when imported; imported with MUJOCO_GL unset
-    it tries GLFW, which fails headless before OpenGL is loaded. Re-running that module
-    (``mujoco.Renderer`` reads the class from it at construction) then picks the platform
-    chosen here. Nothing is done once PyOpenGL is loaded: its platform is fixed for good.
-    """
-    module = sys.modules.get("mujoco.rendering.classic.gl_context")
-    if module is None or getattr(module, "_MUJOCO_GL", chosen) == chosen:
-        return
-    if "OpenGL" in sys.modules:
-        return
-    importlib.reload(module)

@@ -69,7 +69,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     from naoloc.cli import write_resolved_config
     from naoloc.commands.build_map import build_from_dataset
     from naoloc.commands.survey import interruptible, record_survey
-    from naoloc.plots import plot_estimates
+    from naoloc.plots import furniture_footprints, plot_estimates
     from naoloc.progress import Progress
     from naoloc.registry import connect
 
@@ -117,7 +117,8 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
             )
             err = math.nan if loc.error_m is None else loc.error_m
             print(f"demo: pose {i + 1}/{len(poses)}: error {err:.2f} m", flush=True)
-    png = plot_estimates(vmap, pairs, out / "localize.png")
+    furniture = furniture_footprints(cfg, surveyed.meta.get("origin_room_pose"))
+    png = plot_estimates(vmap, pairs, out / "localize.png", furniture=furniture)
     write_resolved_config(cfg, out / "config.yaml")  # with the outputs it describes
     _print_table(rows)
     errors = [r["error_m"] for r in rows if r["error_m"] is not None]

@@ -16,6 +16,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     from naoloc.behaviours.localize import Localization
     from naoloc.commands.localize import teleport_if_asked
     from naoloc.commands.survey import config_path_for, interruptible
+    from naoloc.live import follow_rounds, live_from_args, show_map, watch
     from naoloc.mapping import load_map
     from naoloc.outputs import staged
     from naoloc.plots import plot_go_home
@@ -38,9 +39,10 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         )
 
     bar = Progress(cfg.go_home.max_tries + 1, "go-home")
-    with interruptible(), connect(cfg) as robot, bar:
+    with interruptible(), live_from_args(args) as live, connect(cfg) as robot, bar:
         teleport_if_asked(robot, args.at)
-        result = go_home(robot, vmap, cfg, on_round=report)
+        show_map(live, vmap)
+        result = go_home(watch(robot, live), vmap, cfg, on_round=follow_rounds(live, report))
     summary = result.summary()
     verdict = "reached home after" if result.reached else "gave up after"
     line = f"go-home: {verdict} {result.tries} walks, {result.path_m:.2f} m walked"

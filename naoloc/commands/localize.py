@@ -29,6 +29,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """Localize once (head scan, or the paper's 1-2 pictures in mode paper) and report."""
     from naoloc.behaviours.localize import localize
     from naoloc.commands.survey import config_path_for, interruptible
+    from naoloc.live import live_from_args, show_estimate, show_map, watch
     from naoloc.mapping import load_map
     from naoloc.outputs import staged
     from naoloc.plots import plot_localization
@@ -37,10 +38,12 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
 
     vmap = load_map(args.map)
     png: Path | None = args.png
-    with interruptible(), connect(cfg) as robot:
+    with interruptible(), live_from_args(args) as live, connect(cfg) as robot:
         teleport_if_asked(robot, args.at)
+        show_map(live, vmap)
         with Progress(None, "localize") as bar:
-            loc = localize(robot, vmap, cfg, on_step=lambda note: bar.update(1, note))
+            loc = localize(watch(robot, live), vmap, cfg, on_step=lambda n: bar.update(1, n))
+        show_estimate(live, loc.estimate)
     summary = loc.summary()
     est = loc.estimate
     if est.found:

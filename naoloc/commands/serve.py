@@ -72,6 +72,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """Serve until SIGINT/SIGTERM; return the summary printed as the last JSON line."""
     from naoloc.backends.naoqi.server import RobotThread, VirtualNaoqi
     from naoloc.backends.naoqi.session import resolve_transport
+    from naoloc.live import live_from_args, watch
     from naoloc.registry import connect
 
     if cfg.robot.backend == "naoqi":
@@ -82,6 +83,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     speed = float(getattr(args, "speed", 1.0) or 1.0)
     if not 0.0 < speed <= 1000.0:
         raise BackendError(f"--speed must be in (0, 1000], got {speed:g}")
+    live = live_from_args(args)
     stop = threading.Event()
 
     def on_signal(signum: int, frame: Any) -> None:
@@ -95,7 +97,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         robot = robot_thread.run(connect, cfg)
         try:
             with VirtualNaoqi(
-                robot,
+                watch(robot, live),
                 url,
                 transport,
                 curve_keys=cfg.robot.curve_keys,
@@ -118,6 +120,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
             robot_thread.run(robot.close)
     finally:
         robot_thread.close()
+        live.close()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
     return summary

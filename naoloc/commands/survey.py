@@ -13,6 +13,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from naoloc.behaviours.survey import SurveyResult, frames_per_lap, survey
 from naoloc.config import Config
 from naoloc.dataset import DatasetWriter, interruption_reason
@@ -20,6 +22,7 @@ from naoloc.errors import NaolocError
 from naoloc.geometry import Pose2D
 from naoloc.interrupt import interruptible
 from naoloc.keyframe import Keyframe
+from naoloc.live import NO_LIVE, LiveView, live_from_args, watch
 from naoloc.progress import Progress
 from naoloc.registry import connect
 from naoloc.robot import Robot
@@ -33,7 +36,11 @@ def config_path_for(output: Path) -> Path:
 
 
 def record_survey(
-    robot: Robot, cfg: Config, output: Path, progress: Progress | None = None
+    robot: Robot,
+    cfg: Config,
+    output: Path,
+    progress: Progress | None = None,
+    live: LiveView = NO_LIVE,
 ) -> tuple[SurveyResult, int]:
     """Run the survey on ``robot`` and write every frame as it is taken.
 
@@ -48,17 +55,22 @@ def record_survey(
         cfg: The resolved config (stored in the dataset, without secrets).
         output: The ``.mcap`` file.
         progress: Progress bar advanced per frame.
+        live: Shows the keyframe poses as they are taken (``--live``).
 
     Returns:
         The survey summary and the number of frames written.
     """
     holder: dict[str, DatasetWriter] = {}
+    taken: list[tuple[float, float, float]] = []
 
     def on_start(meta: dict[str, Any]) -> None:
         holder["w"] = DatasetWriter(output, config=cfg.to_dict(), meta=meta)
 
     def on_frame(keyframe: Keyframe, lap: int, odometry: Pose2D) -> None:
         holder["w"].write(keyframe, lap=lap, odometry=odometry)
+        if live is not NO_LIVE:
+            taken.append((keyframe.pose.x, keyframe.pose.y, keyframe.pose.theta))
+            live.map(np.asarray(taken))
 
     try:
         result = survey(
@@ -93,8 +105,9 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     output: Path = args.output
     sides = cfg.survey_sides()
     expected = frames_per_lap(sides, cfg.survey.step_m) * cfg.survey.laps
-    with interruptible(), connect(cfg) as robot, Progress(expected, "survey") as bar:
-        result, frames = record_survey(robot, cfg, output, bar)
+    live = live_from_args(args)
+    with interruptible(), live, connect(cfg) as robot, Progress(expected, "survey") as bar:
+        result, frames = record_survey(watch(robot, live), cfg, output, bar, live)
     if frames > 0:  # the config copy goes with the dataset it describes
         write_resolved_config(cfg, config_path_for(output))
     wall, par = result.wall, result.parallax

@@ -38,6 +38,7 @@ from naoloc.evaluation.protocols import (
     wall_seen,
 )
 from naoloc.evaluation.runner import (
+    Executor,
     LocalizeChunk,
     MapTask,
     Scorer,
@@ -93,6 +94,7 @@ def evaluate(
     studies: tuple[str, ...] = ("main",),
     chunk_size: int | None = None,
     progress: bool | None = None,
+    executor: Executor | None = None,
 ) -> dict[str, Any]:
     """Run an evaluation and write its outputs.
 
@@ -106,6 +108,7 @@ def evaluate(
         studies: Studies to run besides "main" (see :mod:`naoloc.evaluation.plan`).
         chunk_size: Poses per localization task; default: spread over 3 tasks per worker.
         progress: Force progress bars on or off; default: on when stderr is a terminal.
+        executor: Where the tasks run (default: the local process pool); same results.
 
     Returns:
         The JSON line: protocol, n, median_error_m, p90_error_m, max_error_m,
@@ -138,7 +141,9 @@ def evaluate(
     ]
     surveys = {
         r["name"]: r
-        for r in run_tasks(survey_task, survey_tasks, workers, "survey", progress=progress)
+        for r in run_tasks(
+            survey_task, survey_tasks, workers, "survey", progress=progress, executor=executor
+        )
     }
     base = surveys["base"]
     if "failed" in base:
@@ -155,7 +160,10 @@ def evaluate(
         if survey not in failed
     ]
     maps = {
-        r["name"]: r for r in run_tasks(map_task, map_tasks, workers, "maps", progress=progress)
+        r["name"]: r
+        for r in run_tasks(
+            map_task, map_tasks, workers, "maps", progress=progress, executor=executor
+        )
     }
 
     # 3. Test poses and localizations.
@@ -165,7 +173,9 @@ def evaluate(
     runnable = Plan(plan.surveys, plan.maps, [v for v in plan.variants if v.name not in skipped],
                     plan.robots)  # fmt: skip
     chunks = _chunks(runnable, cfg, base_dict, poses, origin, map_paths, workers, chunk_size)
-    results = run_tasks(localize_chunk, chunks, workers, "localize", progress=progress)
+    results = run_tasks(
+        localize_chunk, chunks, workers, "localize", progress=progress, executor=executor
+    )
     flat = [rec for chunk in results for rec in chunk]
     records = [r for r in flat if "skipped" not in r]
     skipped.update({r["variant"]: r["skipped"] for r in flat if "skipped" in r})
@@ -411,10 +421,12 @@ def _write_outputs(
     room_size: tuple[float, float],
     protocol: str,
 ) -> None:
+    from naoloc.config import load_config
     from naoloc.mapping import load_map
-    from naoloc.plots import room_corners
+    from naoloc.plots import furniture_footprints, room_corners
 
     poly = room_corners(origin, room_size)
+    furniture = furniture_footprints(load_config(summary["config"]), origin)
     shown = [v.map_name for v in plan.variants if v.study == "paper" and v.mode == "paper"]
     shown = shown or [plan.main.map_name] + [
         v.map_name for v in plan.variants if v.name.startswith("neurons-") and v.mode == "paper"
@@ -429,13 +441,13 @@ def _write_outputs(
                 vmap.neuron_poses,
             )
         )
-    figures.plot_maps(outdir / "map.png", panels, poly)
+    figures.plot_maps(outdir / "map.png", panels, poly, furniture)
     main_recs = [r for r in records if r["variant"] == plan.main.name]
     figures.plot_estimates(
         outdir / "estimates.png", main_recs,
         f"{protocol} protocol, {plan.main.description}\nmedian "
         f"{summary['median_error_m']} m, p90 {summary['p90_error_m']} m",
-        poly, np.array(summary["survey"]["keyframe_poses"]),
+        poly, np.array(summary["survey"]["keyframe_poses"]), furniture,
     )  # fmt: skip
     curves: dict[str, list[float]] = {}
     for v in plan.variants:

@@ -1,6 +1,6 @@
 """Test poses of the evaluation protocols, and the seed paper's own figures.
 
-Two protocols (CONTRACT.md):
+Two protocols (docs/cli.md, `evaluate`):
 
 - ``paper``: the Table 3 positions of Trujillo-Romero (2024) in the map frame, five
   evaluations each. The paper gives positions only; the heading at each position is ours

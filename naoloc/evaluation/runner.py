@@ -28,7 +28,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from naoloc.errors import MotionError, NaolocError, RobotError
+from naoloc.errors import ConfigError, DependencyNotInstalled, MotionError, NaolocError, RobotError
 from naoloc.evaluation.protocols import EvalPose, room_to_map
 from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.progress import Progress
@@ -111,28 +111,16 @@ class LocalizeChunk:
     world_changes: tuple[tuple[str, tuple[Any, ...]], ...] = field(default_factory=tuple)
 
 
-def run_tasks(
-    fn: Callable[[T], R],
-    tasks: Sequence[T],
-    workers: int,
-    label: str,
-    *,
-    progress: bool | None = None,
-) -> list[R]:
-    """Run ``fn`` over ``tasks`` in a spawn process pool (in-process for one worker).
+class LocalExecutor:
+    """Tasks on this machine: a ``spawn`` process pool, or the calling process for one worker."""
 
-    Args:
-        fn: A module-level function (picklable).
-        tasks: Picklable task objects.
-        workers: Processes; 1 runs in the calling process.
-        label: Progress bar label.
-        progress: Force the bar on or off; default: on when stderr is a terminal.
+    name = "local"
 
-    Returns:
-        Results in the order of ``tasks``.
-    """
-    results: list[Any] = [None] * len(tasks)
-    with Progress(len(tasks), label, enabled=progress) as bar:
+    def run(
+        self, fn: Callable[[T], R], tasks: Sequence[T], workers: int, bar: Progress, label: str
+    ) -> list[R]:
+        """Run ``fn`` over ``tasks``; results in the order of ``tasks``."""
+        results: list[Any] = [None] * len(tasks)
         if workers <= 1 or len(tasks) <= 1:
             for i, task in enumerate(tasks):
                 results[i] = fn(task)
@@ -151,7 +139,135 @@ def run_tasks(
                 for fut in futures:
                     fut.cancel()
                 raise
-    return results
+        return results
+
+    def close(self) -> None:
+        """Nothing to release."""
+
+
+class RayExecutor:
+    """The same tasks as Ray remote tasks, on a cluster or on a local one started here.
+
+    Each task runs ``fn(task)`` in a Ray worker process, one CPU each; results come back
+    in the order of ``tasks`` and are the same as the local pool's (tasks carry their
+    configs and seeds). A local cluster advertises 127.0.0.1 and has no dashboard; Ray's
+    own GCS, raylet and worker gRPC servers still listen on every interface (measured with
+    Ray 2.60, which protects them with its default token authentication). On a
+    remote cluster every node needs naoloc installed (``pip install 'naoloc[sim,ray]'``) and
+    the outputs folder on a shared filesystem.
+
+    Args:
+        address: A running cluster (``ray://host:10001`` or ``host:6379``); None starts a
+            local one with ``num_cpus``.
+        num_cpus: CPUs of a local cluster (default: all).
+
+    Raises:
+        DependencyNotInstalled: Ray is not installed (``pip install 'naoloc[ray]'``).
+    """
+
+    name = "ray"
+
+    def __init__(self, address: str | None = None, num_cpus: int | None = None) -> None:
+        try:
+            import ray
+        except ImportError:
+            raise DependencyNotInstalled(
+                "--executor ray needs Ray: pip install 'naoloc[ray]'"
+            ) from None
+        self._ray = ray
+        self._started = False
+        if not ray.is_initialized():
+            kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False}
+            if address is None:
+                kwargs.update(
+                    num_cpus=num_cpus, _node_ip_address="127.0.0.1",
+                    object_store_memory=256 * 1024 * 1024,
+                )  # fmt: skip
+            ray.init(address=address, **kwargs)
+            self._started = True
+
+    def run(
+        self, fn: Callable[[T], R], tasks: Sequence[T], workers: int, bar: Progress, label: str
+    ) -> list[R]:
+        """Run ``fn`` over ``tasks`` as Ray tasks; results in the order of ``tasks``."""
+        ray = self._ray
+        remote = ray.remote(num_cpus=1, max_retries=0)(fn)
+        refs = [remote.remote(task) for task in tasks]
+        index = {ref: i for i, ref in enumerate(refs)}
+        results: list[Any] = [None] * len(tasks)
+        pending = list(refs)
+        try:
+            while pending:
+                done, pending = ray.wait(pending, num_returns=1)
+                for ref in done:
+                    try:
+                        results[index[ref]] = ray.get(ref)
+                    except ray.exceptions.RayTaskError as err:
+                        cause = err.as_instanceof_cause()
+                        if isinstance(cause, NaolocError):
+                            raise cause from None
+                        raise NaolocError(f"{label}: a Ray task failed: {err}") from None
+                    except ray.exceptions.RayError as err:
+                        raise NaolocError(f"{label}: a Ray worker died ({err})") from None
+                    bar.update()
+        except BaseException:
+            for ref in pending:
+                ray.cancel(ref)
+            raise
+        return results
+
+    def close(self) -> None:
+        """Shut down the local cluster this executor started (a joined one stays up)."""
+        if self._started:
+            self._started = False
+            self._ray.shutdown()
+
+
+Executor = LocalExecutor | RayExecutor
+
+
+def make_executor(name: str, address: str | None = None, workers: int | None = None) -> Executor:
+    """The executor of ``--executor NAME [--ray-address ADDR]``.
+
+    Raises:
+        ConfigError: An unknown name, or an address without ``ray``.
+        DependencyNotInstalled: ``ray`` without Ray installed.
+    """
+    if name == "local":
+        if address is not None:
+            raise ConfigError("--ray-address needs --executor ray")
+        return LocalExecutor()
+    if name == "ray":
+        return RayExecutor(address, num_cpus=workers)
+    raise ConfigError(f"unknown executor {name!r}; valid: local, ray")
+
+
+def run_tasks(
+    fn: Callable[[T], R],
+    tasks: Sequence[T],
+    workers: int,
+    label: str,
+    *,
+    progress: bool | None = None,
+    executor: Executor | None = None,
+) -> list[R]:
+    """Run ``fn`` over ``tasks`` on ``executor`` (default: a local spawn process pool).
+
+    Args:
+        fn: A module-level function (picklable).
+        tasks: Picklable task objects.
+        workers: Processes of the local pool; 1 runs in the calling process.
+        label: Progress bar label.
+        progress: Force the bar on or off; default: on when stderr is a terminal.
+        executor: Where the tasks run: :class:`LocalExecutor` (default) or
+            :class:`RayExecutor`; the results are the same.
+
+    Returns:
+        Results in the order of ``tasks``.
+    """
+    runner = executor if executor is not None else LocalExecutor()
+    with Progress(len(tasks), label, enabled=progress) as bar:
+        return runner.run(fn, tasks, workers, bar, label)
 
 
 def chunked(items: Sequence[T], size: int) -> list[tuple[T, ...]]:

@@ -1,0 +1,69 @@
+"""``evaluate --executor ray``: the same tasks on a local Ray cluster give the same summary.
+
+Skipped when Ray is not installed (it is the optional extra ``ray``). Everything but the
+measured wall times (``*_s``, ``*_ms*``, ``timings``) and the output folder is compared.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+
+from naoloc.cli import main
+from naoloc.errors import ConfigError
+from naoloc.evaluation.runner import make_executor
+
+TINY = {
+    "robot": {"backend": "fake"},
+    "world": {"room": {"size_m": [3.2, 3.2], "seed": 5}},
+    "survey": {"laps": 1, "step_m": 0.3, "wall_offset_m": 0.9},
+    "map": {"neurons": 12, "epochs": 12, "vocabulary_size": 48},
+}
+
+
+def _timeless(value: Any, outdir: str) -> Any:
+    """``value`` without measured times, with the output folder replaced by a placeholder."""
+    if isinstance(value, dict):
+        return {
+            k: _timeless(v, outdir)
+            for k, v in value.items()
+            if not (k.endswith("_s") or "_ms" in k or k == "timings")
+        }
+    if isinstance(value, list):
+        return [_timeless(v, outdir) for v in value]
+    if isinstance(value, str):
+        return value.replace(outdir, "OUT")
+    return value
+
+
+def test_ray_gives_the_local_pools_summary(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    pytest.importorskip("ray", reason="ray is not installed (pip install 'naoloc[ray]')")
+    cfg = tmp_path / "tiny.yaml"
+    cfg.write_text(yaml.safe_dump(TINY))
+    common = ["evaluate", "-c", str(cfg), "--protocol", "random", "-n", "3", "--seed", "4"]
+    common += ["--workers", "2"]
+    assert main([*common, "-o", str(tmp_path / "local")]) == 0
+    assert main([*common, "--executor", "ray", "-o", str(tmp_path / "ray")]) == 0
+    line = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert line["executor"] == "ray" and line["n"] == 3
+    local = json.loads((tmp_path / "local" / "summary.json").read_text())
+    ray = json.loads((tmp_path / "ray" / "summary.json").read_text())
+    assert local["positions"] == ray["positions"]  # estimates, bit for bit
+    assert _timeless(local, str(tmp_path / "local")) == _timeless(ray, str(tmp_path / "ray"))
+    import ray as ray_module
+
+    assert not ray_module.is_initialized()  # the local cluster was shut down
+
+
+def test_executor_names_are_checked() -> None:
+    assert make_executor("local").name == "local"
+    with pytest.raises(ConfigError, match="valid: local, ray"):
+        make_executor("dask")
+    with pytest.raises(ConfigError, match="--ray-address needs --executor ray"):
+        make_executor("local", "ray://127.0.0.1:10001")

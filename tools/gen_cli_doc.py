@@ -1,0 +1,288 @@
+"""Write docs/cli.md: every verb and flag (from the argparse parser), every config key (from
+the pydantic models) and every JSON field of each verb's last stdout line.
+
+    python tools/gen_cli_doc.py           # rewrite docs/cli.md
+    python tools/gen_cli_doc.py --check   # exit 1 when docs/cli.md is not up to date
+
+tests/test_cli_doc.py runs the check, so the page never drifts from the code. The JSON fields
+are described in JSON_FIELDS below; the same test runs the verbs and fails on a field that is
+printed but not described here.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import types
+import typing
+from pathlib import Path
+from typing import Any
+
+from pydantic import BaseModel
+from pydantic_core import PydanticUndefined
+
+REPO = Path(__file__).resolve().parent.parent
+DOC = REPO / "docs" / "cli.md"
+
+# verb -> field -> description. Units: m, rad, deg, s, ms; frames as named.
+JSON_FIELDS: dict[str, dict[str, str]] = {
+    "survey": {
+        "frames": "images written to the dataset",
+        "laps": "closed laps walked",
+        "path_m": "distance walked by odometry (m)",
+        "wall_s": "wall-clock time of the survey (s)",
+        "dataset": "the MCAP dataset written",
+        "direction": "`ccw` or `cw`: the circuit's direction",
+        "head_yaw": "HeadYaw held during the laps (rad): toward the nearer side wall",
+        "head_yaw_source": "what chose the wall side: `parallax`, `keypoints` or the config",
+    },
+    "build-map": {
+        "images": "keyframes the map was built from",
+        "neurons": "GCS neurons",
+        "distinct_poses": "distinct neuron poses (1 mm apart or more)",
+        "features_s": "feature extraction time (s)",
+        "vocabulary_s": "vocabulary and histogram time (s)",
+        "gcs_s": "GCS training time (s)",
+        "total_s": "whole build time (s)",
+        "map": "the map file written (.npz)",
+        "png": "the picture of the map written beside it",
+        "dataset_complete": "false when the dataset's writer died (frames up to there used)",
+    },
+    "localize": {
+        "x": "estimate, map frame (m); null when nothing was recognised",
+        "y": "estimate, map frame (m); null when nothing was recognised",
+        "theta": "estimated heading, map frame (rad); null when nothing was recognised",
+        "confidence": "0..1; 0 when nothing was recognised (exit code 3)",
+        "method": "how the estimate was made (`none` when nothing was recognised)",
+        "mode": "`verified` or `paper` (localize.mode)",
+        "strategy": "`scan` (head sweep) or `paper` (the paper's 1-2 pictures)",
+        "images": "pictures used",
+        "extra_turns": "quarter turns in place made because the estimate was not confident",
+        "error_m": "distance to the truth (m); simulator only",
+        "heading_error_deg": "heading error (deg); simulator only",
+        "truth": "true pose [x, y, theta], map frame; simulator only",
+        "localize_s": "wall-clock time (s)",
+        "covariance": "3 x 3 uncertainty of x, y, theta (m^2, rad^2); absent with no estimate",
+        "png": "the picture written with --png",
+    },
+    "go-home": {
+        "x": "final estimate, map frame (m)",
+        "y": "final estimate, map frame (m)",
+        "theta": "final estimated heading, map frame (rad)",
+        "confidence": "confidence of the final estimate, 0..1",
+        "method": "`filter` (odometry and fixes fused) or how the last estimate was made",
+        "covariance": "3 x 3 uncertainty of x, y, theta of the final belief (m^2, rad^2)",
+        "spread_m": "spread of the final belief (m)",
+        "tries": "walks made toward the origin",
+        "reached": "true when the final estimate is within go_home.tolerance_m",
+        "path_m": "distance walked (m)",
+        "estimates": "every estimate [x, y] on the way, map frame (m)",
+        "blocked": "walks that were blocked (moveTo returned False)",
+        "reason": "why it stopped without reaching home",
+        "error_m": "true distance from the map origin at the end (m); simulator only",
+        "truth": "true final pose [x, y, theta], map frame; simulator only",
+        "png": "the picture written with --png",
+    },
+    "evaluate": {
+        "protocol": "`paper` or `random`",
+        "n": "estimates of the main variant",
+        "median_error_m": "median position error (m)",
+        "p90_error_m": "90th percentile position error (m)",
+        "max_error_m": "largest position error (m)",
+        "median_heading_error_deg": "median heading error (deg)",
+        "map_build_s": "build time of the main map (s)",
+        "localize_ms_median": "median localization time (ms)",
+        "no_estimate": "test poses where nothing was recognised (counted as misses)",
+        "seed": "seed of the test poses",
+        "survey_frames": "images of the base survey",
+        "wall_s": "wall-clock time of the whole evaluation (s)",
+        "report": "report.md written in OUTDIR",
+        "summary": "summary.json written in OUTDIR (these fields, `positions` and more)",
+        "executor": "`local` or `ray`",
+    },
+    "serve": {
+        "endpoint": "the URL served",
+        "transport": "`libqi`, `qimessaging` or `zmq`",
+        "backend": "the simulated robot's backend",
+        "calls": "service calls answered",
+        "deadman_stops": "times a silent client got the robot stopped",
+    },
+    "demo": {
+        "backend": "the robot's backend",
+        "frames": "survey images",
+        "images": "map keyframes",
+        "neurons": "GCS neurons",
+        "distinct_poses": "distinct neuron poses",
+        "map_build_s": "map build time (s)",
+        "n": "poses localized",
+        "median_error_m": "median position error (m)",
+        "max_error_m": "largest position error (m)",
+        "median_heading_error_deg": "median heading error (deg)",
+        "localize_s_median": "median localization time (s)",
+        "wall_s": "wall-clock time of the demo (s)",
+        "dataset": "the dataset written",
+        "map": "the map written",
+        "png": "the picture of the estimates",
+        "positions": "per pose: truth, estimate [x, y, theta] (map frame), error_m, "
+        "heading_error_deg, confidence, localize_s",
+    },
+}
+
+
+def _type_name(annotation: Any) -> str:
+    """A short readable name of a field's type."""
+    origin = typing.get_origin(annotation)
+    args = typing.get_args(annotation)
+    if origin is typing.Literal:
+        return " \\| ".join(f"`{a}`" for a in args)
+    if origin in (typing.Union, types.UnionType):
+        return " or ".join(_type_name(a) for a in args)
+    if origin is tuple:
+        return f"[{', '.join(_type_name(a) for a in args)}]"
+    if origin is list:
+        return f"list of {_type_name(args[0])}" if args else "list"
+    if annotation is type(None):
+        return "null"
+    return getattr(annotation, "__name__", str(annotation))
+
+
+def _default(field: Any) -> str:
+    value = field.default
+    if value is PydanticUndefined:
+        value = field.default_factory() if field.default_factory is not None else None
+    if isinstance(value, BaseModel):
+        return ""
+    if isinstance(value, tuple):
+        value = list(value)
+    return "`null`" if value is None else f"`{value}`".replace("|", "\\|")
+
+
+def config_rows(model: type[BaseModel], prefix: str = "") -> list[tuple[str, str, str, str]]:
+    """(key path, type, default, description) of every leaf key of ``model``, in order."""
+    rows = []
+    for name, field in model.model_fields.items():
+        path = f"{prefix}{name}"
+        annotation = field.annotation
+        sub = annotation if isinstance(annotation, type) else None
+        if sub is not None and issubclass(sub, BaseModel):
+            rows += config_rows(sub, path + ".")
+            continue
+        desc = (field.description or "").replace("|", "\\|")
+        rows.append((path, _type_name(annotation), _default(field), desc))
+    return rows
+
+
+def _flag_rows(parser: argparse.ArgumentParser) -> list[tuple[str, str, str]]:
+    rows = []
+    for action in parser._actions:
+        if isinstance(action, argparse._HelpAction):
+            continue
+        names = ", ".join(action.option_strings) or (action.metavar or action.dest)
+        metavar = action.metavar
+        if isinstance(metavar, tuple):
+            metavar = " ".join(metavar)
+        if action.choices:
+            metavar = "|".join(str(c) for c in action.choices)
+        if action.nargs == "?" and metavar:
+            metavar = f"[{metavar}]"
+        elif metavar is None and action.nargs != 0:
+            metavar = action.dest.upper()
+        usage = f"`{names} {metavar}`" if metavar and action.nargs != 0 else f"`{names}`"
+        default = action.default
+        if action.required:
+            default_text = "required"
+        elif default is None or default is False or (isinstance(default, str) and not default):
+            default_text = ""
+        else:
+            default_text = f"`{default}`"
+        if action.nargs == "?" and action.const is not None:
+            default_text = f"off; `{action.const}` when given alone"
+        rows.append(
+            (usage.replace("|", "\\|"), default_text, (action.help or "").replace("|", "\\|"))
+        )
+    return rows
+
+
+def render() -> str:
+    """The whole page."""
+    from naoloc.cli import VERBS, build_parser
+    from naoloc.config import Config, shipped_configs
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    out = [
+        "# naoloc command line reference",
+        "",
+        "Generated by `tools/gen_cli_doc.py` from the parser and the config models; do not edit",
+        "by hand (`python tools/gen_cli_doc.py` rewrites it, `tests/test_cli_doc.py` checks it).",
+        "",
+        "Every verb that computes a result ends stdout with ONE line of JSON (the fields below),",
+        "after any human-readable text. Errors are one line on stderr and a non-zero exit code",
+        "(1; 2 for a usage error; 3 when `localize` recognises nothing; 130 on Ctrl-C).",
+        "Progress bars go to stderr, only on a terminal.",
+        "",
+        "`-c CFG` takes a YAML file or the name of a config shipped in the package: "
+        + ", ".join(f"`{n}`" for n in shipped_configs())
+        + " (the files of `configs/`, without `sim_`). It works from any folder.",
+        "",
+        "## Verbs",
+        "",
+    ]
+    for verb, verb_parser in sub.choices.items():
+        out += [f"### `naoloc {verb}`", "", VERBS[verb], "", "| flag | default | meaning |"]
+        out += ["| --- | --- | --- |"]
+        out += [f"| {u} | {d} | {h} |" for u, d, h in _flag_rows(verb_parser)]
+        fields = JSON_FIELDS.get(verb, {})
+        if fields:
+            out += ["", "JSON line:", "", "| field | meaning |", "| --- | --- |"]
+            out += [f"| `{k}` | {v} |" for k, v in fields.items()]
+        out.append("")
+    out += [
+        "## Live view (`--live [PORT]`)",
+        "",
+        "`survey`, `localize`, `go-home` and `serve` take `--live [PORT]`: a Foxglove WebSocket",
+        "server on 127.0.0.1:PORT (default 8765; 0 picks a free port, printed on stderr). Open",
+        "it in Foxglove with *Open connection -> Foxglove WebSocket*, `ws://127.0.0.1:PORT`.",
+        "Topics (see `naoloc/live.py`):",
+        "",
+    ]
+    from naoloc import live
+
+    doc = live.__doc__ or ""
+    topics = [line for line in doc.splitlines() if line.startswith(("- ``/", "  "))][:20]
+    out += [line.replace("``", "`") for line in topics]
+    out += [
+        "",
+        "## Config keys",
+        "",
+        "YAML, validated: an unknown or wrong key is an error naming its path. Every key has a",
+        "default. Types, defaults and meanings come from `naoloc/config.py`.",
+        "",
+        "| key | type | default | meaning |",
+        "| --- | --- | --- | --- |",
+    ]
+    out += [f"| `{k}` | {t} | {d} | {m} |" for k, t, d, m in config_rows(Config)]
+    out.append("")
+    return "\n".join(out)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Write docs/cli.md, or with --check say whether it is up to date."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true", help="exit 1 when out of date")
+    args = parser.parse_args(argv)
+    text = render()
+    if args.check:
+        current = DOC.read_text(encoding="utf-8") if DOC.is_file() else ""
+        if current != text:
+            print(f"{DOC.relative_to(REPO)} is out of date: run python tools/gen_cli_doc.py")
+            return 1
+        return 0
+    DOC.write_text(text, encoding="utf-8")
+    print(f"wrote {DOC.relative_to(REPO)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(REPO))
+    sys.exit(main())
