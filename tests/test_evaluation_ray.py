@@ -19,7 +19,12 @@ from naoloc.evaluation.runner import make_executor
 
 TINY = {
     "robot": {"backend": "fake"},
-    "world": {"room": {"size_m": [3.2, 3.2], "seed": 5}},
+    "world": {
+        "room": {"size_m": [3.2, 3.2], "seed": 5, "style": "posters"},
+        "camera_realism": {"profile": "ideal"},
+        "odometry": {"profile": "ideal"},
+        "sim": {"camera_sway": False},
+    },  # the pre-issue-11 world: not about realism
     "survey": {"laps": 1, "step_m": 0.3, "wall_offset_m": 0.9},
     "map": {"neurons": 12, "epochs": 12, "vocabulary_size": 48},
 }

@@ -22,6 +22,7 @@ ROOM: dict[str, Any] = {
         "room": {"size_m": [4.0, 4.0], "seed": 3, "style": "posters"},
         "camera_realism": {"profile": "ideal"},
         "odometry": {"profile": "ideal"},
+        "sim": {"camera_sway": False},
     },  # the pre-issue-11 world: pipeline logic, not realism
     # The nearest wall is found by parallax through the network too.
     "survey": {"laps": 1, "step_m": 0.4},

@@ -24,7 +24,12 @@ from naoloc.mapping import load_map
 pytestmark = pytest.mark.net
 
 ROOM: dict[str, Any] = {
-    "world": {"room": {"size_m": [4.0, 4.0], "seed": 3}},
+    "world": {
+        "room": {"size_m": [4.0, 4.0], "seed": 3, "style": "posters"},
+        "camera_realism": {"profile": "ideal"},
+        "odometry": {"profile": "ideal"},
+        "sim": {"camera_sway": False},
+    },  # the pre-issue-11 world: not about realism
     "survey": {"laps": 1, "step_m": 0.4},
     "map": {"neurons": 30, "epochs": 10, "vocabulary_size": 32, "seed": 4},
 }
