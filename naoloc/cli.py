@@ -2,7 +2,8 @@
 
 Each verb lives in ``naoloc.commands.<verb>`` and returns a JSON-able dict that is
 printed as the single last line of stdout. Errors are one line on stderr and a
-non-zero exit: 1 for a naoloc error, 2 for bad usage, 130 for Ctrl-C.
+non-zero exit: 1 for a naoloc error, 2 for bad usage, 70 for a bug (an unexpected
+exception: one line naming it; set ``NAOLOC_DEBUG=1`` for the traceback), 130 for Ctrl-C.
 """
 
 from __future__ import annotations
@@ -11,7 +12,9 @@ import argparse
 import importlib
 import json
 import math
+import os
 import sys
+import traceback
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -19,6 +22,9 @@ from typing import Any
 from naoloc import __version__
 from naoloc.config import Config, load_config
 from naoloc.errors import NaolocError, NotBuiltError
+
+EXIT_INTERNAL = 70  # sysexits.h EX_SOFTWARE: an unexpected exception (a bug)
+_MAX_MESSAGE = 500  # characters of an error message printed on stderr
 
 VERBS: dict[str, str] = {
     "survey": "Algorithm 3: walk closed laps, record images and odometry poses (MCAP)",
@@ -101,11 +107,40 @@ def _run_verb(verb: str, args: argparse.Namespace, cfg: Config) -> dict[str, Any
     return result
 
 
+def one_line(text: object, limit: int = _MAX_MESSAGE) -> str:
+    """``text`` as one terminal line: newlines folded, at most ``limit`` characters."""
+    line = " ".join(str(text).split())
+    return line if len(line) <= limit else line[: limit - 3] + "..."
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``naoloc`` console script. Returns the exit code."""
+    """Entry point of the ``naoloc`` console script. Returns the exit code.
+
+    The last line of defence: a naoloc error is one line on stderr (exit 1); any other
+    exception is one line naming it and a hint (exit :data:`EXIT_INTERNAL`), with the
+    traceback only when the environment sets ``NAOLOC_DEBUG=1``.
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     verb: str = args.verb
+    try:
+        return _main(verb, args)
+    except KeyboardInterrupt:
+        print(f"naoloc {verb}: interrupted", file=sys.stderr)
+        return 130
+    except Exception as err:  # the last line of defence: a bug, never a bare traceback
+        if os.environ.get("NAOLOC_DEBUG") == "1":
+            traceback.print_exc()
+        what = one_line(f"{type(err).__name__}: {err}" if str(err) else type(err).__name__)
+        print(
+            f"naoloc {verb}: internal error: {what} (a bug: please report it; "
+            "NAOLOC_DEBUG=1 shows the traceback)",
+            file=sys.stderr,
+        )
+        return EXIT_INTERNAL
+
+
+def _main(verb: str, args: argparse.Namespace) -> int:
     try:
         config_src = getattr(args, "config", None)
         if verb == "demo" and config_src is None:
@@ -118,11 +153,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"naoloc {verb}: interrupted", file=sys.stderr)
         return 130
     except NaolocError as err:
-        print(f"naoloc {verb}: error: {err}", file=sys.stderr)
+        print(f"naoloc {verb}: error: {one_line(err)}", file=sys.stderr)
         return 1
     except OSError as err:  # a path that cannot be read or written
         where = f": {err.filename}" if err.filename else ""
-        print(f"naoloc {verb}: error: {err.strerror or err}{where}", file=sys.stderr)
+        print(f"naoloc {verb}: error: {one_line(f'{err.strerror or err}{where}')}", file=sys.stderr)
         return 1
     sys.stdout.write(json.dumps(result, separators=(", ", ": ")) + "\n")
     sys.stdout.flush()

@@ -62,3 +62,11 @@ class FeatureError(NaolocError):
 
 class NotBuiltError(NaolocError):
     """A command or feature that does not exist yet; never silently faked."""
+
+
+class UrlError(BackendError):
+    """A listen or connect URL that is not ``tcp://HOST:PORT`` (or ``tcps://``)."""
+
+
+class ImageError(RobotError):
+    """A camera image whose size, byte count or colorspace does not add up."""
