@@ -46,6 +46,7 @@ def parse_url(
     what: str = "URL",
     schemes: tuple[str, ...] = SCHEMES,
     allow_any_port: bool = True,
+    default_port: int | None = None,
 ) -> Url:
     """Parse and validate ``scheme://host:port``.
 
@@ -54,6 +55,7 @@ def parse_url(
         what: What the URL is, for the error message (e.g. ``--listen``, ``robot.url``).
         schemes: Accepted schemes.
         allow_any_port: Accept port 0 (listen on any free port); False for clients.
+        default_port: The port of a URL that names none (None = a port is required).
 
     Returns:
         The parsed URL.
@@ -82,6 +84,8 @@ def parse_url(
         raise UrlError(f"{what}: {_short(text)} has a path or query; {expected}")
     if not host:
         raise UrlError(f"{what}: {_short(text)} names no host; {expected}")
+    if port is None and default_port is not None:
+        port = default_port
     if port is None:
         raise UrlError(f"{what}: {_short(text)} names no port; {expected}")
     if port == 0 and not allow_any_port:

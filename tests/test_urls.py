@@ -73,3 +73,17 @@ def test_serve_refuses_bad_listen_urls_with_one_line(tmp_path: Path, listen: str
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and "--listen" in lines[0], done.stderr
     assert "listening" not in done.stdout
+
+
+def test_a_client_url_without_a_port_takes_the_default() -> None:
+    assert parse_url("tcp://nao.local", default_port=9559).port == 9559
+
+
+@pytest.mark.parametrize("url", ["tcp://[::1", "tcp://127.0.0.1:99999", "http://127.0.0.1:1"])
+def test_the_client_refuses_bad_robot_urls_with_one_line(url: str) -> None:
+    import naoloc
+
+    cfg = {"robot": {"backend": "naoqi", "transport": "zmq", "url": url}}
+    with pytest.raises(BackendError, match="robot.url") as info:
+        naoloc.connect(cfg)
+    assert "\n" not in str(info.value)
