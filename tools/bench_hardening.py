@@ -10,8 +10,6 @@ Run: ``PYTHONPATH=. .venv/bin/python tools/bench_hardening.py``
 from __future__ import annotations
 
 import importlib.util
-import os
-import subprocess
 import sys
 import tempfile
 import time
@@ -26,33 +24,26 @@ from tests.fuzz.libqi_fuzzer import fuzz_libqi  # noqa: E402
 from tests.fuzz.proc import rss_mb  # noqa: E402
 from tests.fuzz.zmq_fuzzer import fuzz_zmq  # noqa: E402
 from tests.test_fuzz_config import BOMBS, CORPUS  # noqa: E402
+from tests.test_fuzz_config import _run as run_cli  # noqa: E402
 
 FAKE = {"robot": {"backend": "fake"}, "world": {"room": {"size_m": [4.0, 4.0], "seed": 3}}}
 MESSAGES = 10_000
 
 
 def bomb_figures() -> None:
-    """Wall time and peak RSS of the CLI refusing each bomb (and of a trivial run)."""
+    """Wall time and peak RSS (VmHWM) of the CLI refusing each bomb, and of a missing file."""
     with tempfile.TemporaryDirectory() as tmp:
         for name in ["missing_file", *BOMBS]:
             path = Path(tmp) / f"{name}.yaml"
             if name != "missing_file":
                 path.write_bytes(CORPUS[name])
             started = time.perf_counter()
-            proc = subprocess.Popen(
-                [sys.executable, "-m", "naoloc.cli", "survey", "-c", str(path), "-o",
-                 str(Path(tmp) / "x.mcap")],
-                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-            )  # fmt: skip
-            assert proc.stderr is not None
-            err = proc.stderr.read().decode(errors="replace").strip()
-            proc.stderr.close()
-            _, status, usage = os.wait4(proc.pid, 0)
+            code, err, peak_mb = run_cli(["survey", "-c", str(path), "-o", f"{tmp}/x.mcap"])
             wall = time.perf_counter() - started
+            lines = err.strip().splitlines()
             print(
-                f"bomb {name:14s} exit {os.waitstatus_to_exitcode(status)}  {wall:5.2f} s  "
-                f"peak {usage.ru_maxrss / 1024:6.1f} MB  {len(err.splitlines())} line(s): "
-                f"{err[-70:]}"
+                f"bomb {name:14s} exit {code}  {wall:5.2f} s  peak {peak_mb:6.1f} MB  "
+                f"{len(lines)} line(s): {err.strip()[-70:]}"
             )
 
 

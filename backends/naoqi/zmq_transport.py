@@ -219,6 +219,7 @@ class ZmqSession:
             sock = self._ctx.socket(zmq.DEALER)
             sock.setsockopt(zmq.LINGER, 0)
             sock.setsockopt(zmq.RECONNECT_IVL, 100)
+            sock.setsockopt(zmq.MAXMSGSIZE, wire.MAX_BUFFER_BYTES + 1)
             if keys is not None:
                 sock.curve_publickey, sock.curve_secretkey, sock.curve_serverkey = keys
             monitor = sock.get_monitor_socket(zmq.EVENT_DISCONNECTED)
@@ -408,6 +409,8 @@ class ZmqSession:
             sock = self._ctx.socket(zmq.ROUTER)
             sock.setsockopt(zmq.LINGER, 0)
             sock.setsockopt(zmq.ROUTER_HANDOVER, 1)
+            # a peer sending a frame over the wire limit is disconnected before it is buffered
+            sock.setsockopt(zmq.MAXMSGSIZE, wire.MAX_BUFFER_BYTES + 1)
             if keys is not None:
                 from zmq.auth.thread import ThreadAuthenticator
 
