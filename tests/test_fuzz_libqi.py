@@ -16,7 +16,6 @@ import pytest
 from naoloc.backends.naoqi.testing import served
 
 import naoloc
-from naoloc.errors import ConnectionLost
 from tests.fuzz.libqi_fuzzer import churn_authenticated, fuzz_libqi
 from tests.fuzz.proc import rss_mb
 
@@ -55,7 +54,7 @@ def test_fuzzed_libqi_server_survives_answers_and_stays_small() -> None:
     reason="libqi 3.1.5 keeps the socket of every client that authenticates then hangs up "
     "(a plain qi.Session server does too): ~500 such clients and it accepts no more; "
     "server-side limits are issue 15 item 4",
-    raises=(AssertionError, ConnectionLost),
+    raises=AssertionError,
     strict=False,
 )
 def test_libqi_server_still_answers_after_many_clients_hang_up() -> None:
@@ -63,6 +62,11 @@ def test_libqi_server_still_answers_after_many_clients_hang_up() -> None:
         churn_authenticated(server.url, 600)
         time.sleep(0.5)
         fds = _open_fds(server.process.pid)
-        with naoloc.connect(server.client_config()) as robot:
-            assert len(robot.motion.getRobotPosition(True)) == 3
+        qi = pytest.importorskip("qi")
+        session = qi.Session()
+        future = session.connect(server.url, _async=True)
+        future.wait(3000)
+        answered = future.isFinished() and not future.hasError()
+        session.close()
+        assert answered, "no connection accepted within 3 s after 600 clients left"
         assert fds < 100, f"{fds} open file descriptors after 600 clients left"
