@@ -2,8 +2,13 @@
 
 Each verb lives in ``naoloc.commands.<verb>`` and returns a JSON-able dict that is
 printed as the single last line of stdout. Errors are one line on stderr and a
-non-zero exit: 1 for a naoloc error, 2 for bad usage, 70 for a bug (an unexpected
-exception: one line naming it; set ``NAOLOC_DEBUG=1`` for the traceback), 130 for Ctrl-C.
+non-zero exit: 1 for a naoloc error, 2 for bad usage, 3 when ``localize`` recognised
+nothing (its JSON line is still printed, with null pose fields), 70 for a bug (an
+unexpected exception: one line naming it; set ``NAOLOC_DEBUG=1`` for the traceback), 130
+for SIGINT (Ctrl-C) and 143 for SIGTERM. Both signals are honoured also where the shell
+ignores SIGINT (background jobs): :func:`naoloc.interrupt.interruptible` installs the
+handlers for the whole run. Notes attached to the error (e.g. where a partial dataset was
+kept) join its line.
 """
 
 from __future__ import annotations
@@ -21,10 +26,13 @@ from typing import Any
 
 from naoloc import __version__
 from naoloc.config import Config, load_config
-from naoloc.errors import NaolocError, NotBuiltError
+from naoloc.errors import NaolocError, NoEstimate, NotBuiltError
+from naoloc.interrupt import exit_code, interruptible
+from naoloc.outputs import atomic_write_text
 
 EXIT_INTERNAL = 70  # sysexits.h EX_SOFTWARE: an unexpected exception (a bug)
-_MAX_MESSAGE = 500  # characters of an error message printed on stderr
+_MAX_MESSAGE = 500  # characters of an unexpected exception's message printed on stderr
+_MAX_LINE = 1000  # characters of an error line (with its notes) printed on stderr
 
 VERBS: dict[str, str] = {
     "survey": "Algorithm 3: walk closed laps, record images and odometry poses (MCAP)",
@@ -73,7 +81,7 @@ def build_parser() -> argparse.ArgumentParser:
         )  # fmt: skip
         p.add_argument("--png", type=Path, default=None, help="write a picture of the result")
     p = add("evaluate")
-    p.add_argument("--protocol", choices=("paper", "random"), default="random")
+    p.add_argument("--protocol", choices=("paper", "random", "anywhere"), default="random")
     p.add_argument("-n", type=int, default=40, help="test poses (random protocol)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
@@ -123,11 +131,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     verb: str = args.verb
+    with interruptible():
+        return _guarded(verb, args)
+
+
+def _with_notes(text: str, err: BaseException) -> str:
+    """``text`` and the error's notes (``add_note``) on one line."""
+    notes = [str(n).replace("\n", " ") for n in getattr(err, "__notes__", ())]
+    return "; ".join([text, *notes])
+
+
+def _guarded(verb: str, args: argparse.Namespace) -> int:
     try:
         return _main(verb, args)
-    except KeyboardInterrupt:
-        print(f"naoloc {verb}: interrupted", file=sys.stderr)
-        return 130
     except Exception as err:  # the last line of defence: a bug, never a bare traceback
         if os.environ.get("NAOLOC_DEBUG") == "1":
             traceback.print_exc()
@@ -149,15 +165,22 @@ def _main(verb: str, args: argparse.Namespace) -> int:
                 config_src = None
         cfg = load_config(config_src)
         result = _run_verb(verb, args, cfg)
-    except KeyboardInterrupt:
-        print(f"naoloc {verb}: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as err:
+        print(_with_notes(f"naoloc {verb}: interrupted", err), file=sys.stderr)
+        return exit_code(err)
+    except NoEstimate as err:  # the result line still ends stdout, with no pose in it
+        sys.stdout.write(json.dumps(err.result, separators=(", ", ": ")) + "\n")
+        sys.stdout.flush()
+        print(f"naoloc {verb}: {err}", file=sys.stderr)
+        return err.exit_code
     except NaolocError as err:
-        print(f"naoloc {verb}: error: {one_line(err)}", file=sys.stderr)
+        text = _with_notes(f"naoloc {verb}: error: {err}", err)
+        print(one_line(text, _MAX_LINE), file=sys.stderr)
         return 1
     except OSError as err:  # a path that cannot be read or written
         where = f": {err.filename}" if err.filename else ""
-        print(f"naoloc {verb}: error: {one_line(f'{err.strerror or err}{where}')}", file=sys.stderr)
+        text = f"naoloc {verb}: error: {err.strerror or err}{where}"
+        print(one_line(_with_notes(text, err), _MAX_LINE), file=sys.stderr)
         return 1
     sys.stdout.write(json.dumps(result, separators=(", ", ": ")) + "\n")
     sys.stdout.flush()
@@ -165,10 +188,12 @@ def _main(verb: str, args: argparse.Namespace) -> int:
 
 
 def write_resolved_config(cfg: Config, path: Path) -> Path:
-    """Write the resolved config as YAML at ``path`` (creating its folder); returns the path."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(cfg.to_yaml(), encoding="utf-8")
-    return path
+    """Write the resolved config (without secrets) as YAML at ``path``, atomically.
+
+    Call it once the output the copy describes is written, so that a failed run never
+    leaves a config copy that does not match the output beside it. Creates the folder.
+    """
+    return atomic_write_text(path, cfg.to_yaml())
 
 
 if __name__ == "__main__":

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import BaseModel, ConfigDict, Field, SecretStr, ValidationError, field_validator
 
 from naoloc.constants import CAMERA_FPS, COLORSPACE_LAYERS, RESOLUTIONS
 from naoloc.errors import ConfigError
@@ -39,7 +39,9 @@ class RobotConfig(_Model):
         "auto", description="naoqi only: libqi (real qi package), zmq (our shim), auto"
     )
     user: str | None = Field(None, description="NAOqi 2.9+ (tcps://) user, usually 'nao'")
-    password: str | None = Field(None, description="NAOqi 2.9+ (tcps://) password")
+    password: SecretStr | None = Field(
+        None, description="NAOqi 2.9+ (tcps://) password; never written to any file"
+    )
     timeout_s: float = Field(5.0, gt=0, description="timeout of one remote call, seconds")
     move_timeout_s: float = Field(
         300.0, gt=0, description="naoqi only: timeout of one blocking motion call, seconds"
@@ -73,17 +75,42 @@ class RoomConfig(_Model):
 
 
 class OdometryConfig(_Model):
-    """Sensor odometry drift of simulated backends (``getRobotPosition(True)``)."""
+    """Odometry error of simulated backends: how far the true walk strays from odometry.
 
-    scale_error: float = Field(0.01, ge=-0.5, le=0.5, description="relative distance error")
-    heading_bias_rad_per_m: float = Field(0.005, description="heading error per metre walked")
-    random_walk_m_per_sqrt_m: float = Field(
-        0.005, ge=0, description="position noise std per sqrt(metre) walked"
+    ``profile: nao`` draws per-run systematic errors from ``seed`` at the magnitudes of
+    published NAO figures (see ``naoloc/simulated/odometry.py`` for the sources);
+    ``profile: ideal`` is exact. Any key set here overrides the profile's value (a set
+    ``scale_error`` or ``turn_scale_error`` is used as is instead of being drawn).
+    """
+
+    profile: Literal["nao", "ideal"] = Field(
+        "nao", description="nao (published NAO drift) | ideal (exact, for unit tests)"
     )
-    heading_random_walk_rad_per_sqrt_rad: float = Field(
-        0.01, ge=0, description="heading noise std per sqrt(radian) turned"
+    scale_error: float | None = Field(
+        None, ge=-0.5, le=0.5, description="odometry reads (1 + e) times the true distance"
     )
-    seed: int = Field(0, ge=0, description="seed of the noise")
+    turn_scale_error: float | None = Field(
+        None, ge=-0.5, le=0.5, description="odometry reads (1 + e) times the true turn"
+    )
+    heading_bias_rad_per_m: float | None = Field(
+        None, description="odometry heading error per metre walked (rad/m)"
+    )
+    random_walk_m_per_sqrt_m: float | None = Field(
+        None, ge=0, description="position noise std per sqrt(metre) walked"
+    )
+    heading_random_walk_rad_per_sqrt_m: float | None = Field(
+        None, ge=0, description="heading noise std per sqrt(metre) walked"
+    )
+    heading_random_walk_rad_per_sqrt_rad: float | None = Field(
+        None, ge=0, description="heading noise std per sqrt(radian) turned (feet slip)"
+    )
+    turn_slip_m_per_sqrt_rad: float | None = Field(
+        None, ge=0, description="position noise std per sqrt(radian) turned (feet slip)"
+    )
+    level: float = Field(
+        1.0, ge=0, le=20, description="multiplies every error magnitude (robustness studies)"
+    )
+    seed: int = Field(0, ge=0, description="seed of the per-run errors and the noise")
 
 
 class CameraRealismConfig(_Model):
@@ -107,6 +134,9 @@ class SimConfig(_Model):
         True,
         description="start standing in StandInit with motors on (as Webots' NAO does); "
         "false = at rest in Crouch, motors off, like a NAO just switched on",
+    )
+    camera_sway: bool = Field(
+        True, description="torso and head sway and bob while walking, as on a NAO"
     )
 
 
@@ -223,8 +253,12 @@ class Config(_Model):
         return (sx - 2 * off, sy - 2 * off)
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain JSON-able dict of the resolved config."""
-        return self.model_dump(mode="json")
+        """Plain JSON-able dict of the resolved config, without secrets (``robot.password``).
+
+        Everything naoloc writes to disk (config copies, dataset and map metadata,
+        evaluation outputs) comes from here, so a secret never reaches a file.
+        """
+        return self.model_dump(mode="json", exclude=_SECRETS)
 
     def to_yaml(self) -> str:
         """The resolved config as YAML text."""
@@ -232,7 +266,11 @@ class Config(_Model):
 
     def with_overrides(self, overrides: dict[str, Any]) -> Config:
         """A new config with a nested dict of keys replaced (validated again)."""
-        return _validate(_deep_merge(self.to_dict(), overrides), "<overrides>")
+        return _validate(_deep_merge(self.model_dump(), overrides), "<overrides>")
+
+
+# Keys never written anywhere (model_dump ``exclude`` form); see Config.to_dict.
+_SECRETS: dict[str, Any] = {"robot": {"password"}}
 
 
 def _deep_merge(base: dict[str, Any], extra: dict[str, Any]) -> dict[str, Any]:

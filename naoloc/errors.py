@@ -70,3 +70,19 @@ class UrlError(BackendError):
 
 class ImageError(RobotError):
     """A camera image whose size, byte count or colorspace does not add up."""
+
+
+class NoEstimate(NaolocError):
+    """Nothing was recognised, so there is no pose to give (``naoloc localize`` exits 3).
+
+    Attributes:
+        result: The JSON-able result line to print anyway (pose fields null, method "none").
+        exit_code: The process exit code the CLI returns (3).
+    """
+
+    exit_code = 3
+
+    def __init__(self, message: str, result: dict[str, object]) -> None:
+        """An error carrying the result line to print."""
+        super().__init__(message)
+        self.result = result

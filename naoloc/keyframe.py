@@ -2,8 +2,10 @@
 
 Frames: a keyframe's ``pose`` is the robot's FRAME_ROBOT origin in the map frame (the
 odometry frame at the start of the survey: x forward, y left, theta counter-clockwise,
-metres and radians). The camera sits on the head; its pose in FRAME_ROBOT follows
-from HeadYaw and HeadPitch with the nominal NAO geometry below.
+metres and radians). The camera's pose in FRAME_ROBOT is what the robot's own kinematics
+said when the picture was taken (``ALMotion.getTransform(camera, FRAME_ROBOT, True)``,
+kept in :attr:`Keyframe.camera_pose`); keyframes without it (older datasets) fall back to
+the nominal StandInit kinematics of :func:`camera_in_robot`.
 """
 
 from __future__ import annotations
@@ -13,12 +15,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from naoloc.constants import BOTTOM_CAMERA_IN_HEAD, FOV_V5, NECK_OFFSET_Z, TOP_CAMERA_IN_HEAD
+from naoloc import kinematics
+from naoloc.constants import FOV_V5, FRAME_ROBOT
 from naoloc.geometry import Pose2D
 
-# Height of the torso frame above the floor in StandInit (knees bent), metres. With straight
-# legs it is 0.333 m (HipOffsetZ + Thigh + Tibia + FootHeight); StandInit sits lower.
-TORSO_HEIGHT_STANDINIT = 0.3195
+# NAO's StandInit leg angles (rad): the torso leans 0.1 rad forward with the feet flat.
+STANDINIT_LEGS = {"HipPitch": -0.45, "KneePitch": 0.70, "AnklePitch": -0.35}
 
 
 @dataclass(frozen=True, slots=True)
@@ -60,44 +62,62 @@ class CameraInfo:
         return CameraInfo(width, height, self.hfov, self.vfov, self.index)
 
 
-def camera_in_robot(
-    head_yaw: float, head_pitch: float, index: int = 0, torso_height: float = TORSO_HEIGHT_STANDINIT
-) -> np.ndarray:
-    """Pose of a camera's optical frame in FRAME_ROBOT as a 4x4 matrix.
+# Largest image side a camera model may have, pixels (NAO's largest is 2560 x 1920).
+MAX_IMAGE_SIDE = 8192
 
+
+def check_camera(cam: CameraInfo) -> CameraInfo:
+    """``cam`` when it is a usable pinhole model, else ValueError naming the bad field.
+
+    Width and height must be 1 to :data:`MAX_IMAGE_SIDE` pixels, both fields of view
+    finite and strictly between 0 and pi radians (a zero field of view has no focal length),
+    and the index 0 (top) or 1 (bottom).
+
+    Raises:
+        ValueError: One phrase naming the field and its value.
+    """
+    for name, side in (("width", cam.width), ("height", cam.height)):
+        if not 1 <= side <= MAX_IMAGE_SIDE:
+            raise ValueError(f"camera {name} is {side} px, must be 1 to {MAX_IMAGE_SIDE}")
+    for name, fov in (("hfov", cam.hfov), ("vfov", cam.vfov)):
+        if not (math.isfinite(fov) and 0.0 < fov < math.pi):
+            raise ValueError(f"camera {name} is {fov} rad, must be between 0 and pi")
+    if cam.index not in (0, 1):
+        raise ValueError(f"camera index is {cam.index}, must be 0 (top) or 1 (bottom)")
+    return cam
+
+
+def standinit_angles(head_yaw: float = 0.0, head_pitch: float = 0.0) -> dict[str, float]:
+    """Joint angles (rad) of StandInit's legs with the given head angles (rad)."""
+    angles = {"HeadYaw": float(head_yaw), "HeadPitch": float(head_pitch)}
+    for side in "LR":
+        angles.update({f"{side}{joint}": value for joint, value in STANDINIT_LEGS.items()})
+    return angles
+
+
+# Height of the torso frame above the floor in StandInit (knees bent), metres, from the
+# kinematics (0.3204 m). With straight legs it is 0.333 m (HipOffsetZ + Thigh + Tibia + Foot).
+TORSO_HEIGHT_STANDINIT = float(kinematics.robot_to_torso(standinit_angles())[2, 3])
+
+
+def camera_in_robot(head_yaw: float, head_pitch: float, index: int = 0) -> np.ndarray:
+    """Nominal pose of a camera's optical frame in FRAME_ROBOT (StandInit), as a 4x4 matrix.
+
+    The robot's own reading (:attr:`Keyframe.camera_pose`) is preferred; this is the
+    forward kinematics of StandInit (its forward lean included) for keyframes without it.
     The optical frame is OpenCV's: z along the view, x to the image right, y down.
 
     Args:
         head_yaw: HeadYaw in radians (positive turns left).
         head_pitch: HeadPitch in radians (positive looks down).
         index: 0 top camera, 1 bottom camera.
-        torso_height: Torso height above the floor in metres.
 
     Returns:
         ``T`` such that ``p_robot = T @ [p_cam, 1]``.
     """
-    (cx, cy, cz), cam_pitch = TOP_CAMERA_IN_HEAD if index == 0 else BOTTOM_CAMERA_IN_HEAD
-    cyaw, syaw = math.cos(head_yaw), math.sin(head_yaw)
-    rz = np.array([[cyaw, -syaw, 0.0], [syaw, cyaw, 0.0], [0.0, 0.0, 1.0]])
-    pitch = head_pitch + cam_pitch
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])  # positive pitch looks down
-    # Optical axes in the head frame (x fwd, y left, z up): z_opt = x, x_opt = -y, y_opt = -z.
-    opt = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
-    head_origin = np.array([0.0, 0.0, torso_height + NECK_OFFSET_Z])
-    # The camera offset turns with yaw and pitch (HeadPitch axis is at the head origin).
-    offset_head = np.array([cx, cy, cz])
-    rot_head = rz @ np.array(
-        [
-            [math.cos(head_pitch), 0.0, math.sin(head_pitch)],
-            [0.0, 1.0, 0.0],
-            [-math.sin(head_pitch), 0.0, math.cos(head_pitch)],
-        ]
-    )
-    t = np.eye(4)
-    t[:3, :3] = rz @ ry @ opt
-    t[:3, 3] = head_origin + rot_head @ offset_head
-    return t
+    name = "CameraTop" if index == 0 else "CameraBottom"
+    t = kinematics.transform(name, FRAME_ROBOT, standinit_angles(head_yaw, head_pitch))
+    return kinematics.optical_from_camera(t)
 
 
 @dataclass(frozen=True, slots=True)
@@ -113,6 +133,9 @@ class Keyframe:
         stamp: Capture time in seconds.
         command_pose: Robot pose in the map frame from commands (getRobotPosition(False)).
         true_pose: Ground-truth pose in the room frame, when a simulator knows it.
+        camera_pose: The camera's 4x4 pose in FRAME_ROBOT (NAOqi camera frame: x along the
+            view), 16 floats row-major, as ``ALMotion.getTransform(camera, FRAME_ROBOT,
+            True)`` gave it at capture; None when unknown.
     """
 
     image: np.ndarray
@@ -123,6 +146,18 @@ class Keyframe:
     stamp: float = 0.0
     command_pose: Pose2D | None = None
     true_pose: Pose2D | None = None
+    camera_pose: tuple[float, ...] | None = None
+
+    def camera_matrix(self) -> np.ndarray:
+        """The camera's optical frame (OpenCV) in FRAME_ROBOT as a 4x4 matrix.
+
+        From the robot's own kinematics at capture (:attr:`camera_pose`), else the nominal
+        StandInit kinematics for the head angles.
+        """
+        if self.camera_pose is None:
+            return camera_in_robot(self.head_yaw, self.head_pitch, self.camera.index)
+        t = np.asarray(self.camera_pose, dtype=np.float64).reshape(4, 4)
+        return kinematics.optical_from_camera(t)
 
     def gray(self) -> np.ndarray:
         """The image as ``(h, w)`` uint8 grey."""

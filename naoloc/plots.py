@@ -157,12 +157,16 @@ def plot_localization(
     grid = fig.add_gridspec(rows, max(1, len(shown)), height_ratios=[5, 1][:rows])
     ax = fig.add_subplot(grid[0, :])
     _draw_map(ax, vmap)
-    est = Pose2D(estimate.x, estimate.y, estimate.theta)
-    _arrow(ax, est, "tab:green", f"estimate (confidence {estimate.confidence:.2f})")
-    text = f"estimate ({est.x:.2f}, {est.y:.2f}) m"
+    if estimate.found:
+        est = Pose2D(estimate.x, estimate.y, estimate.theta)
+        _arrow(ax, est, "tab:green", f"estimate (confidence {estimate.confidence:.2f})")
+        text = f"estimate ({est.x:.2f}, {est.y:.2f}) m"
+    else:
+        text = "no estimate: nothing recognised"
     if truth is not None:
         _arrow(ax, truth, "black", "truth")
-        text += f", error {est.distance(truth):.2f} m"
+        if estimate.found:
+            text += f", error {est.distance(truth):.2f} m"
     ax.set_title(title or text)
     ax.legend(loc="best", fontsize=8)
     for i, kf in enumerate(shown):
@@ -204,5 +208,58 @@ def plot_estimates(
             ax.annotate(str(i + 1), (truth.x, truth.y), textcoords="offset points", xytext=(5, 5))
     ax.set_title(title or f"{len(pairs)} localizations")
     ax.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    return save_figure(fig, Path(path))
+
+
+def plot_go_home(
+    vmap: VisualMap,
+    trail: Sequence[Pose2D],
+    estimates: Sequence[Estimate],
+    path: str | Path,
+    *,
+    blocked: Sequence[Pose2D] = (),
+    truth: Pose2D | None = None,
+    reached: bool = False,
+    title: str | None = None,
+) -> Path:
+    """Draw a walk home: start, the path believed walked, every fix, blocked places, the end.
+
+    Args:
+        vmap: The map.
+        trail: Believed poses from the start to the end (map frame).
+        estimates: Every localization's estimate (misses are counted, not drawn).
+        path: PNG file to write.
+        blocked: Where walks were blocked (map frame).
+        truth: True final pose in the map frame, when known.
+        reached: Whether the robot believes it arrived.
+        title: Figure title; default a summary.
+
+    Returns:
+        The path written.
+    """
+    fig = new_figure(9.5, 7.0)
+    ax = fig.add_subplot(1, 1, 1)
+    _draw_map(ax, vmap)
+    if trail:
+        xy = np.array([[p.x, p.y] for p in trail])
+        ax.plot(xy[:, 0], xy[:, 1], "-", color="tab:green", lw=2, label="path (believed)")
+        ax.plot([xy[0, 0]], [xy[0, 1]], "s", color="tab:green", ms=10, label="start")
+        _arrow(ax, trail[-1], "darkgreen", "end (believed)")
+    found = [e for e in estimates if e.found]
+    if found:
+        ax.plot([e.x for e in found], [e.y for e in found], "x", color="tab:orange", ms=8,
+                label=f"fixes ({len(found)})")  # fmt: skip
+    misses = len(estimates) - len(found)
+    if misses:
+        ax.plot([], [], " ", label=f"no estimate: {misses} looks")
+    if blocked:
+        ax.plot([b.x for b in blocked], [b.y for b in blocked], "X", color="red", ms=10,
+                label="blocked walk")  # fmt: skip
+    if truth is not None:
+        _arrow(ax, truth, "black", "end (truth)")
+    verdict = "reached home" if reached else "did not reach home"
+    ax.set_title(title or f"go-home: {verdict}")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, borderaxespad=0.0)
     fig.tight_layout()
     return save_figure(fig, Path(path))

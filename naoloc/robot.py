@@ -100,6 +100,18 @@ class Motion(Protocol):
         """Joint angles in radians, in the order of the expanded names."""
         ...
 
+    def getPosition(self, name: str, frame: int, useSensorValues: bool) -> list[float]:
+        """``[x, y, z, wx, wy, wz]`` of an effector ("CameraTop", "Head", "Torso"...) in a frame.
+
+        Frames FRAME_TORSO 0, FRAME_WORLD 1, FRAME_ROBOT 2; metres; roll-pitch-yaw radians
+        (``wy > 0`` looks down).
+        """
+        ...
+
+    def getTransform(self, name: str, frame: int, useSensorValues: bool) -> list[float]:
+        """The effector's 4x4 transform in a frame, 16 floats row-major (metres)."""
+        ...
+
 
 @runtime_checkable
 class VideoDevice(Protocol):
@@ -194,6 +206,13 @@ class SimControl(Protocol):
 
     def sim_time(self) -> float:
         """Simulated seconds since the backend started."""
+        ...
+
+    def true_camera_pose(self, camera_index: int = 0) -> list[float]:
+        """True ``[x, y, z, wx, wy, wz]`` of a camera (NAOqi camera frame), room frame.
+
+        Metres; angles as ALMotion.getPosition gives them (``wy > 0`` looks down).
+        """
         ...
 
 

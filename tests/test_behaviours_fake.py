@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -20,46 +19,54 @@ from naoloc import connect
 from naoloc.behaviours import frames_per_lap, go_home, localize, survey
 from naoloc.commands.survey import record_survey
 from naoloc.config import Config, load_config
-from naoloc.dataset import read_dataset
+from naoloc.dataset import partial_path_for, read_dataset
 from naoloc.geometry import Pose2D, relative_pose
 from naoloc.keyframe import Keyframe
+from naoloc.mapping.localizer import Estimate, no_estimate
 from naoloc.robot import Robot
 
 pytest.importorskip("naoloc.backends.fake")
 
 
 def small_cfg(**survey: Any) -> Config:
-    """A 3 x 3 m fake room; 1 lap of a 1.5 m square in 0.5 m steps (12 frames)."""
+    """A 3 x 3 m fake room; 1 lap of a 1.5 m square in 0.5 m steps (12 frames).
+
+    Exact odometry (profile ideal): these tests are about the behaviours' plumbing; a NAO's
+    drift walks this small room's survey into a wall (issue 12 keeps it off by vision).
+    """
     return load_config(
         {
             "robot": {"backend": "fake"},
-            "world": {"room": {"size_m": [3.0, 3.0], "seed": 3}},
+            "world": {"room": {"size_m": [3.0, 3.0], "seed": 3}, "odometry": {"profile": "ideal"}},
             "survey": {"laps": 1, "step_m": 0.5, "wall_offset_m": 0.75, **survey},
             "go_home": {"tolerance_m": 0.15, "max_tries": 4},
         }
     )
 
 
-@dataclass(frozen=True)
-class _Estimate:
-    x: float
-    y: float
-    theta: float
-    confidence: float
-    mode: str
-    details: dict[str, Any] = field(default_factory=dict)
+# The survey circuit of small_cfg in the map frame (a 1.5 m square from the origin).
+_SIDE = [0.5, 1.0, 1.5]
+CIRCUIT = np.array(
+    [(v, 0.0, 0.0) for v in _SIDE] + [(1.5, v, 0.0) for v in _SIDE]
+    + [(1.5 - v, 1.5, 0.0) for v in _SIDE] + [(0.0, 1.5 - v, 0.0) for v in _SIDE]
+)  # fmt: skip
 
 
 class TruthMap:
-    """A map double: the estimate is the true map-frame pose plus a fixed offset (m)."""
+    """A map double: the estimate is the true map-frame pose plus a fixed offset (m).
+
+    Its keyframes are the survey circuit and it has no landmarks, so go-home's floor grid
+    knows only the walked floor (the rest of the room is unknown, not blocked).
+    """
 
     def __init__(self, robot: Robot, origin_room: Pose2D, *offsets: tuple[float, float]) -> None:
         self.robot = robot
         self.meta = {"origin_room_pose": origin_room.to_list()}
         self.offsets = offsets  # used in turn, one per call
         self.calls: list[int] = []
+        self.keyframe_poses = CIRCUIT
 
-    def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> _Estimate:
+    def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> Estimate:
         offset = self.offsets[len(self.calls) % len(self.offsets)]
         self.calls.append(len(queries))
         assert self.robot.sim is not None
@@ -67,7 +74,7 @@ class TruthMap:
             Pose2D.from_list(self.meta["origin_room_pose"]),
             Pose2D.from_list(self.robot.sim.true_pose()),
         )
-        return _Estimate(truth.x + offset[0], truth.y + offset[1], truth.theta, 1.0, mode)
+        return Estimate(truth.x + offset[0], truth.y + offset[1], truth.theta, 1.0, mode)
 
 
 def test_survey_walks_the_rectangle_and_records_each_step() -> None:
@@ -118,9 +125,10 @@ def test_interrupted_survey_stops_the_robot_and_keeps_frames(tmp_path: Path) -> 
             record_survey(robot, cfg, out)
         assert not robot.motion.moveIsActive()
         assert robot.motion.getRobotVelocity() == pytest.approx([0.0, 0.0, 0.0])
-    data = read_dataset(out)
+    assert not out.exists()  # only a survey that completed all its laps becomes out
+    data = read_dataset(partial_path_for(out))
     assert len(data.keyframes) == 4  # 3 steps, the turn, 2 more steps; the 6th move broke
-    assert data.complete  # the writer was closed on the way out
+    assert not data.complete and data.meta["reason"] == "interrupted (SIGINT)"
 
 
 @pytest.mark.parametrize(
@@ -209,13 +217,14 @@ def test_go_home_gives_up_after_max_tries() -> None:
         assert sim is not None
         origin = Pose2D.from_list(sim.true_pose())
         sim.teleport(1.5, 1.5, 0.0)
-        # 0.3 m off, alternating sides: the robot swings around the origin, never within 0.15.
-        vmap = TruthMap(robot, origin, (0.0, 0.3), (0.0, -0.3))
+        # Wedged: every walk is blocked at once, so the robot never gets home.
+        robot.motion.moveTo = lambda *a, **k: False  # type: ignore[method-assign]
+        vmap = TruthMap(robot, origin, (0.0, 0.0))
         result = go_home(robot, vmap, cfg)  # type: ignore[arg-type]
-    assert not result.reached
-    assert result.tries == cfg.go_home.max_tries
-    assert len(result.rounds) == cfg.go_home.max_tries + 1
-    assert result.error_m == pytest.approx(0.3, abs=0.1)
+    assert not result.reached and result.reason
+    assert result.tries <= cfg.go_home.max_tries
+    assert result.blocked_at  # each blocked walk was remembered and planned around
+    assert result.summary()["reached"] is False
 
 
 class UnsureMap(TruthMap):
@@ -225,10 +234,12 @@ class UnsureMap(TruthMap):
         super().__init__(robot, origin_room, (0.0, 0.0))
         self.confidences = list(confidences)
 
-    def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> _Estimate:
+    def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> Estimate:
         est = super().localize(queries, mode)
         conf = self.confidences[min(len(self.calls), len(self.confidences)) - 1]
-        return _Estimate(est.x, est.y, est.theta, conf, mode)
+        if conf <= 0.0:  # recognised nothing
+            return no_estimate(mode, "test: nothing recognised")
+        return Estimate(est.x, est.y, est.theta, conf, mode)
 
 
 @pytest.mark.parametrize(
@@ -265,7 +276,7 @@ def naoloc_modulo(angle: float) -> float:
     return modulo2PI(angle)
 
 
-def test_go_home_keeps_to_the_circuit_after_a_blocked_walk() -> None:
+def test_go_home_plans_around_a_blocked_walk() -> None:
     cfg = small_cfg()
     with connect(cfg) as robot:
         sim = robot.sim
@@ -278,21 +289,17 @@ def test_go_home_keeps_to_the_circuit_after_a_blocked_walk() -> None:
         def first_walk_blocked(*args: Any, **kwargs: Any) -> bool:
             moves.append(tuple(float(a) for a in args))
             if len(moves) == 1:
-                return False  # an obstacle on the straight line home
+                return False  # an obstacle on the way home
             return bool(real_move(*args, **kwargs))
 
         robot.motion.moveTo = first_walk_blocked  # type: ignore[method-assign]
         vmap = TruthMap(robot, origin, (0.0, 0.0))
-        # The survey circuit of small_cfg (map frame), which route_home follows.
-        side = [0.5, 1.0, 1.5]
-        circuit = [(v, 0.0) for v in side] + [(1.5, v) for v in side]
-        circuit += [(1.5 - v, 1.5) for v in side] + [(0.0, 1.5 - v) for v in side]
-        vmap.keyframe_poses = np.array([(x, y, 0.0) for x, y in circuit])  # type: ignore[attr-defined]
         result = go_home(robot, vmap, cfg, leg_m=5.0)  # type: ignore[arg-type]
     assert result.reached and result.error_m is not None and result.error_m < 0.15
-    assert result.tries >= 2
-    # After the block the robot walked the survey circuit: many short moves, not one.
-    assert len(moves) > 3
+    assert result.tries >= 2 and len(result.blocked_at) == 1
+    summary = result.summary()
+    assert summary["reached"] and summary["path_m"] > 1.0 and summary["blocked"] == 1
+    assert summary["method"] == "filter" and len(summary["covariance"]) == 3
 
 
 def test_go_home_steps_when_nothing_is_recognised() -> None:

@@ -81,11 +81,12 @@ def test_nearest_side_from_the_room_layout() -> None:
 
 
 def test_truncate_route_keeps_the_first_metres() -> None:
-    from naoloc.behaviours.go_home import straight_home, truncate_route
+    from naoloc.behaviours.go_home import _densify, truncate_route
     from naoloc.geometry import Pose2D
 
     here = Pose2D(3.0, 4.0, 1.0)
-    route = straight_home(here)  # 5 m to the origin
+    route = _densify(here, [Pose2D()])  # 5 m to the origin, waypoints at most 0.75 m apart
+    assert len(route) == 7 and route[-1] == Pose2D()
     leg = truncate_route(here, route, 2.0)
     assert math.hypot(leg[-1].x - 3.0, leg[-1].y - 4.0) == pytest.approx(2.0)
     assert leg[-1].x == pytest.approx(3.0 * 0.6) and leg[-1].y == pytest.approx(4.0 * 0.6)

@@ -3,11 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
-import signal
-import subprocess
-import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -18,9 +13,11 @@ from naoloc.dataset import read_dataset
 
 pytest.importorskip("naoloc.backends.fake")
 
+# Exact odometry (profile ideal): these tests are about the verbs; in a 3 x 3 m room a NAO's
+# drift walks the survey into a wall (keeping it off by vision is issue 12's).
 SMALL = {
     "robot": {"backend": "fake"},
-    "world": {"room": {"size_m": [3.0, 3.0], "seed": 5}},
+    "world": {"room": {"size_m": [3.0, 3.0], "seed": 5}, "odometry": {"profile": "ideal"}},
     "survey": {"laps": 1, "step_m": 0.25, "wall_offset_m": 0.75},
     "map": {"neurons": 40, "epochs": 30, "vocabulary_size": 64},
     "go_home": {"tolerance_m": 0.15, "max_tries": 4},
@@ -73,6 +70,22 @@ def test_survey_writes_dataset_and_json(
     assert (out.parent / "survey.config.yaml").is_file()
 
 
+def test_survey_is_chunked_indexed_and_has_room_to_map(surveyed: tuple[Path, Path]) -> None:
+    from mcap.reader import make_reader
+
+    from naoloc.dataset import _protobuf_fields
+
+    _, out = surveyed
+    with open(out, "rb") as f:
+        reader = make_reader(f)
+        summary = reader.get_summary()
+        assert summary is not None and len(summary.chunk_indexes) == 24  # one per frame
+        frames = {(tf[2][0], tf[3][0]) for tf in (
+            _protobuf_fields(m.data) for _, _, m in reader.iter_messages(topics=["/tf"])
+        )}  # fmt: skip
+    assert (b"room", b"map") in frames and (b"map", b"base_link") in frames
+
+
 def test_survey_json_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     cfg = _cfg(tmp_path, survey={"laps": 1, "step_m": 0.5, "wall_offset_m": 0.75})
     out = tmp_path / "s.mcap"
@@ -81,46 +94,6 @@ def test_survey_json_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) ->
     assert result["frames"] == 12 and result["laps"] == 1
     assert result["path_m"] == pytest.approx(6.0, rel=0.05)
     assert result["wall_s"] > 0 and result["dataset"] == str(out)
-
-
-def test_sigint_stops_survey_and_leaves_a_readable_dataset(tmp_path: Path) -> None:
-    # 20 laps (1200 frames, about 13 s): the interrupt after 5 frames can never race the
-    # survey's own end, even when this test's polling lags on a loaded machine.
-    cfg = _cfg(tmp_path, survey={"laps": 20, "step_m": 0.1, "wall_offset_m": 0.75})
-    out = tmp_path / "int.mcap"
-    env = dict(os.environ, PYTHONUNBUFFERED="1")
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "naoloc.cli", "survey", "-c", str(cfg), "-o", str(out)],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        env=env,
-    )
-    try:
-        deadline = time.monotonic() + 60
-        frames = 0
-        part = out.with_name(out.name + ".part")  # frames go here until the survey ends
-        while frames < 5 and time.monotonic() < deadline and proc.poll() is None:
-            time.sleep(0.2)
-            if part.exists():
-                try:
-                    frames = len(read_dataset(part).keyframes)
-                except Exception:
-                    frames = 0
-        assert proc.poll() is None, "the survey ended before it could be interrupted"
-        t0 = time.monotonic()
-        proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate(timeout=10)
-        elapsed = time.monotonic() - t0
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-    assert elapsed < 2.0, err
-    assert proc.returncode == 130, err
-    assert b"interrupted" in err and err.count(b"\n") == 1
-    data = read_dataset(out)
-    assert 5 <= len(data.keyframes) < 20 * 60
-    assert not part.exists()
 
 
 def test_build_map_refuses_a_foreign_file(

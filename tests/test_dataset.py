@@ -1,4 +1,7 @@
-"""Survey datasets: MCAP round trip, Foxglove schemas, partial and corrupt files."""
+"""Survey datasets: MCAP round trip, Foxglove schemas and indexes, partial files.
+
+Corrupt and hostile files are in test_dataset_corrupt.py.
+"""
 
 from __future__ import annotations
 
@@ -9,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from naoloc.dataset import DatasetWriter, read_dataset
+from naoloc.dataset import DatasetWriter, _protobuf_fields, partial_path_for, read_dataset
 from naoloc.errors import DatasetError
 from naoloc.geometry import Pose2D
 from naoloc.keyframe import CameraInfo, Keyframe
@@ -31,14 +34,17 @@ def _keyframe(i: int, rng: np.random.Generator) -> Keyframe:
     )
 
 
-def _write(path: Path, n: int, finish: bool = True) -> list[Keyframe]:
+META = {"room_size_m": [6, 6], "origin_room_pose": [1.0, 2.0, 0.5]}
+
+
+def _write(path: Path, n: int, finish: bool = True, complete: bool = True) -> list[Keyframe]:
     rng = np.random.default_rng(0)
     frames = [_keyframe(i, rng) for i in range(n)]
-    writer = DatasetWriter(path, config={"survey": {"laps": 1}}, meta={"room_size_m": [6, 6]})
+    writer = DatasetWriter(path, config={"survey": {"laps": 1}}, meta=META)
     for i, kf in enumerate(frames):
         writer.write(kf, lap=i // 3, odometry=Pose2D(5.0, 5.0, 1.0))
     if finish:
-        writer.close()
+        writer.close(complete=complete, reason="" if complete else "interrupted (SIGINT)")
     else:
         writer._file.flush()  # the process "dies" here: no summary, no footer
     return frames
@@ -50,7 +56,7 @@ def test_round_trip_keeps_every_field(tmp_path: Path) -> None:
     data = read_dataset(path)
     assert data.complete
     assert data.config == {"survey": {"laps": 1}}
-    assert data.meta == {"room_size_m": [6, 6]}
+    assert data.meta == {**META, "complete": True, "frames": 5}
     assert data.laps == [0, 0, 0, 1, 1]
     assert len(data.keyframes) == 5
     for want, got in zip(frames, data.keyframes, strict=True):
@@ -97,20 +103,96 @@ def test_foxglove_schemas_are_inside(tmp_path: Path) -> None:
 def test_writer_that_died_leaves_every_frame(tmp_path: Path) -> None:
     path = tmp_path / "s.mcap"
     _write(path, 4, finish=False)
-    data = read_dataset(path.with_name("s.mcap.part"))
-    assert not data.complete
+    assert not path.exists()
+    data = read_dataset(tmp_path / "s.partial.mcap")
+    assert not data.complete and data.meta["complete"] is False
+    assert "died" in data.meta["reason"]
     assert len(data.keyframes) == 4
 
 
 def test_truncated_tail_keeps_the_whole_frames(tmp_path: Path) -> None:
     path = tmp_path / "s.mcap"
     _write(path, 4, finish=False)
-    raw = path.with_name("s.mcap.part").read_bytes()
+    raw = partial_path_for(path).read_bytes()
     cut = tmp_path / "cut.mcap"
-    cut.write_bytes(raw[: len(raw) - 300])  # inside the last frame's records
+    cut.write_bytes(raw[: len(raw) - 300])  # inside the last frame's chunk
     data = read_dataset(cut)
-    assert len(data.keyframes) == 3
+    assert len(data.keyframes) == 3 and not data.complete
     assert [kf.pose.x for kf in data.keyframes] == pytest.approx([0.0, 0.2, 0.4])
+
+
+def test_partial_path_keeps_the_mcap_extension() -> None:
+    assert partial_path_for(Path("runs/s.mcap")) == Path("runs/s.partial.mcap")
+    assert partial_path_for(Path("runs/s")) == Path("runs/s.partial.mcap")
+
+
+def test_interrupted_writer_keeps_the_complete_dataset_and_a_marked_partial(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / "s.mcap"
+    _write(path, 5)
+    before = path.read_bytes()
+    _write(path, 3, complete=False)  # e.g. Ctrl-C during a second survey
+    assert path.read_bytes() == before  # the complete dataset is untouched
+    partial = read_dataset(tmp_path / "s.partial.mcap")
+    assert not partial.complete and len(partial.keyframes) == 3
+    assert partial.meta["complete"] is False and partial.meta["frames"] == 3
+    assert partial.meta["reason"] == "interrupted (SIGINT)"
+    assert read_dataset(path).complete
+
+
+def test_context_manager_exit_by_exception_keeps_a_partial(tmp_path: Path) -> None:
+    path = tmp_path / "s.mcap"
+    with pytest.raises(RuntimeError), DatasetWriter(path, config={}, meta={}) as w:
+        w.write(_keyframe(0, np.random.default_rng(0)))
+        raise RuntimeError("robot fell")
+    assert not path.exists()
+    data = read_dataset(partial_path_for(path))
+    assert not data.complete and data.meta["reason"] == "RuntimeError: robot fell"
+
+
+def test_file_is_chunked_and_indexed_with_room_to_map(tmp_path: Path) -> None:
+    from mcap.reader import make_reader
+
+    path = tmp_path / "s.mcap"
+    _write(path, 4)
+    with open(path, "rb") as f:
+        reader = make_reader(f)
+        summary = reader.get_summary()
+        assert summary is not None
+        assert len(summary.chunk_indexes) == 4  # one chunk per frame
+        assert all(c.compression == "zstd" for c in summary.chunk_indexes)
+        assert all(c.message_index_offsets for c in summary.chunk_indexes)
+        # Seeking by time through the indexes reaches the third frame's image directly.
+        t2 = round(1.5 * 2 * 1e9)
+        msgs = list(reader.iter_messages(topics=["/camera/image"], starting_at=t2))
+        assert [m.log_time for _, _, m in msgs] == [t2, round(1.5 * 3 * 1e9)]
+        tfs = [_protobuf_fields(m.data) for _, _, m in reader.iter_messages(topics=["/tf"])]
+    room = [tf for tf in tfs if tf[2] == [b"room"] and tf[3] == [b"map"]]
+    assert len(room) == 4  # with every frame
+    translation = _protobuf_fields(room[0][4][0])
+    x, y = (np.frombuffer(translation[k][0], "<f8")[0] for k in (1, 2))
+    assert (x, y) == (1.0, 2.0)  # the meta's origin_room_pose
+    rotation = _protobuf_fields(room[0][5][0])
+    qz, qw = (np.frombuffer(rotation[k][0], "<f8")[0] for k in (3, 4))
+    assert 2 * math.atan2(qz, qw) == pytest.approx(0.5)
+    assert {(tf[2][0], tf[3][0]) for tf in tfs} == {
+        (b"room", b"map"), (b"map", b"base_link"), (b"base_link", b"camera")
+    }  # fmt: skip
+
+
+def test_no_room_to_map_without_an_origin(tmp_path: Path) -> None:
+    from mcap.reader import make_reader
+
+    path = tmp_path / "s.mcap"
+    with DatasetWriter(path, config={}, meta={"origin_room_pose": None}) as w:
+        w.write(_keyframe(0, np.random.default_rng(0)))
+    with open(path, "rb") as f:
+        parents = {
+            _protobuf_fields(m.data)[2][0]
+            for _, _, m in make_reader(f).iter_messages(topics=["/tf"])
+        }
+    assert parents == {b"map", b"base_link"}
 
 
 @pytest.mark.parametrize(
@@ -152,44 +234,54 @@ def test_empty_survey_says_no_frames(tmp_path: Path) -> None:
     path = tmp_path / "empty.mcap"
     writer = DatasetWriter(path, config={}, meta={})
     writer._file.flush()  # died before its first frame
+    assert not writer.partial_path.exists()  # the file takes that name at the first frame
     with pytest.raises(DatasetError, match="no frames"):
-        read_dataset(writer.part_path)
+        read_dataset(writer._file.name)
 
 
 def test_a_run_without_frames_keeps_the_existing_dataset(tmp_path: Path) -> None:
     path = tmp_path / "s.mcap"
     _write(path, 3)
     before = path.read_bytes()
-    DatasetWriter(path, config={}, meta={}).close()  # e.g. the robot failed at once
+    _write(path, 2, complete=False)  # an interrupted run...
+    partial = partial_path_for(path).read_bytes()
+    DatasetWriter(path, config={}, meta={}).close(complete=False)  # ...then one that failed at once
     assert path.read_bytes() == before
-    assert not path.with_name("s.mcap.part").exists()
-    _write(path, 2)  # a run with frames replaces it
+    assert partial_path_for(path).read_bytes() == partial  # the earlier partial is kept too
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.mcap", "s.partial.mcap"]
+    _write(path, 2)  # a complete run with frames replaces it
     assert len(read_dataset(path).keyframes) == 2
 
 
-def test_garbled_record_is_a_dataset_error(tmp_path: Path) -> None:
+def test_missing_dataset_points_at_the_partial_one(tmp_path: Path) -> None:
+    path = tmp_path / "s.mcap"
+    _write(path, 2, complete=False)
+    with pytest.raises(DatasetError, match=r"s.mcap: no such dataset; .*s.partial.mcap"):
+        read_dataset(path)
+
+
+def test_flipped_byte_is_a_dataset_error(tmp_path: Path) -> None:
     path = tmp_path / "s.mcap"
     _write(path, 2)
     raw = path.read_bytes()
-    needle = json.dumps(-1.57).encode()
-    assert needle in raw
-    path.write_bytes(raw.replace(b'"head_yaw": ' + needle, b'"head_yaw": "abc"', 1))
-    with pytest.raises(DatasetError, match="garbles"):
+    assert json.dumps(-1.57).encode() not in raw  # the records are compressed
+    middle = len(raw) // 2
+    path.write_bytes(raw[:middle] + bytes([raw[middle] ^ 0x40]) + raw[middle + 1 :])
+    with pytest.raises(DatasetError, match=f"{path}: corrupt MCAP at byte") as info:
         read_dataset(path)
+    assert "\n" not in str(info.value)
 
 
 def test_newer_version_is_refused(tmp_path: Path) -> None:
     path = tmp_path / "s.mcap"
-    _write(path, 1)
-    raw = path.read_bytes()
-    assert raw.count(b"\x01\x00\x00\x001") >= 1  # the version string "1" with its length
-    path.write_bytes(
-        raw.replace(
-            b"\x07\x00\x00\x00version\x01\x00\x00\x001", b"\x07\x00\x00\x00version\x01\x00\x00\x009"
-        )
-    )
+    _write(path, 1, finish=False)  # no data-section CRC yet, so the edit is not a CRC error
+    part = partial_path_for(path)
+    raw = part.read_bytes()
+    version = b"\x07\x00\x00\x00version\x01\x00\x00\x002"
+    assert raw.count(version) == 1  # the version string "2" with its length
+    part.write_bytes(raw.replace(version, version[:-1] + b"9"))
     with pytest.raises(DatasetError, match="newer"):
-        read_dataset(path)
+        read_dataset(part)
 
 
 def test_closed_writer_refuses_frames(tmp_path: Path) -> None:

@@ -92,9 +92,7 @@ def test_plans_name_every_variant_once() -> None:
         assert v.strategy == ("scan" if v.mode == "verified" else "paper")
     # A drift survey's odometry is scaled from the config's own.
     odo = cfg.with_overrides(plan.surveys["drift-x4"]).world.odometry
-    assert odo.heading_bias_rad_per_m == pytest.approx(
-        4 * cfg.world.odometry.heading_bias_rad_per_m
-    )
+    assert odo.level == pytest.approx(4 * cfg.world.odometry.level)
     assert make_plan(cfg, "random", ("main",)).variants == plan.variants[:1]
 
 

@@ -29,7 +29,9 @@ def world() -> tuple[Config, list[Keyframe], list[tuple[list[Keyframe], Pose2D]]
     cfg = load_config(
         {
             "robot": {"backend": "fake"},
-            "world": {"room": {"size_m": [4.0, 4.0], "seed": 3}},
+            # Exact odometry: these tests are about the map; under a NAO's drift a 4 m room's
+            # survey strays (keeping it on the circuit by vision is issue 12's).
+            "world": {"room": {"size_m": [4.0, 4.0], "seed": 3}, "odometry": {"profile": "ideal"}},
             "survey": {"wall_offset_m": 0.9},
         }
     )

@@ -89,7 +89,7 @@ def test_server_killed_mid_survey_ends_the_client_with_one_line_within_2s(
             text=True,
         )
         try:
-            part = dataset.with_name(dataset.name + ".part")  # written until the survey ends
+            part = tmp_path / "survey.partial.mcap"  # written until the survey completes
             started = _wait_for(lambda: part.exists() and part.stat().st_size > 20_000, 60)
             assert started, "the survey did not start writing frames"
             server.process.send_signal(signal.SIGKILL)
@@ -105,7 +105,8 @@ def test_server_killed_mid_survey_ends_the_client_with_one_line_within_2s(
     assert len(lines) == 1 and "Traceback" not in err, err
     assert "connection to NAOqi" in lines[0] and "lost" in lines[0]
     assert ended_after < 2.0, f"client noticed the dead server only after {ended_after:.2f} s"
-    assert read_dataset(dataset).keyframes  # the frames taken before the loss are kept
+    assert f"kept in {part}" in lines[0]
+    assert read_dataset(part).keyframes  # the frames taken before the loss are kept
 
 
 _DRIVER = """

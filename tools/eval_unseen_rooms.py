@@ -1,13 +1,18 @@
-"""Random protocol in rooms the code has never been tuned to, and the pooled figures.
+"""The random or anywhere protocol in rooms the code has never been tuned to, pooled.
 
 Each room comes from a seed (posters, textures, furniture and its size); pass seeds that
 appear nowhere in the repository, or none to draw three from os.urandom. Nothing is
-written into the repository: outputs go to --out (default: a folder under /tmp).
+written into the repository: outputs go to --out (default: a folder under /tmp). ``--set``
+changes any config key of every room (dotted path = YAML value), e.g. dim light or one
+picture per wall; ``--small`` draws rooms of 3.5-4.5 x 2.8-3.5 m like the paper's lab.
 
     MUJOCO_GL=egl .venv/bin/python tools/eval_unseen_rooms.py -n 60 --workers 2
+    MUJOCO_GL=egl .venv/bin/python tools/eval_unseen_rooms.py --protocol anywhere -n 60
+    MUJOCO_GL=egl .venv/bin/python tools/eval_unseen_rooms.py --set world.sim.light=0.3
     MUJOCO_GL=egl .venv/bin/python tools/eval_unseen_rooms.py --seeds 123 456 789 -n 60
 
-Prints one line per room and the pooled median / 90th percentile position error.
+Prints one line per room and the pooled median / 90th percentile position error and the
+share of poses with no estimate (a miss, counted as infinitely wrong in the percentiles).
 """
 
 from __future__ import annotations
@@ -21,38 +26,66 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
 
 from naoloc.config import Config, load_config
 from naoloc.evaluation.pipeline import evaluate
 from naoloc.evaluation.stats import summarize
 
 
-def room_config(seed: int, backend: str = "mujoco") -> Config:
-    """A room drawn from ``seed``: sides 5-8 m, 4-6 posters per wall, furniture.
+def room_config(
+    seed: int,
+    backend: str = "mujoco",
+    *,
+    small: bool = False,
+    overrides: dict[str, Any] | None = None,
+) -> Config:
+    """A room drawn from ``seed``: sides 5-8 m (small: about 4 x 3 m), 4-6 pictures a wall.
 
     Args:
         seed: Room seed (also the world's room.seed).
         backend: "mujoco" or "fake".
+        small: A lab-sized room with the survey 0.5 m from the walls and 3 laps.
+        overrides: Nested config keys applied to every room.
 
     Returns:
-        A config with the survey 1 m from the walls, 2 laps, 0.2 m steps.
+        A config with the survey 1 m from the walls, 2 laps, 0.2 m steps (small: 0.5 m, 3).
     """
     rng = np.random.default_rng(seed)
-    sx, sy = (round(float(v), 1) for v in rng.uniform(5.0, 8.0, size=2))
-    return load_config(
-        {
-            "robot": {"backend": backend},
-            "world": {
-                "room": {
-                    "size_m": [sx, sy],
-                    "seed": int(seed),
-                    "posters_per_wall": int(rng.integers(4, 7)),
-                    "furniture": True,
-                }
-            },
-            "survey": {"laps": 2, "step_m": 0.2, "wall_offset_m": 1.0},
-        }
-    )
+    if small:
+        sx, sy = round(float(rng.uniform(3.5, 4.5)), 1), round(float(rng.uniform(2.8, 3.5)), 1)
+        survey = {"laps": 3, "step_m": 0.2, "wall_offset_m": 0.5}
+    else:
+        sx, sy = (round(float(v), 1) for v in rng.uniform(5.0, 8.0, size=2))
+        survey = {"laps": 2, "step_m": 0.2, "wall_offset_m": 1.0}
+    base = {
+        "robot": {"backend": backend},
+        "world": {
+            "room": {
+                "size_m": [sx, sy],
+                "seed": int(seed),
+                "posters_per_wall": int(rng.integers(4, 7)),
+                "furniture": True,
+            }
+        },
+        "survey": survey,
+    }
+    return load_config(base).with_overrides(overrides or {})
+
+
+def parse_sets(items: list[str]) -> dict[str, Any]:
+    """``["a.b=1", "c=x"]`` -> ``{"a": {"b": 1}, "c": "x"}`` (values parsed as YAML)."""
+    out: dict[str, Any] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise SystemExit(f"--set {item!r}: expected KEY.PATH=VALUE")
+        node = out
+        *parents, leaf = key.split(".")
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[leaf] = yaml.safe_load(value)
+    return out
 
 
 def main() -> int:
@@ -63,15 +96,24 @@ def main() -> int:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--backend", default="mujoco", choices=("mujoco", "fake"))
     parser.add_argument("--out", type=Path, default=None, help="output folder (not the repo)")
+    parser.add_argument("--protocol", default="random", choices=("random", "anywhere"))
+    parser.add_argument("--small", action="store_true", help="lab-sized rooms (about 4 x 3 m)")
+    parser.add_argument(
+        "--set", action="append", default=[], metavar="KEY=VALUE",
+        help="config override for every room, e.g. world.sim.light=0.3",
+    )  # fmt: skip
     args = parser.parse_args()
+    overrides = parse_sets(args.set)
     seeds = args.seeds or [int.from_bytes(os.urandom(4), "little") >> 1 for _ in range(3)]
     out = args.out or Path(tempfile.mkdtemp(prefix="naoloc_unseen_"))
     errors: list[float] = []
     rooms: list[dict[str, Any]] = []
     t0 = time.monotonic()
     for seed in seeds:
-        cfg = room_config(seed, args.backend)
-        line = evaluate(cfg, "random", args.n, seed, out / f"room_{seed}", workers=args.workers)
+        cfg = room_config(seed, args.backend, small=args.small, overrides=overrides)
+        line = evaluate(
+            cfg, args.protocol, args.n, seed, out / f"room_{seed}", workers=args.workers
+        )
         recs = json.loads((out / f"room_{seed}" / "estimates.json").read_text(encoding="utf-8"))
         errors += [r["error_m"] if r["error_m"] is not None else float("nan")
                    for r in recs if r["variant"] == "main"]  # fmt: skip
@@ -81,6 +123,7 @@ def main() -> int:
             f"room seed {seed} {cfg.world.room.size_m[0]:g} x {cfg.world.room.size_m[1]:g} m: "
             f"n {line['n']} median {line['median_error_m']} m p90 {line['p90_error_m']} m "
             f"max {line['max_error_m']} m heading {line['median_heading_error_deg']} deg "
+            f"no estimate {line['no_estimate']} "
             f"map {line['map_build_s']} s localize {line['localize_ms_median']} ms "
             f"wall {line['wall_s']} s",
             flush=True,
@@ -93,6 +136,9 @@ def main() -> int:
         "p90_error_m": round(s.p90_m, 4),
         "max_error_m": round(s.max_m, 4),
         "within_0_3m": round(s.within_0_3m, 4),
+        "no_estimate": int(sum(1 for e in errors if not np.isfinite(e))),
+        "protocol": args.protocol,
+        "overrides": overrides,
         "wall_s": round(time.monotonic() - t0, 1),
         "out": str(out),
     }

@@ -5,9 +5,14 @@ yet real enough that feature extraction and the survey -> map -> localize pipeli
 
 - Walking is kinematic, within NAO's walk speeds, at the 50 Hz ALMotion cycle; the
   robot (a disc of 0.15 m) never enters a wall: a walk that would is stopped.
-- ``getRobotPosition(False)`` integrates the commands, ``getRobotPosition(True)`` adds the
-  seeded drift of ``world.odometry``; both read ``[0, 0, 0]`` at ``cfg.start_pose()``.
-- Frames are ray-cast in numpy from the true pose and head angles.
+- Walking is open-loop on odometry, as on a NAO: ``getRobotPosition(False)`` integrates the
+  commands, ``getRobotPosition(True)`` the legs' measured motion (a little joint-sensor
+  noise), and the body strays from both by ``world.odometry`` (profile ``nao``: a NAO's
+  published drift; ``ideal``: exact); both read ``[0, 0, 0]`` at ``cfg.start_pose()``.
+- Frames are ray-cast in numpy from the true camera pose: the true robot pose and the
+  forward kinematics of the joints (``naoloc/kinematics.py``; StandInit leans forward), with
+  the walk's sway (``world.sim.camera_sway``). ``getPosition``/``getTransform`` use the same
+  kinematics; ``robot.sim.true_camera_pose(i)`` gives the truth.
 - The robot starts standing in StandInit with its motors on, as Webots' NAO does; with
   ``world.sim.start_awake: false`` it starts at rest in Crouch (motors off), like a NAO that
   was just switched on, and walks only after ``motion.wakeUp()``.

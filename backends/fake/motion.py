@@ -36,6 +36,7 @@ from naoloc.constants import (
 )
 from naoloc.errors import MotionError, RobotError
 from naoloc.geometry import Pose2D
+from naoloc.kinematics import position6d
 from naoloc.robot import Angles, Names, expand_joint_names
 
 _IGNORED_MOVE_CONFIG = ("StepHeight", "TorsoWx", "TorsoWy")
@@ -205,7 +206,7 @@ class FakeMotion:
         w.start_walk(task)
 
         def finished() -> bool:
-            return w.task is not task
+            return w.task is not task and w.sway.settled  # the walk ends with the body still
 
         def reached() -> bool:
             return task.done
@@ -256,7 +257,7 @@ class FakeMotion:
         w.check_open()
         if isinstance(w.task, VelocityWalk):
             raise MotionError("waitUntilMoveIsFinished would never return: move() is active")
-        w.run_until(lambda: w.task is None, "waitUntilMoveIsFinished")
+        w.run_until(lambda: w.task is None and w.sway.settled, "waitUntilMoveIsFinished")
 
     def moveIsActive(self) -> bool:
         """True while a walk task runs."""
@@ -274,7 +275,7 @@ class FakeMotion:
         """``[x, y, theta]`` in FRAME_WORLD: True = sensor odometry (drifts), False = commands."""
         w = self._world
         w.tick()
-        return (w.sensor.pose if useSensors else w.command).normalized().to_list()
+        return (w.sensor if useSensors else w.command).normalized().to_list()
 
     def getNextRobotPosition(self) -> list[float]:
         """Where the current move ends (moveTo) or where it is in 0.5 s (move), FRAME_WORLD."""
@@ -332,6 +333,21 @@ class FakeMotion:
         joints = expand_joint_names(names)
         source = w.joint_actual if useSensors else w.joint_cmd
         return [float(source[j]) for j in joints]
+
+    def getPosition(self, name: str, frame: int, useSensorValues: bool) -> list[float]:
+        """``[x, y, z, wx, wy, wz]`` of an effector in a frame (m, rad; ``wy > 0`` looks down).
+
+        Names: CameraTop, CameraBottom, Head, Torso, LLeg, RLeg; frames FRAME_TORSO 0,
+        FRAME_WORLD 1, FRAME_ROBOT 2. From the joints' forward kinematics (naoloc.kinematics).
+        """
+        self._world.tick()
+        return position6d(self._world.fk_transform(str(name), int(frame), bool(useSensorValues)))
+
+    def getTransform(self, name: str, frame: int, useSensorValues: bool) -> list[float]:
+        """The effector's 4x4 transform in a frame, 16 floats row-major (metres)."""
+        self._world.tick()
+        t = self._world.fk_transform(str(name), int(frame), bool(useSensorValues))
+        return [float(v) for v in t.reshape(-1)]
 
 
 def _parse_move_to(

@@ -8,6 +8,7 @@ from naoloc.backends.fake.world import ROBOT_RADIUS_M, FakeWorld
 
 from naoloc.errors import RobotError
 from naoloc.geometry import Pose2D
+from naoloc.kinematics import position6d
 
 
 class FakeSim:
@@ -27,6 +28,17 @@ class FakeSim:
         self._world.check_open()
         p = self._world.true_pose
         return (p.x, p.y, p.theta)
+
+    def true_camera_pose(self, camera_index: int = 0) -> list[float]:
+        """True ``[x, y, z, wx, wy, wz]`` of a camera, room frame (m, rad; ``wy > 0`` looks down).
+
+        Raises:
+            RobotError: For a camera index other than 0 (top) or 1 (bottom).
+        """
+        self._world.check_open()
+        if camera_index not in (0, 1):
+            raise RobotError(f"camera index {camera_index} does not exist (0 top, 1 bottom)")
+        return position6d(self._world.camera_in_room(int(camera_index)))
 
     def teleport(self, x: float, y: float, theta: float) -> None:
         """Put the robot at ``(x, y, theta)`` (room frame); stops walking; odometry not told.

@@ -1,8 +1,8 @@
 """ALVideoDevice of the fake robot: ray-cast frames of the textured room.
 
-A frame is rendered on demand from the TRUE robot pose, the measured head angles and
-the head camera geometry of :func:`naoloc.keyframe.camera_in_robot` (torso height of the
-current posture). Its timestamp is the simulated time; its view angles are
+A frame is rendered on demand from the TRUE camera pose: the true robot pose and the
+forward kinematics of the measured joints (:mod:`naoloc.kinematics`, StandInit's lean and
+the walk's sway included). Its timestamp is the simulated time; its view angles are
 ``(+hfov/2, +vfov/2, -hfov/2, -vfov/2)`` (left, top, right, bottom).
 """
 
@@ -26,7 +26,7 @@ from naoloc.constants import (
 )
 from naoloc.errors import HandleError, RobotError
 from naoloc.image import Frame, frame_to_naoqi, from_rgb
-from naoloc.keyframe import camera_in_robot
+from naoloc.kinematics import optical_from_camera
 
 MAX_SUBSCRIBERS = 64
 
@@ -136,13 +136,7 @@ class FakeVideo:
         """
         w = self._world
         width, height = RESOLUTIONS[resolution]
-        yaw, pitch = w.head_angles()
-        robot = w.true_pose
-        c, s = np.cos(robot.theta), np.sin(robot.theta)
-        room_robot = np.array(
-            [[c, -s, 0.0, robot.x], [s, c, 0.0, robot.y], [0.0, 0.0, 1.0, 0.0], [0, 0, 0, 1.0]]
-        )
-        cam = room_robot @ camera_in_robot(yaw, pitch, camera, w.torso_height())
+        cam = optical_from_camera(w.camera_in_room(camera))  # joints' kinematics, with sway
         hfov, vfov = self._fov
         rgb = self._renderer.render(cam, width, height, hfov, vfov)
         r = self._realism

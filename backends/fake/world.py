@@ -8,6 +8,10 @@ their targets and the body along the current walk task.
 Frames: the ground truth ``true_pose`` is the FRAME_ROBOT origin in the room frame;
 ``command`` (``getRobotPosition(False)``) and ``sensor`` (``getRobotPosition(True)``) are
 FRAME_WORLD poses, both ``[0, 0, 0]`` at the start pose.
+
+Walking is open-loop on odometry, as on a NAO: a walk task plans on the commanded
+odometry, and the body moves by what :class:`naoloc.simulated.odometry.OdometryModel`
+makes of each increment (``world.odometry``: profile ``nao`` drifts, ``ideal`` is exact).
 """
 
 from __future__ import annotations
@@ -15,12 +19,14 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from naoloc.backends.fake.joints import STANDING, joint_limits, posture_angles, torso_height
-from naoloc.backends.fake.odometry import DriftingOdometry
+import numpy as np
+from naoloc.backends.fake.joints import STANDING, joint_limits, posture_angles
 from naoloc.backends.fake.walk import PathWalk, SpeedLimits, VelocityWalk
 
+from naoloc import kinematics
 from naoloc.config import Config
 from naoloc.constants import (
+    FRAME_ROBOT,
     JOINT_NAMES,
     MOTION_CYCLE_S,
     WALK_SPEED,
@@ -29,6 +35,8 @@ from naoloc.constants import (
 )
 from naoloc.errors import MotionError, RobotError
 from naoloc.geometry import Pose2D
+from naoloc.simulated.odometry import OdometryModel
+from naoloc.simulated.sway import WalkSway
 
 ROBOT_RADIUS_M = 0.15  # the robot's footprint, a disc, for wall collisions
 LEG_JOINTS = tuple(j for j in JOINT_NAMES if "Hip" in j or "Knee" in j or "Ankle" in j)
@@ -46,8 +54,7 @@ class FakeWorld:
         dt: ALMotion cycle, seconds.
         time_s: Simulated seconds since creation.
         true_pose: Ground truth, room frame.
-        command: Commanded odometry, FRAME_WORLD.
-        sensor: Drifting sensor odometry (its ``pose`` is FRAME_WORLD).
+        odometry: Commanded and sensor odometry (FRAME_WORLD) and the walk's error model.
         task: The running walk task, or None.
         velocity: Body velocity of the last cycle ``(vx, vy, wz)``, FRAME_ROBOT.
         posture: Name of the last posture reached ("Unknown" after joint commands to legs).
@@ -66,8 +73,8 @@ class FakeWorld:
         self.time_s = 0.0
         self._cycles = 0
         self.true_pose = Pose2D(*cfg.start_pose())
-        self.command = Pose2D()
-        self.sensor = DriftingOdometry(cfg.world.odometry)
+        self.odometry = OdometryModel(cfg.world.odometry)
+        self.sway = WalkSway(cfg.world.sim.camera_sway)
         self.task: PathWalk | VelocityWalk | None = None
         self.last_move_failed = False
         self.velocity = (0.0, 0.0, 0.0)
@@ -113,6 +120,7 @@ class FakeWorld:
     def _cycle(self) -> None:
         self._step_joints()
         self._step_walk()
+        self.sway.step(self.task is not None and self.awake, self.dt)
         self._cycles += 1
         self.time_s = self._cycles * self.dt
 
@@ -123,15 +131,20 @@ class FakeWorld:
         """True when every leg joint is stiff (stiffness >= 0.5)."""
         return all(self.stiffness[j] >= 0.5 for j in LEG_JOINTS)
 
+    @property
+    def command(self) -> Pose2D:
+        """Commanded odometry (``getRobotPosition(False)``), FRAME_WORLD."""
+        return self.odometry.command
+
+    @property
+    def sensor(self) -> Pose2D:
+        """Sensor odometry (``getRobotPosition(True)``), FRAME_WORLD."""
+        return self.odometry.sensor
+
     def is_free(self, x: float, y: float, clearance: float = ROBOT_RADIUS_M) -> bool:
         """True when a disc of ``clearance`` m at room-frame ``(x, y)`` touches no wall."""
         sx, sy = self.size
         return clearance <= x <= sx - clearance and clearance <= y <= sy - clearance
-
-    def torso_height(self) -> float:
-        """Torso height above the floor (m) for the current posture (StandInit if unknown)."""
-        name = self.posture if self.posture != "Unknown" else "StandInit"
-        return torso_height(name)
 
     def start_walk(self, task: PathWalk | VelocityWalk) -> None:
         """Replace the current walk task; walking starts from a walk-ready posture."""
@@ -159,15 +172,13 @@ class FakeWorld:
             inc = task.step(self.dt)
         else:
             inc = task.step(self.command, self.dt)
-        new_true = self.true_pose * inc
+        # The odometry counts the step even when a wall stops the body (the feet slip).
+        new_true = self.true_pose * self.odometry.walk(inc)
         if not self.is_free(new_true.x, new_true.y):
             self.last_move_failed = True
             self.stop_walk()
             return
         self.true_pose = Pose2D(new_true.x, new_true.y, _wrap(new_true.theta))
-        self.command = self.command * inc
-        self.command = Pose2D(self.command.x, self.command.y, _wrap(self.command.theta))
-        self.sensor.add(inc)
         if isinstance(task, VelocityWalk):
             self.velocity = (task.vx, task.vy, task.wz)
         else:
@@ -232,6 +243,24 @@ class FakeWorld:
         self.joint_target.update(target)
         self.joint_actual.update(target)
         self.posture = name
+
+    def fk_transform(self, name: str, frame: int, use_sensors: bool) -> np.ndarray:
+        """4x4 pose of an effector in a NAOqi frame from the joints (see naoloc.kinematics).
+
+        Sensors: measured joints, the sway and the sensor odometry; else the commands.
+        """
+        angles = self.joint_actual if use_sensors else self.joint_cmd
+        odometry = self.sensor if use_sensors else self.command
+        offset = self.sway.torso_offset() if use_sensors else None
+        return kinematics.transform(name, frame, angles, odometry.to_list(), offset)
+
+    def camera_in_room(self, index: int) -> np.ndarray:
+        """True 4x4 pose of a camera (NAOqi camera frame) in the room frame."""
+        name = "CameraTop" if index == 0 else "CameraBottom"
+        local = kinematics.transform(
+            name, FRAME_ROBOT, self.joint_actual, torso_offset=self.sway.torso_offset()
+        )
+        return kinematics.world_to_robot(self.true_pose.to_list()) @ local
 
     def head_angles(self) -> tuple[float, float]:
         """Measured ``(HeadYaw, HeadPitch)`` in radians."""

@@ -15,6 +15,7 @@ from typing import Any
 from naoloc.backends.mujoco.nao import POSTURES, STANDING_POSTURES
 from naoloc.backends.mujoco.sim import Simulation
 
+from naoloc import kinematics
 from naoloc.constants import POSTURES as POSTURE_NAMES
 from naoloc.errors import MotionError, RobotError
 from naoloc.geometry import Pose2D, pose2DInverse
@@ -140,11 +141,13 @@ class MujocoMotion:
         if not self._ready_to_walk():
             sim.cycle()
             return False
-        start = sim.true_pose2d()
+        start = sim.sensor_odometry  # open loop on odometry, as NAO's walk
         sim.walk.set_goals([start * p for p in points], start)
         while sim.walk.mode == "target":
             sim.cycle()
         sim.cycle(_SETTLE_CYCLES)
+        while not sim.sway.settled:  # the walk ends with the body still
+            sim.cycle()
         return bool(sim.walk.result)
 
     @staticmethod
@@ -202,6 +205,8 @@ class MujocoMotion:
         while sim.walk.mode == "target":
             sim.cycle()
         sim.cycle()
+        while not sim.sway.settled:  # the walk ends with the body still
+            sim.cycle()
 
     def moveIsActive(self) -> bool:
         """True while a move task runs."""
@@ -230,7 +235,7 @@ class MujocoMotion:
         sim = self._sim
         sim.cycle()
         if sim.walk.mode == "target" and sim.walk.goals:
-            rest = pose2DInverse(sim.true_pose2d()) * sim.walk.goals[-1]
+            rest = pose2DInverse(sim.sensor_odometry) * sim.walk.goals[-1]
             return (sim.command_odometry * rest).normalized().to_list()
         return sim.command_odometry.normalized().to_list()
 
@@ -262,6 +267,28 @@ class MujocoMotion:
         joints = expand_joint_names(names)
         self._sim.cycle()
         return self._sim.joint_angles(joints, bool(useSensors))
+
+    def getPosition(self, name: str, frame: int, useSensorValues: bool) -> list[float]:
+        """``[x, y, z, wx, wy, wz]`` of an effector in a frame (m, rad; ``wy > 0`` looks down).
+
+        Names: CameraTop, CameraBottom, Head, Torso, LLeg, RLeg; frames FRAME_TORSO 0,
+        FRAME_WORLD 1, FRAME_ROBOT 2. From the joints' forward kinematics (naoloc.kinematics).
+        """
+        self._sim.cycle()
+        return kinematics.position6d(self._transform(name, frame, useSensorValues))
+
+    def getTransform(self, name: str, frame: int, useSensorValues: bool) -> list[float]:
+        """The effector's 4x4 transform in a frame, 16 floats row-major (metres)."""
+        self._sim.cycle()
+        t = self._transform(name, frame, useSensorValues)
+        return [float(v) for v in t.reshape(-1)]
+
+    def _transform(self, name: str, frame: int, use_sensors: bool) -> Any:
+        sim, sensors = self._sim, bool(use_sensors)
+        angles = sim.fk_angles(sensors)
+        odometry = sim.sensor_odometry if sensors else sim.command_odometry
+        offset = sim.sway.torso_offset() if sensors else None
+        return kinematics.transform(str(name), int(frame), angles, odometry.to_list(), offset)
 
     def getBodyNames(self, name: str) -> list[str]:
         """Joint names of a chain ("Body", "Head", "LArm", ...) or of one joint."""

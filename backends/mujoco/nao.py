@@ -1,4 +1,4 @@
-"""Facts about the NAO model that the backend needs besides the MJCF: postures, leg height.
+"""Facts about the NAO model that the backend needs besides the MJCF: postures, head limits.
 
 Joint limits and speeds live in ``model/nao.xml`` (joint ranges and ``speed/<joint>``
 custom numerics) and are read from the compiled model; see ``model/README.md`` for sources.
@@ -13,17 +13,12 @@ from typing import Final
 
 import numpy as np
 
-from naoloc.keyframe import TORSO_HEIGHT_STANDINIT
+from naoloc import kinematics
 
 MODEL_DIR: Final = Path(__file__).resolve().parent / "model"
 NAO_XML: Final = MODEL_DIR / "nao.xml"
 
-# Link lengths in metres (NAO H25 "Links" documentation page).
-HIP_OFFSET_Z: Final = 0.085
-THIGH_LENGTH: Final = 0.100
-TIBIA_LENGTH: Final = 0.1029
-FOOT_HEIGHT: Final = 0.04519
-
+# Link lengths (NAO H25 "Links" documentation page) live in naoloc/kinematics.py.
 ROBOT_RADIUS: Final = 0.15  # m, radius of the collision capsule around the body
 
 # NAOqi's head anti-collision limits: HeadPitch range (deg) as a function of HeadYaw (deg),
@@ -52,32 +47,9 @@ def head_pitch_limits(head_yaw: float) -> tuple[float, float]:
     return math.radians(lo), math.radians(hi)
 
 
-def torso_height(hip_pitch: float, knee_pitch: float) -> float:
-    """Height of the torso frame above the floor for a leg pose (sagittal plane, feet flat).
-
-    Args:
-        hip_pitch: HipPitch in radians (negative moves the thigh forward).
-        knee_pitch: KneePitch in radians (positive bends the knee).
-
-    Returns:
-        Height in metres.
-    """
-    return (
-        HIP_OFFSET_Z
-        + THIGH_LENGTH * math.cos(hip_pitch)
-        + TIBIA_LENGTH * math.cos(hip_pitch + knee_pitch)
-        + FOOT_HEIGHT
-    )
-
-
-def _knee_for_height(hip_pitch: float, height: float) -> float:
-    """KneePitch that puts the torso at ``height`` m with the given HipPitch (rad)."""
-    rest = (height - HIP_OFFSET_Z - FOOT_HEIGHT - THIGH_LENGTH * math.cos(hip_pitch)) / TIBIA_LENGTH
-    return math.acos(max(-1.0, min(1.0, rest))) - hip_pitch
-
-
-def _legs(hip: float, knee: float) -> dict[str, float]:
-    ankle = -(hip + knee)  # keeps the feet flat with an upright torso
+def _legs(hip: float, knee: float, ankle: float | None = None) -> dict[str, float]:
+    if ankle is None:
+        ankle = -(hip + knee)  # keeps the feet flat with an upright torso
     out: dict[str, float] = {}
     for side in "LR":
         out.update(
@@ -113,19 +85,18 @@ def _arms(
 
 
 _HEAD0 = {"HeadYaw": 0.0, "HeadPitch": 0.0}
-_STANDINIT_HIP = -0.45
-_STANDINIT_KNEE = _knee_for_height(_STANDINIT_HIP, TORSO_HEIGHT_STANDINIT)
 
 # Joint angles (rad) of NAOqi's predefined postures, approximated from the figures of the
-# ALRobotPosture documentation with the torso kept upright (the model does not tilt or lie
-# down: Sit and Lying postures only set the joints). StandInit's legs put the torso at
-# naoloc.keyframe.TORSO_HEIGHT_STANDINIT, so cameras match naoloc.keyframe.camera_in_robot.
+# ALRobotPosture documentation. StandInit's legs are NAO's (hip -0.45, knee 0.70, ankle
+# -0.35): with the feet flat the torso leans 0.1 rad forward (naoloc/kinematics.py places it);
+# the other postures keep the torso upright (the model does not lie down: Sit and Lying
+# postures only set the joints).
 POSTURES: Final = MappingProxyType(
     {
         "StandInit": {
             **_HEAD0,
             **_arms(1.40, 0.30, -1.39, 1.00, 0.25),
-            **_legs(_STANDINIT_HIP, _STANDINIT_KNEE),
+            **_legs(-0.45, 0.70, -0.35),
         },
         "Stand": {**_HEAD0, **_arms(1.40, 0.20, -1.39, 0.50, 0.25), **_legs(-0.20, 0.40)},
         "StandZero": {**_HEAD0, **_arms(0.0, 0.0, 0.0, 0.0349, 0.0), **_legs(0.0, 0.0)},
@@ -140,6 +111,5 @@ STANDING_POSTURES: Final = ("StandInit", "Stand", "StandZero")
 
 
 def posture_torso_height(name: str) -> float:
-    """Torso height (m) of a predefined posture, from its left-leg angles."""
-    angles = POSTURES[name]
-    return torso_height(angles["LHipPitch"], angles["LKneePitch"])
+    """Torso height (m) above the floor of a predefined posture, feet flat (kinematics)."""
+    return float(kinematics.robot_to_torso(POSTURES[name])[2, 3])

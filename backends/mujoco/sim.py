@@ -5,6 +5,12 @@ frame; the base joints ``base_x, base_y, base_yaw`` are the robot's true pose in
 FRAME_WORLD (odometry) starts at the robot's pose when the simulation is created, and is
 never told about teleports.
 
+Walking is open-loop on odometry, as on a NAO: the walk controller steers on the sensor
+odometry, each cycle's odometry increment goes through
+:class:`naoloc.simulated.odometry.OdometryModel` (``world.odometry``), and the base is
+driven at the true velocity the model returns, so physics (walls, furniture) decides where
+the body goes while the odometry keeps counting what the legs did.
+
 Time is simulated only: nothing here reads the wall clock except the optional real-time
 pacing (``world.sim.realtime``). Every call of :meth:`Simulation.cycle` advances the
 physics by one ALMotion cycle. The same config gives the same run, step for step.
@@ -27,22 +33,25 @@ from naoloc.backends.mujoco.nao import (
     ROBOT_RADIUS,
     STANDING_POSTURES,
     head_pitch_limits,
-    torso_height,
 )
 from naoloc.backends.mujoco.room import RoomLayout, build_layout, room_mjcf
 from naoloc.backends.mujoco.walk import WalkController, WalkLimits
 
+from naoloc import kinematics
 from naoloc.config import Config
 from naoloc.constants import FOV_V5, FOV_V6, JOINT_NAMES, MOTION_CYCLE_S
 from naoloc.errors import BackendError, RobotError
 from naoloc.geometry import Pose2D, modulo2PI, pose2DInverse
-from naoloc.keyframe import TORSO_HEIGHT_STANDINIT
+from naoloc.simulated.odometry import OdometryModel
+from naoloc.simulated.sway import WalkSway
 
 # mujoco reads MUJOCO_GL when first imported: import_mujoco chooses the platform first.
 mujoco: Any = import_mujoco()
 
 CAMERA_NAMES = ("CameraTop", "CameraBottom")
 _LEG_JOINTS = tuple(n for n in JOINT_NAMES if n[1:4] in ("Hip", "Kne", "Ank"))
+# MuJoCo's camera frame (looks along -z, x right, y up) -> NAOqi's (x along the view, y left).
+_GL_TO_NAOQI = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]])
 _GAIT_HZ = 1.0  # strides per second: two steps per second, NAO's maximum step frequency
 _GAIT_AMPLITUDE = 0.18  # rad of hip flexion at full speed (a visible, not a dynamic, gait)
 
@@ -116,20 +125,28 @@ class Simulation:
             for p in self.layout.posters
         }
         self.walk = WalkController(WalkLimits(), self.cycle_s)
-        seed = cfg.world.sim.seed
-        self._odo_rng = np.random.default_rng([seed, cfg.world.odometry.seed, 0x0D0])
+        self.odometry = OdometryModel(cfg.world.odometry)
+        self.sway = WalkSway(cfg.world.sim.camera_sway)
         self.command_velocity = (0.0, 0.0, 0.0)
         self._gait_phase = 0.0
         self.posture_name = "StandInit"
         self.set_posture_now("StandInit")
         x, y, th = cfg.start_pose()
         self._place(x, y, th)
-        self.command_odometry = Pose2D()
-        self.sensor_odometry = Pose2D()
         self.closed = False
         self._realtime = cfg.world.sim.realtime
         self._wall0 = time.monotonic()
         self._sim0 = float(self.data.time)
+
+    @property
+    def command_odometry(self) -> Pose2D:
+        """Integrated commands (``getRobotPosition(False)``), FRAME_WORLD."""
+        return self.odometry.command
+
+    @property
+    def sensor_odometry(self) -> Pose2D:
+        """Sensor odometry (``getRobotPosition(True)``), FRAME_WORLD."""
+        return self.odometry.sensor
 
     # ----------------------------------------------------------------------------- joints
     def _init_joints(self) -> None:
@@ -148,8 +165,8 @@ class Simulation:
         self._walk_ids = [
             _obj_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, n) for n in ("walk_x", "walk_y", "walk_yaw")
         ]
-        self._torso_act = _obj_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "torso_z")
-        self._torso_qadr = int(m.jnt_qposadr[_obj_id(m, mujoco.mjtObj.mjOBJ_JOINT, "torso_z")])
+        self._torso_body = _obj_id(m, mujoco.mjtObj.mjOBJ_BODY, "torso")
+        self._cam_ids = [_obj_id(m, mujoco.mjtObj.mjOBJ_CAMERA, n) for n in CAMERA_NAMES]
         self._lhip = self.joint_index["LHipPitch"]
         self._lknee = self.joint_index["LKneePitch"]
         self._r_hyp = self.joint_index["RHipYawPitch"]
@@ -228,8 +245,8 @@ class Simulation:
             i = self.joint_index[n]
             self.target[i] = self.command[i] = a
             self.data.qpos[self._qadr[i]] = a
-        self.data.qpos[self._torso_qadr] = self._torso_offset()
         self.posture_name = name
+        self.place_torso()
         self._write_joint_ctrl()
         mujoco.mj_forward(self.model, self.data)
 
@@ -250,14 +267,54 @@ class Simulation:
                 return name
         return "Unknown"
 
-    def _torso_offset(self) -> float:
-        h = torso_height(float(self.command[self._lhip]), float(self.command[self._lknee]))
-        return h - TORSO_HEIGHT_STANDINIT
+    def fk_angles(self, use_sensors: bool) -> dict[str, float]:
+        """Joint angles (rad) for the forward kinematics: measured or commanded.
+
+        The legs' gait swing (visual) is left out: the torso's pose comes from the stance legs
+        (the commanded posture) plus the walk's sway.
+        """
+        angles = dict(zip(JOINT_NAMES, (float(v) for v in self.command), strict=True))
+        if use_sensors:
+            q = self.data.qpos[self._qadr]
+            walking = self._gait_phase != 0.0
+            for i, n in enumerate(JOINT_NAMES):
+                if not (walking and n in _LEG_JOINTS):
+                    angles[n] = float(q[i])
+        return angles
+
+    def torso_in_robot(self, use_sensors: bool = True) -> np.ndarray:
+        """The torso's 4x4 pose in FRAME_ROBOT: legs' kinematics, plus the sway if sensed."""
+        t = kinematics.robot_to_torso(self.fk_angles(use_sensors))
+        offset = self.sway.torso_offset() if use_sensors else None
+        return t if offset is None else offset @ t
+
+    def place_torso(self) -> None:
+        """Put the torso body where the kinematics (and the sway) say (model pos and quat)."""
+        t = self.torso_in_robot(True)
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, np.ascontiguousarray(t[:3, :3]).reshape(-1))
+        self.model.body_pos[self._torso_body] = t[:3, 3]
+        self.model.body_quat[self._torso_body] = quat
+
+    def true_camera_pose(self, camera_index: int = 0) -> list[float]:
+        """True pose of a camera, room frame: ``[x, y, z, wx, wy, wz]`` (m, rad).
+
+        The frame is NAOqi's camera frame (x along the view, y left, z up); the angles are
+        ALMotion.getPosition's roll-pitch-yaw, so ``wy > 0`` looks down.
+
+        Raises:
+            RobotError: For a camera index other than 0 (top) or 1 (bottom).
+        """
+        if camera_index not in (0, 1):
+            raise RobotError(f"camera index {camera_index} does not exist (0 top, 1 bottom)")
+        mujoco.mj_kinematics(self.model, self.data)
+        cam = self._cam_ids[camera_index]
+        rot = self.data.cam_xmat[cam].reshape(3, 3) @ _GL_TO_NAOQI
+        return kinematics.position6d(kinematics.homogeneous(rot, self.data.cam_xpos[cam]))
 
     def _write_joint_ctrl(self, gait: np.ndarray | None = None) -> None:
         q = self.command if gait is None else self.command + gait
         self.data.ctrl[self._act_ids] = q[self._act_mask]
-        self.data.ctrl[self._torso_act] = self._torso_offset()
 
     # ----------------------------------------------------------------------------- stepping
     def cycle(self, n: int = 1) -> None:
@@ -280,7 +337,7 @@ class Simulation:
         start = self.true_pose2d()
         if not self.awake and self.walk.active:
             self.walk.stop()
-        cmd = self.walk.command(start)
+        cmd = self.walk.command(self.sensor_odometry)
         self.command_velocity = cmd
         dt = self.cycle_s
         step = self.rate * dt
@@ -288,7 +345,7 @@ class Simulation:
         lo, hi = head_pitch_limits(float(self.command[self._head_yaw]))  # the shell, on the way
         self.command[self._head_pitch] = min(hi, max(lo, float(self.command[self._head_pitch])))
         self._write_joint_ctrl(self._gait_offsets(cmd, dt))
-        vx, vy, wz = cmd
+        vx, vy, wz = self._true_twist(cmd, dt)
         ix, iy, iw = self._walk_ids
         for _ in range(self.substeps):
             yaw = float(d.qpos[2])
@@ -299,7 +356,21 @@ class Simulation:
             mujoco.mj_step(m, d)
         moved = pose2DInverse(start) * self.true_pose2d()
         self.walk.observe(cmd, moved)
-        self._integrate_odometry(cmd, moved)
+        self.sway.step(any(v != 0.0 for v in cmd) and self.awake, dt)
+        self.place_torso()
+
+    def _true_twist(self, cmd: tuple[float, float, float], dt: float) -> tuple[float, float, float]:
+        """Count a commanded twist in the odometry; the body's true twist (FRAME_ROBOT)."""
+        vx, vy, wz = cmd
+        if vx == 0.0 and vy == 0.0 and wz == 0.0:
+            return cmd
+        half = wz * dt / 2
+        c, s = math.cos(half), math.sin(half)
+        odo = Pose2D((c * vx - s * vy) * dt, (s * vx + c * vy) * dt, wz * dt)
+        true = self.odometry.walk(odo)
+        wt = true.theta / dt
+        c, s = math.cos(wt * dt / 2), math.sin(wt * dt / 2)
+        return ((c * true.x + s * true.y) / dt, (-s * true.x + c * true.y) / dt, wt)
 
     def _gait_offsets(self, cmd: tuple[float, float, float], dt: float) -> np.ndarray | None:
         lim = self.walk.limits
@@ -316,29 +387,6 @@ class Simulation:
             out[self.joint_index[f"{side}KneePitch"]] = 2 * lift
             out[self.joint_index[f"{side}AnklePitch"]] = -lift
         return out
-
-    def _integrate_odometry(self, cmd: tuple[float, float, float], moved: Pose2D) -> None:
-        dt = self.cycle_s
-        vx, vy, wz = cmd
-        half = wz * dt / 2
-        c, s = math.cos(half), math.sin(half)
-        self.command_odometry = self.command_odometry * Pose2D(
-            (c * vx - s * vy) * dt, (s * vx + c * vy) * dt, wz * dt
-        )
-        odo = self.cfg.world.odometry
-        noise = [float(v) for v in self._odo_rng.standard_normal(3)]
-        dist = math.hypot(moved.x, moved.y)
-        turn = abs(modulo2PI(moved.theta))
-        step = Pose2D(
-            moved.x * (1 + odo.scale_error)
-            + noise[0] * odo.random_walk_m_per_sqrt_m * math.sqrt(dist),
-            moved.y * (1 + odo.scale_error)
-            + noise[1] * odo.random_walk_m_per_sqrt_m * math.sqrt(dist),
-            modulo2PI(moved.theta)
-            + odo.heading_bias_rad_per_m * dist
-            + noise[2] * odo.heading_random_walk_rad_per_sqrt_rad * math.sqrt(turn),
-        )
-        self.sensor_odometry = self.sensor_odometry * step
 
     def close(self) -> None:
         """Stop the walk and refuse further service calls; safe to call twice."""

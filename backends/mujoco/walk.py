@@ -2,9 +2,11 @@
 
 A pragmatic omnidirectional walk: the base is driven at a commanded velocity in FRAME_ROBOT
 (within NAO's limits) and the physics decides where it really goes (walls and furniture stop
-it). ``moveTo`` goals are tracked in the room frame with feedback on the true base pose, the
-way NAO's walk engine follows its own footstep plan; a move that stops making progress
-for a second (blocked by an obstacle) or runs out of time fails, as ``ALMotion/MoveFailed``.
+it). ``moveTo`` goals are tracked in FRAME_WORLD with feedback on the robot's own sensor
+odometry, never on the truth: NAO's walk engine executes its footstep plan open-loop on its
+odometry, so the body ends where the odometry error puts it. A move whose body stops making
+progress for a second (blocked by an obstacle) or that runs out of time fails, as
+``ALMotion/MoveFailed``.
 No mujoco here: pure arithmetic, driven once per ALMotion cycle by the simulation.
 """
 
@@ -38,7 +40,8 @@ class WalkLimits:
 class WalkController:
     """State of the current move task: idle, a velocity, or a list of goals.
 
-    Frames: goals are robot poses in the room frame; commands are twists in FRAME_ROBOT.
+    Frames: goals are robot poses in FRAME_WORLD (sensor odometry); commands are twists in
+    FRAME_ROBOT.
     """
 
     def __init__(self, limits: WalkLimits, cycle_s: float) -> None:
@@ -82,11 +85,11 @@ class WalkController:
         self.result = None
 
     def set_goals(self, goals: list[Pose2D], current: Pose2D) -> None:
-        """Walk through goal poses (room frame) in order; set a time budget from the path.
+        """Walk through goal poses (FRAME_WORLD) in order; set a time budget from the path.
 
         Args:
-            goals: Robot poses to reach, room frame.
-            current: True robot pose now, room frame.
+            goals: Robot poses to reach, FRAME_WORLD (sensor odometry).
+            current: Sensor odometry now, FRAME_WORLD.
         """
         lim = self.limits
         budget, prev = 0.0, current
@@ -112,11 +115,11 @@ class WalkController:
         self.velocity = (0.0, 0.0, 0.0)
         self.goals = []
 
-    def command(self, true_pose: Pose2D) -> tuple[float, float, float]:
+    def command(self, odometry: Pose2D) -> tuple[float, float, float]:
         """The twist to command for the next cycle (m/s, m/s, rad/s; FRAME_ROBOT).
 
         Args:
-            true_pose: True robot pose now, room frame.
+            odometry: Sensor odometry now, FRAME_WORLD.
         """
         if self.mode == "velocity":
             return self.velocity
@@ -124,7 +127,7 @@ class WalkController:
             return (0.0, 0.0, 0.0)
         lim = self.limits
         while self.goals:
-            err = pose2DInverse(true_pose) * self.goals[0]
+            err = pose2DInverse(odometry) * self.goals[0]
             eth = modulo2PI(err.theta)
             if math.hypot(err.x, err.y) > lim.tol_xy or abs(eth) > lim.tol_theta:
                 break

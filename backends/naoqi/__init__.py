@@ -33,7 +33,8 @@ def create(cfg: Config) -> Robot:
     transport = resolve_transport(rc.transport)
     if rc.transport == "auto" and transport == "libqi" and looks_like_zmq(rc.url):
         transport = "zmq"
-    link = Link(rc.url, transport, user=rc.user, password=rc.password, curve_keys=rc.curve_keys)
+    password = None if rc.password is None else rc.password.get_secret_value()
+    link = Link(rc.url, transport, user=rc.user, password=password, curve_keys=rc.curve_keys)
     link.open()
     try:
         sim = None

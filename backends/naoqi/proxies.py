@@ -104,6 +104,14 @@ class RemoteMotion(_Remote):
     def getAngles(self, names: Names, useSensors: bool) -> list[float]:
         return _floats(self._call(MOTION, "getAngles", _plain(names), bool(useSensors), read=True))
 
+    def getPosition(self, name: str, frame: int, useSensorValues: bool) -> list[float]:
+        args = (str(name), int(frame), bool(useSensorValues))
+        return _floats(self._call(MOTION, "getPosition", *args, read=True))
+
+    def getTransform(self, name: str, frame: int, useSensorValues: bool) -> list[float]:
+        args = (str(name), int(frame), bool(useSensorValues))
+        return _floats(self._call(MOTION, "getTransform", *args, read=True))
+
 
 class RemoteVideo(_Remote):
     """ALVideoDevice over the network (see :class:`naoloc.robot.VideoDevice`)."""
@@ -182,6 +190,9 @@ class RemoteSim(_Remote):
 
     def sim_time(self) -> float:
         return float(self._call(SIM, "sim_time", read=True))
+
+    def true_camera_pose(self, camera_index: int = 0) -> list[float]:
+        return _floats(self._call(SIM, "true_camera_pose", int(camera_index), read=True))
 
 
 def _plain(value: Any) -> Any:

@@ -68,6 +68,8 @@ SERVICES: Final[dict[str, dict[str, tuple[Overload, ...]]]] = {
         "setAngles": _o("v", "m", "m", "d"),
         "angleInterpolationWithSpeed": _o("v", "m", "m", "d"),
         "getAngles": _o("[d]", "m", "b"),
+        "getPosition": _o("[d]", "s", "i", "b"),
+        "getTransform": _o("[d]", "s", "i", "b"),
     },
     VIDEO: {
         "subscribeCamera": _o("s", "s", "i", "i", "i", "i"),
@@ -93,6 +95,7 @@ SERVICES: Final[dict[str, dict[str, tuple[Overload, ...]]]] = {
         "room_size": _o("[d]"),
         "is_free": _o("b", "d", "d", "d"),
         "sim_time": _o("d"),
+        "true_camera_pose": _o("[d]", "i"),
     },
     WATCHDOG: {
         "ping": _o("b"),

@@ -2,7 +2,8 @@
 
 :class:`Camera` subscribes once to ALVideoDevice and turns each NAOqi image into a
 :class:`~naoloc.keyframe.Keyframe` carrying the odometry pose (sensors and commands),
-the head angles and, on a simulator, the true pose. :func:`look` points the head.
+the head angles, the camera pose from ALMotion's kinematics and, on a simulator, the true
+pose. :func:`look` points the head.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import math
 from types import TracebackType
 
 from naoloc.config import CameraConfig
-from naoloc.constants import JOINT_LIMITS
+from naoloc.constants import FRAME_ROBOT, JOINT_LIMITS
 from naoloc.errors import RobotError
 from naoloc.geometry import Pose2D, relative_pose
 from naoloc.image import Frame, frame_from_naoqi
@@ -102,14 +103,19 @@ class Camera:
         odometry = pose_of(motion, True)
         command = pose_of(motion, False)
         yaw, pitch = (float(a) for a in motion.getAngles(["HeadYaw", "HeadPitch"], True))
+        # The robot's own kinematics (a real NAO's included), never an assumed geometry.
+        name = "CameraTop" if self.index == 0 else "CameraBottom"
+        camera_pose = tuple(float(v) for v in motion.getTransform(name, FRAME_ROBOT, True))
         truth = None
         if self.robot.sim is not None:
             truth = Pose2D.from_list(self.robot.sim.true_pose())
         pose = odometry if origin is None else relative_pose(origin, odometry)
         if command_origin is not None:
             command = relative_pose(command_origin, command)
-        if not all(math.isfinite(v) for v in (*pose, yaw, pitch)):
-            raise RobotError("the robot reported a non-finite pose or head angle")
+        if len(camera_pose) != 16 or not all(
+            math.isfinite(v) for v in (*pose, yaw, pitch, *camera_pose)
+        ):
+            raise RobotError("the robot reported a non-finite pose, head angle or camera pose")
         keyframe = Keyframe(
             image=frame.bgr(),
             pose=pose,
@@ -119,6 +125,7 @@ class Camera:
             stamp=frame.stamp,
             command_pose=command,
             true_pose=truth,
+            camera_pose=camera_pose,
         )
         return keyframe, odometry
 
@@ -143,7 +150,7 @@ class Camera:
 
 
 def stand(robot: Robot) -> None:
-    """Wake up and take StandInit (the posture the head geometry assumes); blocking."""
+    """Wake up and take StandInit (the walk-ready posture); blocking."""
     if not robot.motion.robotIsWakeUp():
         robot.motion.wakeUp()
     robot.posture.goToPosture("StandInit", 0.5)

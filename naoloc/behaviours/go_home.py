@@ -1,9 +1,14 @@
 """Walk back to the map origin (where the survey started) using the map.
 
 Each round localizes (:func:`naoloc.behaviours.localize.localize`, which turns in place
-until it is confident), then walks with ``moveTo`` one leg (at most :data:`LEG_M`) toward
-the origin as seen from the estimate, and localizes again, until a confident estimate is
-within ``go_home.tolerance_m`` of the origin or ``go_home.max_tries`` walks were made.
+until it is confident) and fuses the fix with the odometry walked since the last one in a
+particle filter (:mod:`naoloc.fusion`). From the filter's pose it plans a path home over the
+floor grid the map implies (:mod:`naoloc.planning`: the floor the survey walked is free,
+walls and furniture seen as landmarks near the floor are blocked), walks the first leg of it
+(at most ``leg_m``) open-loop on odometry with ``moveTo``, and localizes again. A blocked walk
+(``moveTo`` returns False: an obstacle the map did not know) marks the place ahead of the
+robot blocked and the next plan goes around it. It stops when a fresh fix puts the robot
+within ``go_home.tolerance_m`` of the origin, or after ``go_home.max_tries`` walks.
 """
 
 from __future__ import annotations
@@ -18,7 +23,9 @@ import numpy as np
 from naoloc.behaviours.camera import Camera
 from naoloc.behaviours.localize import Localization, estimate_fields, localize, truth_in_map
 from naoloc.config import Config
+from naoloc.fusion import Belief, ParticleFilter, fix_from_confidence
 from naoloc.geometry import Pose2D, relative_pose
+from naoloc.planning import BLOCKED, FloorGrid, NoPath, grid_from_map
 from naoloc.robot import Robot, pose_of
 
 if TYPE_CHECKING:
@@ -32,10 +39,16 @@ class GoHomeResult:
     Attributes:
         final: The last localization (estimate in the map frame).
         tries: Walks made toward the origin.
-        reached: True when the last estimate was within the tolerance.
+        reached: True when the last fix put the robot within the tolerance.
         rounds: Every localization, in order.
         truth: The true final pose in the map frame (simulator), else None.
         error_m: True distance from the map origin at the end, m (simulator), else None.
+        path_m: Distance walked by odometry, m (turns in place excluded).
+        trail: Map-frame poses the robot believed it was at, from the start to the end: the
+            filter's belief at each localization and the odometry-carried pose after each leg.
+        beliefs: The filter's belief after each localization (None before the first fix).
+        blocked_at: Map-frame places where a walk was blocked.
+        reason: Why it stopped short (empty when it arrived).
     """
 
     final: Localization
@@ -44,15 +57,40 @@ class GoHomeResult:
     rounds: list[Localization] = field(default_factory=list)
     truth: Pose2D | None = None
     error_m: float | None = None
+    path_m: float = 0.0
+    trail: list[Pose2D] = field(default_factory=list)
+    beliefs: list[Belief | None] = field(default_factory=list)
+    blocked_at: list[Pose2D] = field(default_factory=list)
+    reason: str = ""
 
     def summary(self) -> dict[str, Any]:
-        """JSON-able fields of CONTRACT.md's ``go-home`` line."""
+        """JSON-able fields of CONTRACT.md's ``go-home`` line (map frame)."""
+        last = next((b for b in reversed(self.beliefs) if b is not None), None)
+        if last is not None:
+            pose: dict[str, Any] = {
+                "x": round(last.pose.x, 4),
+                "y": round(last.pose.y, 4),
+                "theta": round(last.pose.theta, 4),
+                "confidence": estimate_fields(self.final.estimate)["confidence"],
+                "method": "filter",
+                **last.to_json(),
+            }
+        else:
+            pose = dict(estimate_fields(self.final.estimate))
         out: dict[str, Any] = {
-            **estimate_fields(self.final.estimate),
+            **pose,
             "tries": self.tries,
             "reached": self.reached,
-            "estimates": [[round(r.estimate.x, 3), round(r.estimate.y, 3)] for r in self.rounds],
+            "path_m": round(self.path_m, 3),
+            "estimates": [
+                [round(r.estimate.x, 3), round(r.estimate.y, 3)]
+                for r in self.rounds
+                if r.estimate.found
+            ],
+            "blocked": len(self.blocked_at),
         }
+        if self.reason:
+            out["reason"] = self.reason
         if self.truth is not None and self.error_m is not None:
             out["error_m"] = round(self.error_m, 4)
             out["truth"] = [round(v, 4) for v in self.truth]
@@ -60,12 +98,29 @@ class GoHomeResult:
 
 
 # Longest walk between two localizations, m: odometry stays good over a leg, and a fresh
-# estimate re-plans the rest. Without a confident estimate the leg is shorter.
+# estimate re-plans the rest. Without a confident belief the leg is shorter.
 LEG_M = 2.0
 UNSURE_LEG_M = 0.5
+# Waypoints at most this far apart (m): each moveTo is re-aimed from odometry.
+WAYPOINT_M = 0.75
+# A belief is confident when its particles lie within this radius (m).
+CONFIDENT_SPREAD_M = 0.15
 # With nothing recognised even after a full turn: step this far forward (m), then look again.
 LOST_STEP_M = 1.0
 MAX_LOST_STEPS = 4  # exploring steps when nothing is recognised; they are not walks home
+# A blocked walk marks a disc of this radius (m) this far ahead (m) of where it stopped.
+BUMP_RADIUS_M = 0.2
+BUMP_AHEAD_M = 0.3
+PARTICLES = 1500
+
+
+def floor_grid(vmap: Any) -> FloorGrid:
+    """The floor grid of a map: keyframe poses walked free, landmarks near the floor blocked."""
+    refined = getattr(vmap, "refined_poses", None)
+    poses = np.asarray(vmap.keyframe_poses if refined is None else refined)
+    points = getattr(vmap, "kp_points", None)
+    pts = np.empty((0, 3)) if points is None else np.asarray(points)
+    return grid_from_map(poses, pts)
 
 
 def go_home(
@@ -77,94 +132,129 @@ def go_home(
     turns: int = 1,
     leg_m: float = LEG_M,
 ) -> GoHomeResult:
-    """Localize, walk a leg toward the map origin, and repeat until there or out of tries.
+    """Localize, fuse, plan, walk a leg toward the map origin; repeat until there.
 
     Args:
         robot: The robot, anywhere in the mapped room.
         vmap: The map.
-        cfg: Config; uses ``go_home.tolerance_m``, ``go_home.max_tries``, ``localize`` and
-            ``camera``.
+        cfg: Config; uses ``go_home.tolerance_m``, ``go_home.max_tries``, ``localize``,
+            ``camera`` and ``map.seed`` (the filter's seed).
         on_round: Called after each localization with the walk count so far and its result.
         turns: Body headings of the first sweep of each localization (1 = no turning in
             place; the localize behaviour adds quarter turns while it is not confident).
         leg_m: Longest walk between two localizations, m.
 
     Returns:
-        The final estimate, walks made, and the true error on a simulator.
+        The final estimate, walks made, path walked, and the true error on a simulator.
 
-    Each round localizes (the robot turns in place until the map gives a confident, verified
-    estimate or it has looked all around). A confident estimate within the tolerance ends
-    the walk home. Otherwise the robot walks at most ``leg_m`` (``UNSURE_LEG_M`` when the
-    estimate is not confident) toward the origin and localizes again. When a localization is
-    not confident but an earlier one was, that earlier estimate carried forward by odometry
-    is used instead. A localization with confidence 0 (nothing recognised all around) and
-    no earlier confident one is followed by a short step forward; up to ``MAX_LOST_STEPS`` of
-    those do not count as walks. After a walk that fails
-    (``moveTo`` returns False: an obstacle) the robot localizes again and keeps to the survey
-    circuit, which it is known to have walked, in legs of ``2 * leg_m``.
+    A localization that recognises nothing before any fix is followed by a short exploring
+    step forward (up to ``MAX_LOST_STEPS``, not counted as walks). Between fixes the filter
+    carries the pose by odometry, so a round that recognises nothing still has a pose to plan
+    from; it is walked in short legs.
 
     Raises:
         MotionError: A turn in place while localizing failed (the robot is stopped).
     """
-    from naoloc.mapping.localizer import CONFIDENT
-
     tolerance = cfg.go_home.tolerance_m
+    grid = floor_grid(vmap)
+    home = Pose2D()
     rounds: list[Localization] = []
-    tries = 0
-    lost_steps = 0
+    beliefs: list[Belief | None] = []
+    trail: list[Pose2D] = []
+    bumps: list[Pose2D] = []
+    tries = lost_steps = 0
     reached = False
-    blocked = False
-    anchor: tuple[Pose2D, Pose2D] | None = None  # last confident estimate, odometry then
+    reason = ""
+    walked = 0.0
+    pf: ParticleFilter | None = None
     with Camera(robot, cfg.camera, "naoloc_go_home") as camera:
         try:
+            odo_prev = pose_of(robot.motion, True)
             while True:
                 loc = localize(robot, vmap, cfg, camera=camera, turns=turns)
                 rounds.append(loc)
                 if on_round is not None:
                     on_round(tries, loc)
                 est = loc.estimate
-                odometry = pose_of(robot.motion, True)
-                confident = est.confidence >= CONFIDENT
-                if confident:
-                    anchor = (Pose2D(est.x, est.y, est.theta), odometry)
-                if confident and math.hypot(est.x, est.y) <= tolerance:
+                odo = pose_of(robot.motion, True)
+                if pf is not None:
+                    pf.predict(relative_pose(odo_prev, odo))
+                odo_prev = odo
+                if est.found:
+                    inliers = est.details.get("inliers") if est.method == "pnp" else None
+                    fix = fix_from_confidence(est.pose(), est.confidence, inliers)
+                    if pf is None:
+                        pf = ParticleFilter(
+                            PARTICLES, seed=cfg.map.seed, bounds=grid.bounds(),
+                            free=grid.free_test(),
+                        )  # fmt: skip
+                        pf.reset_to(fix)
+                    pf.update(fix)
+                belief = pf.belief() if pf is not None else None
+                beliefs.append(belief)
+                if belief is None:
+                    if lost_steps >= MAX_LOST_STEPS:
+                        reason = "nothing recognised anywhere it looked"
+                        break
+                    # Nothing recognised all around and no fix yet: explore a little.
+                    lost_steps += 1
+                    walked += _walk_straight(robot, LOST_STEP_M)
+                    continue
+                here = belief.pose
+                trail.append(here)
+                confident = belief.spread_m <= CONFIDENT_SPREAD_M
+                if est.found and confident and math.hypot(here.x, here.y) <= tolerance:
                     reached = True
                     break
                 if tries >= cfg.go_home.max_tries:
+                    reason = f"not home after {tries} walks"
                     break
-                if anchor is None and est.confidence <= 0.0 and lost_steps < MAX_LOST_STEPS:
-                    # Nothing recognised all around and no earlier fix: explore a little
-                    # (mid-room, far from every survey view) without using up a walk home.
-                    lost_steps += 1
-                    robot.motion.moveTo(LOST_STEP_M, 0.0, 0.0)  # False at an obstacle: fine
-                    robot.motion.stopMove()
-                    continue
                 tries += 1
-                if anchor is not None and not confident:
-                    # Not recognised here (e.g. mid-room, far from every survey view): the
-                    # last confident estimate carried by odometry is the better guess.
-                    here = anchor[0] * relative_pose(anchor[1], odometry)
-                    confident = True
-                elif est.confidence <= 0.0:  # nothing recognised all around: step elsewhere
-                    robot.motion.moveTo(LOST_STEP_M, 0.0, 0.0)  # False at an obstacle: fine
-                    robot.motion.stopMove()
-                    continue
-                else:
-                    here = Pose2D(est.x, est.y, est.theta)
-                if blocked:  # along the circuit, which is free, as far as odometry holds
-                    route = route_home(vmap, here)
-                    length = 2.0 * leg_m if confident else UNSURE_LEG_M
-                else:
-                    route = straight_home(here)
-                    length = leg_m if confident else UNSURE_LEG_M
-                leg = truncate_route(here, route, length)
-                # Once the straight line was blocked, keep to the circuit from then on.
-                blocked = not _follow(robot, here, leg, ends_home=leg[-1] == route[-1]) or blocked
+                try:
+                    route = grid.plan(here, home)
+                except NoPath as err:
+                    reason = str(err)
+                    break
+                leg = _densify(
+                    here, truncate_route(here, route, leg_m if confident else UNSURE_LEG_M)
+                )
+                ok, dist, end = _follow(robot, here, leg, ends_home=leg[-1] == route[-1])
+                walked += dist
+                trail.append(end)
+                if not ok:  # an obstacle the map did not know: remember it, plan around it
+                    bump = end * Pose2D(BUMP_AHEAD_M, 0.0)
+                    bumps.append(bump)
+                    grid.mark(bump.x, bump.y, BUMP_RADIUS_M, BLOCKED)
         finally:
             robot.motion.stopMove()
     truth = truth_in_map(robot, vmap.meta)
     error = None if truth is None else math.hypot(truth.x, truth.y)
-    return GoHomeResult(rounds[-1], tries, reached, rounds, truth, error)
+    return GoHomeResult(
+        rounds[-1], tries, reached, rounds, truth, error, walked, trail, beliefs, bumps, reason
+    )
+
+
+def _walk_straight(robot: Robot, distance_m: float) -> float:
+    """Walk forward (False at an obstacle is fine); the odometry distance walked, m."""
+    before = pose_of(robot.motion, True)
+    robot.motion.moveTo(distance_m, 0.0, 0.0)
+    robot.motion.stopMove()
+    return before.distance(pose_of(robot.motion, True))
+
+
+def _densify(here: Pose2D, route: list[Pose2D], spacing: float = WAYPOINT_M) -> list[Pose2D]:
+    """The route with extra waypoints so that none is more than ``spacing`` m from the last."""
+    out: list[Pose2D] = []
+    prev = here
+    for p in route:
+        n = max(1, math.ceil(math.hypot(p.x - prev.x, p.y - prev.y) / spacing))
+        out += [
+            Pose2D(prev.x + (p.x - prev.x) * k / n, prev.y + (p.y - prev.y) * k / n)
+            for k in range(1, n)
+        ]
+        out.append(p)
+        prev = p
+    return out
 
 
 def truncate_route(here: Pose2D, route: list[Pose2D], length_m: float) -> list[Pose2D]:
@@ -195,50 +285,22 @@ def truncate_route(here: Pose2D, route: list[Pose2D], length_m: float) -> list[P
     return out
 
 
-def straight_home(here: Pose2D, leg_m: float = 0.75) -> list[Pose2D]:
-    """Waypoints (map frame) on the straight line from ``here`` to the origin, ``leg_m`` apart.
-
-    Short legs re-planned from odometry keep the walk's own errors from adding up.
-    """
-    distance = math.hypot(here.x, here.y)
-    legs = max(1, math.ceil(distance / leg_m))
-    return [Pose2D(here.x * (1 - k / legs), here.y * (1 - k / legs)) for k in range(1, legs + 1)]
-
-
-def route_home(vmap: VisualMap, here: Pose2D, spacing: int = 5) -> list[Pose2D]:
-    """Waypoints (map frame) to the origin along the survey circuit's first lap.
-
-    Args:
-        vmap: The map; ``keyframe_poses`` and ``meta["frames_per_lap"]`` give the circuit.
-        here: The robot's estimated pose, map frame.
-        spacing: Keep every ``spacing``-th survey pose as a waypoint.
-
-    Returns:
-        From the circuit pose nearest ``here``, the shorter way round to the origin, which
-        ends the list.
-    """
-    poses = np.asarray(vmap.keyframe_poses, dtype=float)[:, :2]
-    per_lap = int(vmap.meta.get("frames_per_lap") or len(poses))
-    ring = poses[: max(1, min(per_lap, len(poses)))]
-    i = int(np.argmin(np.hypot(ring[:, 0] - here.x, ring[:, 1] - here.y)))
-    forward = ring[i:]
-    backward = ring[i::-1]
-
-    def length(path: np.ndarray) -> float:
-        return float(np.sum(np.hypot(*np.diff(np.vstack([path, [0.0, 0.0]]), axis=0).T)))
-
-    path = forward if length(forward) <= length(backward) else backward
-    kept = path[::spacing]
-    return [Pose2D(float(x), float(y)) for x, y in kept] + [Pose2D()]
-
-
-def _follow(robot: Robot, start: Pose2D, route: list[Pose2D], *, ends_home: bool = True) -> bool:
-    """Walk through map-frame waypoints by odometry from ``start``; False if a move failed.
+def _follow(
+    robot: Robot, start: Pose2D, route: list[Pose2D], *, ends_home: bool = True
+) -> tuple[bool, float, Pose2D]:
+    """Walk through map-frame waypoints by odometry from ``start``.
 
     Each waypoint is approached facing it; when ``ends_home``, the last one (the origin) ends
     facing map +x.
+
+    Returns:
+        Whether every move succeeded, the odometry distance walked (m), and where odometry
+        says the robot ended (map frame, carried from ``start``).
     """
     odo0 = pose_of(robot.motion, True)
+    walked = 0.0
+    ok = True
+    prev = odo0
     for k, point in enumerate(route):
         here = start * relative_pose(odo0, pose_of(robot.motion, True))
         last = ends_home and k == len(route) - 1
@@ -246,7 +308,13 @@ def _follow(robot: Robot, start: Pose2D, route: list[Pose2D], *, ends_home: bool
         if not last and math.hypot(point.x - here.x, point.y - here.y) < 1e-3:
             continue
         move = relative_pose(here, Pose2D(point.x, point.y, heading))
-        if not robot.motion.moveTo(move.x, move.y, move.theta):
+        moved = robot.motion.moveTo(move.x, move.y, move.theta)
+        now = pose_of(robot.motion, True)
+        walked += prev.distance(now)
+        prev = now
+        if not moved:
             robot.motion.stopMove()
-            return False
-    return True
+            ok = False
+            break
+    end = start * relative_pose(odo0, pose_of(robot.motion, True))
+    return ok, walked, end

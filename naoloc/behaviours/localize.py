@@ -44,14 +44,39 @@ EXTRA_TURNS = 3
 EXTRA_TURN_RAD = math.pi / 2
 
 
-def estimate_fields(est: Estimate) -> dict[str, float]:
-    """The pose and confidence of an estimate as the CLI's JSON lines give them (map frame)."""
+def estimate_fields(est: Estimate) -> dict[str, float | str | None]:
+    """The pose, confidence and method of an estimate as the CLI's JSON lines give them.
+
+    Map frame. With nothing recognised the pose fields are None (JSON null), the confidence
+    0 and the method ``none``: never a made-up pose.
+    """
+    if not est.found:
+        return {"x": None, "y": None, "theta": None, "confidence": 0.0, "method": "none"}
     return {
         "x": round(est.x, 4),
         "y": round(est.y, 4),
         "theta": round(est.theta, 4),
         "confidence": round(float(est.confidence), 4),
+        "method": est.method,
     }
+
+
+def estimate_covariance(est: Estimate) -> dict[str, Any]:
+    """The estimate's uncertainty as the JSON ``covariance`` (3 x 3 of x, y, theta).
+
+    The standard deviations are those the particle filter gives a fix
+    (:func:`naoloc.fusion.fix_from_confidence`: from the PnP inliers, or the confidence);
+    nothing when there is no estimate.
+    """
+    if not est.found:
+        return {}
+    from naoloc.fusion import fix_from_confidence
+
+    inliers = est.details.get("inliers") if est.method == "pnp" else None
+    fix = fix_from_confidence(est.pose(), est.confidence, inliers)
+    sxy, sth = fix.sigma_xy_m**2, fix.sigma_theta_rad**2
+    cov = [[sxy, 0.0, 0.0], [0.0, sxy, 0.0], [0.0, 0.0, sth]]
+    return {"covariance": [[round(v, 6) for v in row] for row in cov]}
 
 
 @dataclass(frozen=True)
@@ -65,7 +90,8 @@ class Localization:
         extra_turns: Quarter turns in place made because an estimate was not confident.
         truth: The true pose in the map frame, when a simulator and the map's
             origin_room_pose know it; else None.
-        error_m: Distance from estimate to truth, m (None without truth).
+        error_m: Distance from estimate to truth, m (None without truth or without an
+            estimate).
         heading_error_deg: Wrapped heading difference, degrees (None without truth).
         wall_s: Wall-clock seconds spent (pictures and the map's work).
     """
@@ -84,15 +110,17 @@ class Localization:
         est = self.estimate
         out: dict[str, Any] = {
             **estimate_fields(est),
+            **estimate_covariance(est),
             "mode": est.mode,
             "strategy": self.strategy,
             "images": len(self.queries),
             "extra_turns": self.extra_turns,
         }
-        if self.truth is not None and self.error_m is not None:
-            out["error_m"] = round(self.error_m, 4)
-            out["heading_error_deg"] = round(float(self.heading_error_deg or 0.0), 3)
+        if self.truth is not None:
             out["truth"] = [round(v, 4) for v in self.truth]
+            if self.error_m is not None:
+                out["error_m"] = round(self.error_m, 4)
+                out["heading_error_deg"] = round(float(self.heading_error_deg or 0.0), 3)
         return out
 
 
@@ -247,7 +275,7 @@ def localize(
             cam.close()
     truth = truth_in_map(robot, vmap.meta)
     error = heading = None
-    if truth is not None:
+    if truth is not None and estimate.found:
         error = math.hypot(estimate.x - truth.x, estimate.y - truth.y)
         heading = math.degrees(abs(modulo2PI(estimate.theta - truth.theta)))
     return Localization(

@@ -116,6 +116,9 @@ class ParallaxWall:
 MIN_PARALLAX_MATCHES = 8
 
 
+MAX_ROLL_SLOPE = 0.15  # |dy/dx| a sideways view's motion may have (camera roll up to 8.5 deg)
+
+
 def feature_shift(before: np.ndarray, after: np.ndarray) -> tuple[float, int]:
     """Median horizontal shift (px) of A-KAZE features matched between two grey images.
 
@@ -136,12 +139,14 @@ def feature_shift(before: np.ndarray, after: np.ndarray) -> tuple[float, int]:
         return float("nan"), 0
     pairs = cv2.BFMatcher(cv2.NORM_HAMMING).knnMatch(d1, d2, k=2)
     good = [p[0] for p in pairs if len(p) == 2 and p[0].distance < 0.75 * p[1].distance]
-    # A sideways wall seen while walking forward moves horizontally, not vertically.
-    shifts = [
-        abs(kp2[m.trainIdx].pt[0] - kp1[m.queryIdx].pt[0])
-        for m in good
-        if abs(kp2[m.trainIdx].pt[1] - kp1[m.queryIdx].pt[1]) < 0.05 * before.shape[0]
-    ]
+    # A sideways wall seen while walking forward moves along the image's horizontal, tilted
+    # by the camera's roll: StandInit's 0.1 rad forward lean is a 0.1 rad roll seen sideways.
+    shifts = []
+    for m in good:
+        dx = kp2[m.trainIdx].pt[0] - kp1[m.queryIdx].pt[0]
+        dy = kp2[m.trainIdx].pt[1] - kp1[m.queryIdx].pt[1]
+        if abs(dy) < 0.05 * before.shape[0] + MAX_ROLL_SLOPE * abs(dx):
+            shifts.append(abs(dx))
     if len(shifts) < MIN_PARALLAX_MATCHES:
         return float("nan"), len(shifts)
     return float(np.median(shifts)), len(shifts)

@@ -1,4 +1,10 @@
-"""``naoloc build-map -c CFG -d DATASET.mcap -o MAP.npz``: Algorithm 4, plus a PNG of the map."""
+"""``naoloc build-map -c CFG -d DATASET.mcap -o MAP.npz``: Algorithm 4, plus a PNG of the map.
+
+The map, its PNG and the config copy (``MAP.config.yaml``) are written under temporary
+names and moved into place together once all three exist: a run that fails or is
+interrupted leaves an older map, PNG and config copy as they were. A partial dataset (an
+interrupted survey's ``DATASET.partial.mcap``) is read only when named, and said so.
+"""
 
 from __future__ import annotations
 
@@ -8,11 +14,21 @@ from typing import Any
 
 from naoloc.config import Config
 from naoloc.dataset import read_dataset
+from naoloc.errors import DatasetError
+from naoloc.outputs import staged
 from naoloc.progress import Progress
+
+# Fewest frames a map is built from: one or two pictures give no place to tell apart.
+MIN_MAP_FRAMES = 3
 
 
 def build_from_dataset(
-    dataset: Path, cfg: Config, output: Path, *, show_progress: bool | None = None
+    dataset: Path,
+    cfg: Config,
+    output: Path,
+    *,
+    show_progress: bool | None = None,
+    config_copy: Path | None = None,
 ) -> tuple[Any, dict[str, Any]]:
     """Read a dataset, build the map with ``cfg.map``, save it and its PNG.
 
@@ -21,14 +37,19 @@ def build_from_dataset(
         cfg: Config; ``cfg.map`` sets features, neurons, epochs and seed.
         output: The map file (``.npz``); the PNG goes beside it (``MAP.png``).
         show_progress: Force progress bars on or off; default: on a terminal.
+        config_copy: Also write the resolved config (no secrets) here, with the map.
 
     Returns:
         The :class:`naoloc.mapping.VisualMap` and the JSON summary.
 
     Raises:
-        DatasetError: The dataset is unreadable or empty.
+        DatasetError: The dataset is unreadable, corrupt or has too few frames.
     """
     data = read_dataset(dataset)  # before importing the map code: a bad file fails fast
+    if len(data.keyframes) < MIN_MAP_FRAMES:
+        raise DatasetError(
+            f"{dataset}: {len(data.keyframes)} frame(s); a map needs at least {MIN_MAP_FRAMES}"
+        )
 
     from naoloc.mapping import build_map
     from naoloc.plots import plot_map
@@ -53,8 +74,13 @@ def build_from_dataset(
     finally:
         for bar in bars.values():
             bar.close()
-    vmap.save(output)
-    png = plot_map(vmap, output.with_suffix(".png"))
+    png = output.with_suffix(".png")
+    finals = [output, png] if config_copy is None else [output, png, config_copy]
+    with staged(*finals) as temps:
+        vmap.save(temps[0])
+        plot_map(vmap, temps[1])
+        if config_copy is not None:
+            temps[2].write_text(cfg.to_yaml(), encoding="utf-8")
     timings = vmap.timings
     summary = {
         "images": int(vmap.images),
@@ -68,18 +94,20 @@ def build_from_dataset(
         "png": str(png),
         "dataset_complete": data.complete,
     }
+    if not data.complete:
+        summary["dataset_reason"] = data.meta.get("reason")
     return vmap, summary
 
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """Build the map of ``args.dataset`` into ``args.output``, with a PNG and the config."""
-    from naoloc.cli import write_resolved_config
     from naoloc.commands.survey import config_path_for
 
     output: Path = args.output
-    write_resolved_config(cfg, config_path_for(output))
-    _, summary = build_from_dataset(args.dataset, cfg, output)
-    partial = "" if summary["dataset_complete"] else " (partial dataset)"
+    _, summary = build_from_dataset(args.dataset, cfg, output, config_copy=config_path_for(output))
+    partial = ""
+    if not summary["dataset_complete"]:
+        partial = f" (partial dataset: {summary.get('dataset_reason') or 'incomplete'})"
     print(
         f"build-map: {summary['images']} images{partial} -> {summary['neurons']} neurons, "
         f"{summary['distinct_poses']} distinct poses in {summary['total_s']:.1f} s "

@@ -76,7 +76,6 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     t0 = time.monotonic()
     out: Path = args.output
     out.mkdir(parents=True, exist_ok=True)
-    write_resolved_config(cfg, out / "config.yaml")
     dataset, map_path = out / "survey.mcap", out / "map.npz"
     rows: list[dict[str, Any]] = []
     with interruptible(), connect(cfg) as robot:
@@ -119,6 +118,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
             err = math.nan if loc.error_m is None else loc.error_m
             print(f"demo: pose {i + 1}/{len(poses)}: error {err:.2f} m", flush=True)
     png = plot_estimates(vmap, pairs, out / "localize.png")
+    write_resolved_config(cfg, out / "config.yaml")  # with the outputs it describes
     _print_table(rows)
     errors = [r["error_m"] for r in rows if r["error_m"] is not None]
     headings = [r["heading_error_deg"] for r in rows if r["heading_error_deg"] is not None]

@@ -14,23 +14,24 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """Localize, walk to the origin, repeat (``go_home`` config); report where it ended."""
     from naoloc.behaviours.go_home import go_home
     from naoloc.behaviours.localize import Localization
-    from naoloc.cli import write_resolved_config
     from naoloc.commands.localize import teleport_if_asked
     from naoloc.commands.survey import config_path_for, interruptible
     from naoloc.mapping import load_map
-    from naoloc.plots import plot_localization
+    from naoloc.outputs import staged
+    from naoloc.plots import plot_go_home
     from naoloc.progress import Progress
     from naoloc.registry import connect
 
     vmap = load_map(args.map)
     png: Path | None = args.png
-    if png is not None:
-        write_resolved_config(cfg, config_path_for(png))
 
     def report(tries: int, loc: Localization) -> None:
         est = loc.estimate
-        extra = "" if loc.error_m is None else f", error {loc.error_m:.2f} m"
         bar.update(1, f"walk {tries}")
+        if not est.found:
+            print(f"go-home: after {tries} walks: nothing recognised")
+            return
+        extra = "" if loc.error_m is None else f", error {loc.error_m:.2f} m"
         print(
             f"go-home: after {tries} walks: estimate ({est.x:.2f}, {est.y:.2f}, "
             f"{est.theta:.2f}), {math.hypot(est.x, est.y):.2f} m from home{extra}"
@@ -41,13 +42,19 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         teleport_if_asked(robot, args.at)
         result = go_home(robot, vmap, cfg, on_round=report)
     summary = result.summary()
-    verdict = "reached" if result.reached else "gave up after"
-    line = f"go-home: {verdict} {result.tries} walks"
+    verdict = "reached home after" if result.reached else "gave up after"
+    line = f"go-home: {verdict} {result.tries} walks, {result.path_m:.2f} m walked"
+    if result.reason:
+        line += f" ({result.reason})"
     if result.error_m is not None:
         line += f"; truly {result.error_m:.2f} m from the origin"
     print(line)
     if png is not None:
-        loc = result.final
-        plot_localization(vmap, loc.estimate, png, truth=loc.truth, queries=loc.queries)
+        with staged(png, config_path_for(png)) as (tmp_png, tmp_cfg):
+            plot_go_home(
+                vmap, result.trail, [r.estimate for r in result.rounds], tmp_png,
+                blocked=result.blocked_at, truth=result.truth, reached=result.reached,
+            )  # fmt: skip
+            tmp_cfg.write_text(cfg.to_yaml(), encoding="utf-8")
         summary["png"] = str(png)
     return summary

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from naoloc.config import Config
-from naoloc.errors import BackendError
+from naoloc.errors import BackendError, NoEstimate
 from naoloc.robot import Robot
 
 
@@ -28,33 +28,43 @@ def teleport_if_asked(robot: Robot, at: list[float] | None) -> None:
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """Localize once (head scan, or the paper's 1-2 pictures in mode paper) and report."""
     from naoloc.behaviours.localize import localize
-    from naoloc.cli import write_resolved_config
     from naoloc.commands.survey import config_path_for, interruptible
     from naoloc.mapping import load_map
+    from naoloc.outputs import staged
     from naoloc.plots import plot_localization
     from naoloc.progress import Progress
     from naoloc.registry import connect
 
     vmap = load_map(args.map)
     png: Path | None = args.png
-    if png is not None:
-        write_resolved_config(cfg, config_path_for(png))
     with interruptible(), connect(cfg) as robot:
         teleport_if_asked(robot, args.at)
         with Progress(None, "localize") as bar:
             loc = localize(robot, vmap, cfg, on_step=lambda note: bar.update(1, note))
     summary = loc.summary()
     est = loc.estimate
-    line = (
-        f"localize: ({est.x:.2f}, {est.y:.2f}, {est.theta:.2f}) in the map frame, "
-        f"confidence {est.confidence:.2f}, {len(loc.queries)} images ({loc.strategy})"
-    )
-    if loc.error_m is not None:
-        line += f"; error {loc.error_m:.2f} m, {loc.heading_error_deg:.1f} deg"
+    if est.found:
+        line = (
+            f"localize: ({est.x:.2f}, {est.y:.2f}, {est.theta:.2f}) in the map frame, "
+            f"confidence {est.confidence:.2f}, {len(loc.queries)} images ({loc.strategy})"
+        )
+        if loc.error_m is not None:
+            line += f"; error {loc.error_m:.2f} m, {loc.heading_error_deg:.1f} deg"
+    else:
+        reason = est.details.get("reason", "nothing recognised")
+        line = f"localize: no estimate ({reason}) from {len(loc.queries)} images"
     print(line)
-    if png is not None:
-        plot_localization(vmap, est, png, truth=loc.truth, queries=loc.queries)
+    if png is not None:  # the picture and its config copy appear together, or not at all
+        with staged(png, config_path_for(png)) as (tmp_png, tmp_cfg):
+            plot_localization(vmap, est, tmp_png, truth=loc.truth, queries=loc.queries)
+            tmp_cfg.write_text(cfg.to_yaml(), encoding="utf-8")
         summary["png"] = str(png)
         print(f"localize: picture -> {png}")
     summary["localize_s"] = round(loc.wall_s, 3)
+    if not est.found:
+        raise NoEstimate(
+            f"no estimate: {est.details.get('reason', 'nothing recognised')} "
+            f"in {len(loc.queries)} images",
+            summary,
+        )
     return summary

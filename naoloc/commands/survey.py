@@ -1,51 +1,30 @@
 """``naoloc survey -c CFG -o DATASET.mcap``: Algorithm 3, recorded as an MCAP dataset.
 
-Frames are written as they are taken; Ctrl-C or an error mid-survey stops the robot and
-leaves a dataset that ``build-map`` reads with every frame taken so far.
+Frames are written to ``DATASET.partial.mcap`` as they are taken; a survey that completes
+all its laps becomes ``DATASET.mcap`` (with ``DATASET.config.yaml`` beside it). Ctrl-C,
+SIGTERM or an error mid-survey stops the robot and keeps ``DATASET.partial.mcap``, marked
+incomplete, beside any complete ``DATASET.mcap``, which is left as it was; the one-line
+error says where the partial data is, and ``build-map -d DATASET.partial.mcap`` reads it.
 """
 
 from __future__ import annotations
 
 import argparse
-import contextlib
-import signal
-import threading
-from collections.abc import Iterator
 from pathlib import Path
-from types import FrameType
 from typing import Any
 
 from naoloc.behaviours.survey import SurveyResult, frames_per_lap, survey
 from naoloc.config import Config
-from naoloc.dataset import DatasetWriter
+from naoloc.dataset import DatasetWriter, interruption_reason
+from naoloc.errors import NaolocError
 from naoloc.geometry import Pose2D
+from naoloc.interrupt import interruptible
 from naoloc.keyframe import Keyframe
 from naoloc.progress import Progress
 from naoloc.registry import connect
 from naoloc.robot import Robot
 
-
-@contextlib.contextmanager
-def interruptible() -> Iterator[None]:
-    """Make SIGINT and SIGTERM raise KeyboardInterrupt inside the block, then restore.
-
-    A robot command must stop the robot on Ctrl-C even when started from a shell that
-    ignores SIGINT in background jobs, and on a plain ``kill``. Only in the main thread.
-    """
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-
-    def raise_interrupt(signum: int, frame: FrameType | None) -> None:
-        raise KeyboardInterrupt(f"signal {signum}")
-
-    old_int = signal.signal(signal.SIGINT, signal.default_int_handler)
-    old_term = signal.signal(signal.SIGTERM, raise_interrupt)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old_int)
-        signal.signal(signal.SIGTERM, old_term)
+__all__ = ["config_path_for", "interruptible", "record_survey", "run"]
 
 
 def config_path_for(output: Path) -> Path:
@@ -56,13 +35,17 @@ def config_path_for(output: Path) -> Path:
 def record_survey(
     robot: Robot, cfg: Config, output: Path, progress: Progress | None = None
 ) -> tuple[SurveyResult, int]:
-    """Run the survey on ``robot`` and write every frame to ``output`` as it is taken.
+    """Run the survey on ``robot`` and write every frame as it is taken.
 
-    See :func:`naoloc.behaviours.survey.survey` for where the head yaw comes from.
+    Frames go to ``DATASET.partial.mcap``; only when the survey completes all its laps does
+    the file become ``output`` (atomically). When it does not (an exception, Ctrl-C,
+    SIGTERM), the partial file is kept, marked incomplete, and the exception gets a note
+    (``err.add_note``) saying where the partial data is; ``output`` is not touched. See
+    :func:`naoloc.behaviours.survey.survey` for where the head yaw comes from.
 
     Args:
         robot: The robot, where the survey starts.
-        cfg: The resolved config (stored in the dataset).
+        cfg: The resolved config (stored in the dataset, without secrets).
         output: The ``.mcap`` file.
         progress: Progress bar advanced per frame.
 
@@ -82,10 +65,25 @@ def record_survey(
             robot, cfg, on_frame, on_start=on_start,
             progress=None if progress is None else progress.update,
         )  # fmt: skip
-    finally:
-        if "w" in holder:
-            holder["w"].close()
-    return result, holder["w"].frames if "w" in holder else 0
+    except BaseException as err:
+        writer = holder.get("w")
+        if writer is not None:
+            try:
+                kept = writer.close(complete=False, reason=interruption_reason(err))
+            except NaolocError as failed:
+                err.add_note(f"the partial dataset could not be finished: {failed}")
+            else:
+                if kept is not None:
+                    err.add_note(f"partial dataset ({writer.frames} frames) kept in {kept}")
+        raise
+    writer = holder.get("w")
+    if writer is None:
+        return result, 0
+    if result.laps < cfg.survey.laps:  # not expected: survey() walks every lap or raises
+        writer.close(complete=False, reason=f"{result.laps} of {cfg.survey.laps} laps")
+    else:
+        writer.close(complete=True)
+    return result, writer.frames
 
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
@@ -93,11 +91,12 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     from naoloc.cli import write_resolved_config
 
     output: Path = args.output
-    write_resolved_config(cfg, config_path_for(output))
     sides = cfg.survey_sides()
     expected = frames_per_lap(sides, cfg.survey.step_m) * cfg.survey.laps
     with interruptible(), connect(cfg) as robot, Progress(expected, "survey") as bar:
         result, frames = record_survey(robot, cfg, output, bar)
+    if frames > 0:  # the config copy goes with the dataset it describes
+        write_resolved_config(cfg, config_path_for(output))
     wall, par = result.wall, result.parallax
     detected = ""
     if wall is not None:

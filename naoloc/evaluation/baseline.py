@@ -29,16 +29,16 @@ def nearest_neighbour(vmap: Any, queries: Sequence[Keyframe]) -> Any:
 
     Returns:
         A :class:`naoloc.mapping.Estimate` (mode ``"nearest"``) for the pose at the last query,
-        map frame; confidence 0 and the keyframes' centroid when no query has features.
+        map frame; no pose (method ``none``, NaN, confidence 0) when no query has features.
     """
     from naoloc.mapping import Estimate
+    from naoloc.mapping.localizer import no_estimate
 
     feats = vmap.extract(queries)
     usable = [i for i, f in enumerate(feats) if len(f) > 0]
     poses = np.asarray(vmap.keyframe_poses, dtype=np.float64)
     if not usable or len(poses) == 0:
-        cx, cy = (float(poses[:, 0].mean()), float(poses[:, 1].mean())) if len(poses) else (0, 0)
-        return Estimate(cx, cy, 0.0, 0.0, "nearest", {"method": "none", "reason": "no features"})
+        return no_estimate("nearest", "no features")
     hists = np.asarray(vmap.histograms, dtype=np.float64)
     heads = np.asarray(vmap.keyframe_heads, dtype=np.float64)
     # Training images without a keypoint have no histogram to compare: leave them out (an

@@ -34,7 +34,7 @@ from naoloc.evaluation.protocols import (
     EvalPose,
     lap_of,
     paper_poses,
-    sample_random_poses,
+    sample_protocol_poses,
     wall_seen,
 )
 from naoloc.evaluation.runner import (
@@ -50,6 +50,7 @@ from naoloc.evaluation.runner import (
     survey_task,
 )
 from naoloc.evaluation.stats import group_rows, heading_errors, json_float, summarize
+from naoloc.outputs import atomic_write_text
 
 
 def check_simulated(cfg: Config) -> None:
@@ -118,8 +119,8 @@ def evaluate(
 
     t_start = time.monotonic()
     check_simulated(cfg)
-    if protocol not in ("paper", "random"):
-        raise ConfigError(f"unknown protocol {protocol!r}; valid: paper, random")
+    if protocol not in ("paper", "random", "anywhere"):
+        raise ConfigError(f"unknown protocol {protocol!r}; valid: paper, random, anywhere")
     if protocol == "paper" and tuple(round(s, 6) for s in cfg.survey_sides()) != PAPER_SQUARE_M:
         raise ConfigError(
             f"the paper protocol needs a 4 x 4 m survey square; this config walks "
@@ -127,7 +128,6 @@ def evaluate(
         )
     workers = max(1, workers if workers is not None else (os.cpu_count() or 1))
     outdir.mkdir(parents=True, exist_ok=True)
-    write_resolved_config(cfg, outdir / "config.yaml")
     plan = make_plan(cfg, protocol, studies)
     base_dict = cfg.to_dict()
 
@@ -176,6 +176,7 @@ def evaluate(
     )
     summary["wall_s"] = round(time.monotonic() - t_start, 2)
     _write_outputs(outdir, summary, records, plan, maps, surveys, origin, room_size, protocol)
+    write_resolved_config(cfg, outdir / "config.yaml")  # last: it describes the outputs
     line = {k: summary[k] for k in _LINE_KEYS}
     line.update(
         {
@@ -198,6 +199,7 @@ _LINE_KEYS = (
     "median_heading_error_deg",
     "map_build_s",
     "localize_ms_median",
+    "no_estimate",
 )
 
 
@@ -216,7 +218,7 @@ def _test_poses(
     with connect(cfg) as robot:
         if robot.sim is None:
             raise BackendError(f"evaluate needs robot.sim; the {robot.backend} backend has none")
-        return sample_random_poses(n, seed, room_size, robot.sim.is_free)
+        return sample_protocol_poses(protocol, n, seed, room_size, robot.sim.is_free)
 
 
 def _chunks(
@@ -259,6 +261,8 @@ def _variant_summary(records: Sequence[dict[str, Any]]) -> dict[str, Any]:
     conf = [r["confidence"] for r in records if math.isfinite(r["confidence"])]
     out["confidence_median"] = json_float(float(np.median(conf))) if conf else None
     out["no_features"] = int(sum(1 for r in records if r["confidence"] == 0.0))
+    # A pose without an estimate is a miss (its error counts as infinite above), never a guess.
+    out["no_estimate"] = int(sum(1 for r in records if not math.isfinite(r["error_m"])))
     return out
 
 
@@ -290,6 +294,7 @@ def _summary(
         "median_heading_error_deg": main_stats["median_heading_error_deg"],
         "map_build_s": json_float(main_map["timings"].get("total_s", float("nan")), 3),
         "localize_ms_median": main_stats["localize_ms_median"],
+        "no_estimate": main_stats["no_estimate"],
         "positions": group_rows(by_variant[main.name]),
         "seed": seed,
         "workers": workers,
@@ -342,12 +347,17 @@ def _table3(by_variant: dict[str, list[dict[str, Any]]]) -> list[dict[str, Any]]
             mine = [r for r in recs if r["group"] == pos.number]
             if not mine:
                 continue
+            errors = [r["error_m"] if math.isfinite(r["error_m"]) else math.inf for r in mine]
             row["ours"][name] = {
                 "estimates": [
-                    [round(r["estimate"][0], 3), round(r["estimate"][1], 3)] for r in mine
+                    [round(r["estimate"][0], 3), round(r["estimate"][1], 3)]
+                    if math.isfinite(r["error_m"])
+                    else None
+                    for r in mine
                 ],
-                "mean_error_m": round(float(np.mean([r["error_m"] for r in mine])), 4),
-                "max_error_m": round(float(np.max([r["error_m"] for r in mine])), 4),
+                "mean_error_m": json_float(float(np.mean(errors))),
+                "max_error_m": json_float(float(np.max(errors))),
+                "no_estimate": sum(1 for e in errors if not math.isfinite(e)),
             }
         rows.append(row)
     return rows
@@ -444,6 +454,6 @@ def _write_outputs(
         figures.plot_cdf(
             outdir / "cdf_robustness.png", rob, "robustness: cumulative position error"
         )
-    (outdir / "summary.json").write_text(json.dumps(jsonable(summary), indent=1), encoding="utf-8")
-    (outdir / "estimates.json").write_text(json.dumps(jsonable(list(records))), encoding="utf-8")
-    (outdir / "report.md").write_text(report.render(summary), encoding="utf-8")
+    atomic_write_text(outdir / "estimates.json", json.dumps(jsonable(list(records))))
+    atomic_write_text(outdir / "report.md", report.render(summary))
+    atomic_write_text(outdir / "summary.json", json.dumps(jsonable(summary), indent=1))

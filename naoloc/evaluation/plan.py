@@ -116,18 +116,7 @@ def _strategy(mode: str) -> str:
 
 def drift_overrides(cfg: Config, level: float) -> dict[str, Any]:
     """``world.odometry`` overrides that scale the config's drift by ``level``."""
-    odo = cfg.world.odometry
-    return {
-        "world": {
-            "odometry": {
-                "scale_error": max(-0.5, min(0.5, odo.scale_error * level)),
-                "heading_bias_rad_per_m": odo.heading_bias_rad_per_m * level,
-                "random_walk_m_per_sqrt_m": odo.random_walk_m_per_sqrt_m * level,
-                "heading_random_walk_rad_per_sqrt_rad": odo.heading_random_walk_rad_per_sqrt_rad
-                * level,
-            }
-        }
-    }
+    return {"world": {"odometry": {"level": cfg.world.odometry.level * level}}}
 
 
 def make_plan(cfg: Config, protocol: str, studies: tuple[str, ...]) -> Plan:

@@ -119,6 +119,34 @@ def distance_to_walls(x: float, y: float, room_size: tuple[float, float]) -> flo
     return min(x, sx - x, y, sy - y)
 
 
+# Where each drawn protocol puts the robot: (min, max) distance to the nearest wall (m) and
+# the free radius around it (m) that no furniture may enter. ``random`` keeps near the survey
+# circuit; ``anywhere`` takes the whole free floor, the room's interior included.
+PROTOCOL_BANDS: dict[str, tuple[tuple[float, float], float]] = {
+    "random": ((0.6, 1.4), 0.25),
+    "anywhere": ((0.3, math.inf), 0.3),
+}
+
+
+def sample_protocol_poses(
+    protocol: str,
+    n: int,
+    seed: int,
+    room_size: tuple[float, float],
+    is_free: Callable[[float, float, float], bool],
+) -> list[EvalPose]:
+    """Draw the poses of a drawn protocol (``random`` or ``anywhere``; see PROTOCOL_BANDS).
+
+    Raises:
+        ConfigError: Unknown protocol, ``n`` < 1, or too little free floor.
+    """
+    if protocol not in PROTOCOL_BANDS:
+        valid = ", ".join(["paper", *PROTOCOL_BANDS])
+        raise ConfigError(f"unknown protocol {protocol!r}; valid: {valid}")
+    band, clearance = PROTOCOL_BANDS[protocol]
+    return sample_random_poses(n, seed, room_size, is_free, band_m=band, clearance_m=clearance)
+
+
 def sample_random_poses(
     n: int,
     seed: int,
@@ -156,6 +184,7 @@ def sample_random_poses(
     sx, sy = room_size
     if min(sx, sy) < 2 * lo:
         raise ConfigError(f"room {sx} x {sy} m has no floor {lo} m from every wall")
+    band = f"{lo}-{hi}" if math.isfinite(hi) else f"at least {lo}"
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0x7E57]))
     child_seeds = rng.integers(0, 2**31 - 1, size=n)
     poses: list[EvalPose] = []
@@ -163,7 +192,7 @@ def sample_random_poses(
     while len(poses) < n:
         if draws >= max_draws:
             raise ConfigError(
-                f"found only {len(poses)} of {n} free poses {lo}-{hi} m from the walls "
+                f"found only {len(poses)} of {n} free poses {band} m from the walls "
                 f"after {max_draws} draws"
             )
         draws += 1

@@ -7,6 +7,7 @@ from a finished run without re-running it.
 
 from __future__ import annotations
 
+import math
 import os
 import platform
 from collections.abc import Sequence
@@ -42,7 +43,9 @@ def _f(value: Any, digits: int = 2) -> str:
     return str(value)
 
 
-def _xy(pair: Sequence[float], digits: int = 2) -> str:
+def _xy(pair: Sequence[float] | None, digits: int = 2) -> str:
+    if pair is None or not all(math.isfinite(v) for v in pair[:2]):
+        return "(none)"  # no estimate: a miss
     return f"({pair[0]:.{digits}f}, {pair[1]:.{digits}f})"
 
 

@@ -150,11 +150,15 @@ def group_rows(records: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
                 "errors_m": [],
             },
         )
-        row["estimates"].append([round(float(v), 4) for v in rec["estimate"][:2]])
-        row["errors_m"].append(round(float(rec["error_m"]), 4))
+        est = [float(v) for v in rec["estimate"][:2]]
+        # No estimate: null in JSON (a miss), never a placeholder position.
+        found = all(math.isfinite(v) for v in est)
+        row["estimates"].append([round(v, 4) for v in est] if found else None)
+        row["errors_m"].append(json_float(float(rec["error_m"])))
     out = []
     for row in rows.values():
-        row["mean_error_m"] = round(float(np.mean(row["errors_m"])), 4)
+        errors = [math.inf if e is None else e for e in row["errors_m"]]
+        row["mean_error_m"] = json_float(float(np.mean(errors)))
         out.append(row)
     return out
 

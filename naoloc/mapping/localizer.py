@@ -72,6 +72,16 @@ class Estimate:
         """The estimate as a :class:`Pose2D`."""
         return Pose2D(self.x, self.y, self.theta)
 
+    @property
+    def found(self) -> bool:
+        """False when nothing was recognised: then x, y and theta are NaN, never a guess."""
+        return self.method != "none" and math.isfinite(self.x) and math.isfinite(self.y)
+
+    @property
+    def method(self) -> str:
+        """How the pose was found: ``pnp``, ``keyframes``, ``paper``, ``filter`` or ``none``."""
+        return str(self.details.get("method", self.mode))
+
 
 def query_camera(kf: Keyframe) -> CameraInfo:
     """The keyframe's camera model at the keyframe's actual image size."""
@@ -92,10 +102,17 @@ def _to_last(queries: Sequence[Keyframe]) -> list[np.ndarray]:
     return [robot_matrix(*relative_pose(q.pose, last)) for q in queries]
 
 
-def _no_estimate(vmap: VisualMap, mode: str, reason: str) -> Estimate:
-    poses = vmap.keyframe_poses
-    cx, cy = (float(poses[:, 0].mean()), float(poses[:, 1].mean())) if len(poses) else (0.0, 0.0)
-    return Estimate(cx, cy, 0.0, 0.0, mode, {"method": "none", "reason": reason})
+def no_estimate(mode: str, reason: str, details: dict[str, Any] | None = None) -> Estimate:
+    """The answer when nothing was recognised: no pose at all (NaN), confidence 0.
+
+    Args:
+        mode: ``verified`` or ``paper``.
+        reason: A few words on why (``no features``, ``no verified match``...).
+        details: Extras to keep (candidates...).
+    """
+    nan = float("nan")
+    extras = {**(details or {}), "method": "none", "reason": reason}
+    return Estimate(nan, nan, nan, 0.0, mode, extras)
 
 
 def featured_neuron_poses(vmap: VisualMap) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -136,7 +153,7 @@ def localize_paper(
     posed, neuron_poses, neuron_views = featured_neuron_poses(vmap)
     usable = [i for i, f in enumerate(feats) if len(f) > 0]
     if not usable or posed.size == 0:
-        return _no_estimate(vmap, "paper", "no features" if not usable else "no posed neuron")
+        return no_estimate("paper", "no features" if not usable else "no posed neuron")
     to_last = _to_last(queries)
     xs, ys, headings, closeness, winners = [], [], [], [], []
     weights = vmap.gcs.weights[posed]
@@ -280,7 +297,7 @@ def localize_verified(
 
     usable = [i for i, f in enumerate(feats) if len(f) > 0]
     if not usable:
-        return _no_estimate(vmap, "verified", "no features")
+        return no_estimate("verified", "no features")
     to_last = _to_last(queries)
     matcher = hamming_matcher(vmap.vocabulary.binary)
     corr = _Correspondences()
@@ -292,7 +309,7 @@ def localize_verified(
         q, f = queries[qi], feats[qi]
         cam = query_camera(q)
         kmat = cam.matrix()
-        c_q = camera_in_robot(q.head_yaw, q.head_pitch, cam.index)
+        c_q = q.camera_matrix()  # the robot's own kinematics at capture
         cands = _candidates(vmap, vmap.vocabulary.histogram(f.descriptors), top_k)
         cand_all.append(cands)
         best: dict[int, tuple[float, np.ndarray]] = {}
@@ -408,7 +425,7 @@ def _fallback(
         t_map_cam_k = robot_matrix(*vmap.refined_poses[c]) @ camera_in_robot(
             float(vmap.keyframe_heads[c, 0]), float(vmap.keyframe_heads[c, 1]), cam_k.index
         )
-        off = camera_in_robot(q.head_yaw, q.head_pitch, cam_q.index)[:2, 3]
+        off = q.camera_matrix()[:2, 3]
         ct, st = math.cos(theta_q), math.sin(theta_q)
         rx = t_map_cam_k[0, 3] - (ct * off[0] - st * off[1])
         ry = t_map_cam_k[1, 3] - (st * off[0] + ct * off[1])
@@ -419,8 +436,7 @@ def _fallback(
         ths.append(th)
         ws.append(float(inl.sum()))
     if not ws:
-        est = _no_estimate(vmap, "verified", "no verified match")
-        return Estimate(est.x, est.y, est.theta, 0.0, "verified", {**details, **est.details})
+        return no_estimate("verified", "no verified match", details)
     w = np.asarray(ws)
     details.update(method="keyframes", inliers=int(w.sum()))
     conf = FALLBACK_MAX_CONFIDENCE * (1.0 - math.exp(-float(w.max()) / CONFIDENCE_SCALE))

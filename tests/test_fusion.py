@@ -1,0 +1,119 @@
+"""The particle filter: tracks odometry and fixes, survives outliers, recovers when kidnapped."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from naoloc.fusion import Fix, ParticleFilter, fix_from_confidence
+from naoloc.geometry import Pose2D, modulo2PI, relative_pose
+
+BOUNDS = (-1.0, -1.0, 5.0, 5.0)
+
+
+def _walk(start: Pose2D, steps: int, step: Pose2D) -> list[Pose2D]:
+    poses = [start]
+    for _ in range(steps):
+        poses.append(poses[-1] * step)
+    return poses
+
+
+def _odometry(truth: list[Pose2D], scale: float, bias: float) -> list[Pose2D]:
+    """A drifting odometry of a true path: distances scaled, headings biased per step."""
+    odo = [truth[0]]
+    for a, b in itertools.pairwise(truth):
+        d = relative_pose(a, b)
+        odo.append(odo[-1] * Pose2D(d.x * scale, d.y * scale, d.theta + bias))
+    return odo
+
+
+def _run(pf: ParticleFilter, truth: list[Pose2D], odo: list[Pose2D], fix_every: int,
+         sigma: float = 0.05, rng: np.random.Generator | None = None) -> list[float]:  # fmt: skip
+    rng = rng or np.random.default_rng(0)
+    errors = []
+    for k in range(1, len(truth)):
+        pf.predict(relative_pose(odo[k - 1], odo[k]))
+        if k % fix_every == 0:
+            t = truth[k]
+            noisy = Pose2D(t.x + rng.normal(0, sigma), t.y + rng.normal(0, sigma),
+                           t.theta + rng.normal(0, 0.03))  # fmt: skip
+            pf.update(Fix(noisy, sigma, 0.05))
+        errors.append(pf.belief().pose.distance(truth[k]))
+    return errors
+
+
+def test_tracks_a_drifting_walk_with_occasional_fixes() -> None:
+    truth = _walk(Pose2D(0.5, 0.5, 0.3), 60, Pose2D(0.05, 0.0, 0.02))
+    odo = _odometry(truth, 1.15, 0.01)  # 15 % distance error, 0.6 deg per step of bias
+    pf = ParticleFilter(1500, seed=1, bounds=BOUNDS)
+    pf.reset_to(Fix(truth[0], 0.05, 0.05))
+    errors = _run(pf, truth, odo, fix_every=10)
+    odo_error = odo[-1].distance(truth[-1])
+    assert errors[-1] < 0.1 < odo_error  # the fixes hold the belief where odometry drifted off
+    cov = pf.belief().covariance
+    assert cov.shape == (3, 3) and np.all(np.linalg.eigvalsh(cov) >= -1e-12)
+
+
+def test_global_start_converges_on_fixes() -> None:
+    truth = _walk(Pose2D(3.0, 1.0, -1.0), 20, Pose2D(0.05, 0.0, 0.0))
+    pf = ParticleFilter(2000, seed=2, bounds=BOUNDS)  # no idea where it starts
+    assert pf.belief().spread_m > 1.0
+    errors = _run(pf, truth, truth, fix_every=2)
+    assert errors[-1] < 0.08 and pf.belief().spread_m < 0.15
+
+
+def test_kidnapped_robot_recovers() -> None:
+    pf = ParticleFilter(2000, seed=3, bounds=BOUNDS)
+    here = Pose2D(1.0, 1.0, 0.0)
+    pf.reset_to(Fix(here, 0.05, 0.05))
+    for _ in range(5):
+        pf.update(Fix(here, 0.05, 0.05))
+    assert pf.belief().pose.distance(here) < 0.05
+    # Carried 3 m away without odometry knowing: the fixes now say somewhere else.
+    there = Pose2D(3.5, 3.8, 2.0)
+    for _ in range(12):
+        pf.predict(Pose2D())
+        pf.update(Fix(there, 0.05, 0.05))
+    b = pf.belief()
+    assert b.pose.distance(there) < 0.1
+    assert abs(modulo2PI(b.pose.theta - there.theta)) < 0.1
+
+
+def test_one_wrong_fix_does_not_move_a_confident_belief() -> None:
+    pf = ParticleFilter(2000, seed=4, bounds=BOUNDS)
+    here = Pose2D(2.0, 2.0, 1.0)
+    pf.reset_to(Fix(here, 0.05, 0.05))
+    for _ in range(4):
+        pf.update(Fix(here, 0.05, 0.05))
+    pf.update(Fix(Pose2D(4.0, 0.0, -2.0), 0.05, 0.05))  # a look-alike poster elsewhere
+    assert pf.belief().pose.distance(here) < 0.1
+
+
+def test_same_seed_same_belief() -> None:
+    truth = _walk(Pose2D(0.5, 0.5, 0.0), 15, Pose2D(0.1, 0.0, 0.05))
+    a = ParticleFilter(500, seed=7, bounds=BOUNDS)
+    b = ParticleFilter(500, seed=7, bounds=BOUNDS)
+    ea = _run(a, truth, truth, 3, rng=np.random.default_rng(5))
+    eb = _run(b, truth, truth, 3, rng=np.random.default_rng(5))
+    assert ea == eb and np.array_equal(a.states, b.states)
+
+
+def test_particles_stay_off_furniture() -> None:
+    def free(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return np.hypot(x - 2.0, y - 2.0) > 0.5
+
+    pf = ParticleFilter(1000, seed=8, bounds=BOUNDS, free=free)
+    assert free(pf.states[:, 0], pf.states[:, 1]).all()
+
+
+def test_fix_uncertainty_shrinks_with_inliers() -> None:
+    few = fix_from_confidence(Pose2D(), 0.9, inliers=10)
+    many = fix_from_confidence(Pose2D(), 0.9, inliers=200)
+    unsure = fix_from_confidence(Pose2D(), 0.1)
+    assert many.sigma_xy_m < few.sigma_xy_m < unsure.sigma_xy_m
+    with pytest.raises(ValueError, match="at least 10"):
+        ParticleFilter(3)
+    assert math.isfinite(many.sigma_theta_rad)
