@@ -3,10 +3,12 @@
 Each verb lives in ``naoloc.commands.<verb>`` and returns a JSON-able dict that is
 printed as the single last line of stdout. Errors are one line on stderr and a
 non-zero exit: 1 for a naoloc error, 2 for bad usage, 3 when ``localize`` recognised
-nothing (its JSON line is still printed, with null pose fields), 130 for SIGINT (Ctrl-C)
-and 143 for SIGTERM. Both signals are honoured also where the shell ignores SIGINT
-(background jobs): :func:`naoloc.interrupt.interruptible` installs the handlers for the
-whole run. Notes attached to the error (e.g. where a partial dataset was kept) join its line.
+nothing (its JSON line is still printed, with null pose fields), 70 for a bug (an
+unexpected exception: one line naming it; set ``NAOLOC_DEBUG=1`` for the traceback), 130
+for SIGINT (Ctrl-C) and 143 for SIGTERM. Both signals are honoured also where the shell
+ignores SIGINT (background jobs): :func:`naoloc.interrupt.interruptible` installs the
+handlers for the whole run. Notes attached to the error (e.g. where a partial dataset was
+kept) join its line.
 """
 
 from __future__ import annotations
@@ -15,7 +17,9 @@ import argparse
 import importlib
 import json
 import math
+import os
 import sys
+import traceback
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -25,6 +29,10 @@ from naoloc.config import Config, load_config
 from naoloc.errors import NaolocError, NoEstimate, NotBuiltError
 from naoloc.interrupt import exit_code, interruptible
 from naoloc.outputs import atomic_write_text
+
+EXIT_INTERNAL = 70  # sysexits.h EX_SOFTWARE: an unexpected exception (a bug)
+_MAX_MESSAGE = 500  # characters of an unexpected exception's message printed on stderr
+_MAX_LINE = 1000  # characters of an error line (with its notes) printed on stderr
 
 VERBS: dict[str, str] = {
     "survey": "Algorithm 3: walk closed laps, record images and odometry poses (MCAP)",
@@ -156,19 +164,45 @@ def _run_verb(verb: str, args: argparse.Namespace, cfg: Config) -> dict[str, Any
     return result
 
 
+def one_line(text: object, limit: int = _MAX_MESSAGE) -> str:
+    """``text`` as one terminal line: newlines folded, at most ``limit`` characters."""
+    line = " ".join(str(text).split())
+    return line if len(line) <= limit else line[: limit - 3] + "..."
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``naoloc`` console script. Returns the exit code."""
+    """Entry point of the ``naoloc`` console script. Returns the exit code.
+
+    The last line of defence: a naoloc error is one line on stderr (exit 1); any other
+    exception is one line naming it and a hint (exit :data:`EXIT_INTERNAL`), with the
+    traceback only when the environment sets ``NAOLOC_DEBUG=1``.
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     verb: str = args.verb
     with interruptible():
-        return _main(verb, args)
+        return _guarded(verb, args)
 
 
 def _with_notes(text: str, err: BaseException) -> str:
     """``text`` and the error's notes (``add_note``) on one line."""
     notes = [str(n).replace("\n", " ") for n in getattr(err, "__notes__", ())]
     return "; ".join([text, *notes])
+
+
+def _guarded(verb: str, args: argparse.Namespace) -> int:
+    try:
+        return _main(verb, args)
+    except Exception as err:  # the last line of defence: a bug, never a bare traceback
+        if os.environ.get("NAOLOC_DEBUG") == "1":
+            traceback.print_exc()
+        what = one_line(f"{type(err).__name__}: {err}" if str(err) else type(err).__name__)
+        print(
+            f"naoloc {verb}: internal error: {what} (a bug: please report it; "
+            "NAOLOC_DEBUG=1 shows the traceback)",
+            file=sys.stderr,
+        )
+        return EXIT_INTERNAL
 
 
 def _main(verb: str, args: argparse.Namespace) -> int:
@@ -185,12 +219,13 @@ def _main(verb: str, args: argparse.Namespace) -> int:
         print(f"naoloc {verb}: {err}", file=sys.stderr)
         return err.exit_code
     except NaolocError as err:
-        print(_with_notes(f"naoloc {verb}: error: {err}", err), file=sys.stderr)
+        text = _with_notes(f"naoloc {verb}: error: {err}", err)
+        print(one_line(text, _MAX_LINE), file=sys.stderr)
         return 1
     except OSError as err:  # a path that cannot be read or written
         where = f": {err.filename}" if err.filename else ""
         text = f"naoloc {verb}: error: {err.strerror or err}{where}"
-        print(_with_notes(text, err), file=sys.stderr)
+        print(one_line(_with_notes(text, err), _MAX_LINE), file=sys.stderr)
         return 1
     sys.stdout.write(json.dumps(result, separators=(", ", ": ")) + "\n")
     sys.stdout.flush()

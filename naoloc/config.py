@@ -1,8 +1,9 @@
 """Typed configuration: every key (listed in docs/cli.md) with a default, unknown keys rejected.
 
-A config comes from a YAML file (read with ``yaml.safe_load`` only), a dict, or a
-:class:`Config`. Errors are one line naming the file and the key path, e.g.
-``configs/x.yaml: world.room.sise_m: unknown key``.
+A config comes from a YAML file (read with a bounded ``yaml.SafeLoader`` only, see
+:mod:`naoloc.safe_yaml`: size, nesting, alias expansion and integer digits capped), a
+dict, or a :class:`Config`. Every number must be finite. Errors are one line naming the
+file and the key path, e.g. ``configs/x.yaml: world.room.sise_m: unknown key``.
 """
 
 from __future__ import annotations
@@ -17,10 +18,15 @@ from pydantic import BaseModel, ConfigDict, Field, SecretStr, ValidationError, f
 
 from naoloc.constants import CAMERA_FPS, COLORSPACE_LAYERS, RESOLUTIONS
 from naoloc.errors import ConfigError
+from naoloc.safe_yaml import MAX_CONFIG_BYTES, check_values, load_yaml, read_text, short_repr
+
+__all__ = ["MAX_CONFIG_BYTES", "Config", "load_config"]
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, validate_default=True)
+    model_config = ConfigDict(
+        extra="forbid", frozen=True, validate_default=True, allow_inf_nan=False
+    )
 
 
 class RobotConfig(_Model):
@@ -498,29 +504,59 @@ def _deep_merge(base: dict[str, Any], extra: dict[str, Any]) -> dict[str, Any]:
 
 
 def _format_error(source: str, err: ValidationError) -> str:
-    first = err.errors()[0]
-    path = ".".join(str(p) for p in first.get("loc", ())) or "<root>"
+    errors = err.errors(include_url=False)
+    first = errors[0]
+    path = ".".join(str(p)[:60] for p in first.get("loc", ())) or "<root>"
     kind = first.get("type", "")
     if kind == "extra_forbidden":
         msg = "unknown key"
     else:
-        msg = str(first.get("msg", "invalid value"))
+        msg = " ".join(str(first.get("msg", "invalid value")).split())[:160]
         if "input" in first and kind != "missing" and "password" not in path:
-            msg += f" (got {first['input']!r})"
-    more = len(err.errors()) - 1
+            msg += f" (got {short_repr(first['input'])})"  # bounded: never a huge repr
+    more = len(errors) - 1
     suffix = f" (+{more} more)" if more > 0 else ""
     return f"{source}: {path}: {msg}{suffix}"
+
+
+# Sane ranges of keys whose Field has none (key path -> inclusive [low, high]); applied
+# to every item of a list value; a key missing from the config is skipped.
+_SANE_RANGES: dict[str, tuple[float, float]] = {
+    "robot.timeout_s": (0.0, 3600.0),
+    "robot.move_timeout_s": (0.0, 86400.0),
+    "world.odometry.heading_bias_rad_per_m": (-1.0, 1.0),
+    "world.start_pose": (-100.0, 100.0),
+    "survey.side_m": (0.0, 50.0),
+    "survey.wall_offset_m": (0.0, 25.0),
+    "survey.head_yaw_rad": (-2.0857, 2.0857),  # NAO HeadYaw limits (rad)
+    "go_home.tolerance_m": (0.0, 10.0),
+}
+
+
+def _check_ranges(values: dict[str, Any], source: str) -> None:
+    for key, (low, high) in _SANE_RANGES.items():
+        value: Any = values
+        for part in key.split("."):
+            value = value.get(part) if isinstance(value, dict) else None
+        items = value if isinstance(value, list | tuple) else [value]
+        for item in items:
+            if isinstance(item, int | float) and not low <= item <= high:
+                raise ConfigError(f"{source}: {key}: {item} is outside [{low:g}, {high:g}]")
 
 
 def _validate(data: Any, source: str) -> Config:
     if data is None:
         data = {}
+    check_values(data, source)  # finite numbers, bounded sizes and nesting, before pydantic
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: the top level must be a mapping, got {type(data).__name__}")
     try:
         cfg = Config.model_validate(data)
     except ValidationError as err:
         raise ConfigError(_format_error(source, err)) from None
+    values = cfg.model_dump()
+    check_values(values, source)  # strings such as "nan" that pydantic turned into floats
+    _check_ranges(values, source)
     sides = cfg.survey_sides()
     if min(sides) <= 0:
         raise ConfigError(
@@ -556,19 +592,7 @@ def load_config(source: str | Path | dict[str, Any] | Config | None) -> Config:
     path = Path(source)
     if not path.exists() and is_config_name(str(source)):
         return load_shipped_config(str(source))
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: no such config file") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise ConfigError(f"{path}: cannot read: {err}") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        where = f" line {mark.line + 1}" if mark is not None else ""
-        problem = getattr(err, "problem", None) or "invalid YAML"
-        raise ConfigError(f"{path}:{where}: {problem}") from None
+    data = load_yaml(read_text(path), str(path))
     return _validate(data, str(path))
 
 
@@ -614,8 +638,6 @@ def load_shipped_config(name: str) -> Config:
     if entry is None:
         names = ", ".join(shipped) or "none"
         raise ConfigError(f"{name}: no such config file or shipped config (shipped: {names})")
-    try:
-        data = yaml.safe_load(entry.read_text(encoding="utf-8"))
-    except yaml.YAMLError as err:
-        raise ConfigError(f"{name}: shipped config is not valid YAML: {err}") from None
-    return _validate(data, f"{name} (configs/{entry.name})")
+    source = f"{name} (configs/{entry.name})"
+    data = load_yaml(entry.read_text(encoding="utf-8"), source)
+    return _validate(data, source)

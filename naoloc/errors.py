@@ -64,6 +64,14 @@ class NotBuiltError(NaolocError):
     """A command or feature that does not exist yet; never silently faked."""
 
 
+class UrlError(BackendError):
+    """A listen or connect URL that is not ``tcp://HOST:PORT`` (or ``tcps://``)."""
+
+
+class ImageError(RobotError):
+    """A camera image whose size, byte count or colorspace does not add up."""
+
+
 class NoEstimate(NaolocError):
     """Nothing was recognised, so there is no pose to give (``naoloc localize`` exits 3).
 

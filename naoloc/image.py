@@ -3,17 +3,25 @@
 ``getImageRemote`` returns ``[width, height, layers, colorspace, sec, usec, bytes,
 camera, left, top, right, bottom]`` (angles in radians). Over libqi the bytes may arrive
 as ``bytes``, ``bytearray`` or even ``str``; :func:`frame_from_naoqi` accepts all three.
+
+Nothing from the wire is trusted: every field's type, the size (1 to :data:`MAX_SIDE_PX`
+pixels a side), the colorspace and its layer count, and the byte count are checked before
+any byte is copied or any array is allocated; a failure is a one-line
+:class:`~naoloc.errors.ImageError`. A :class:`Frame` checks its pixel array when made, so
+no empty or mis-shaped image reaches OpenCV. A blank image is a valid frame.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 
 from naoloc.constants import (
+    COLORSPACE_LAYERS,
     kBGRColorSpace,
     kHSVColorSpace,
     kRGBColorSpace,
@@ -21,7 +29,35 @@ from naoloc.constants import (
     kYUVColorSpace,
     kYuvColorSpace,
 )
-from naoloc.errors import RobotError
+from naoloc.errors import ImageError, RobotError
+
+MAX_SIDE_PX: Final = 4096  # NAO's largest image is k16VGA, 2560 x 1920
+
+
+def check_pixels(pixels: Any, colorspace: Any) -> None:
+    """Check that ``pixels`` is a non-empty ``(h, w, layers)`` uint8 image of ``colorspace``.
+
+    Raises:
+        ImageError: One line naming what does not match.
+    """
+    if not isinstance(colorspace, int) or colorspace not in COLORSPACE_LAYERS:
+        raise ImageError(f"unknown colorspace {str(colorspace)[:20]}")
+    if not isinstance(pixels, np.ndarray):
+        raise ImageError(f"an image must be a numpy array, got {type(pixels).__name__}")
+    if pixels.dtype != np.uint8 or pixels.ndim != 3:
+        raise ImageError(
+            f"an image must be (height, width, layers) uint8, got {pixels.ndim}-d {pixels.dtype}"
+        )
+    height, width, layers = pixels.shape
+    if not (0 < width <= MAX_SIDE_PX and 0 < height <= MAX_SIDE_PX):
+        raise ImageError(f"image size {width}x{height} is outside 1..{MAX_SIDE_PX} pixels")
+    if layers != COLORSPACE_LAYERS[colorspace]:
+        raise ImageError(
+            f"colorspace {colorspace} has {COLORSPACE_LAYERS[colorspace]} layers, "
+            f"the image {layers}"
+        )
+    if colorspace == kYUV422ColorSpace and width % 2:
+        raise ImageError(f"a YUV422 image needs an even width, got {width}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -42,6 +78,9 @@ class Frame:
     camera: int
     angles: tuple[float, float, float, float]
 
+    def __post_init__(self) -> None:
+        check_pixels(self.pixels, self.colorspace)
+
     @property
     def width(self) -> int:
         """Width in pixels."""
@@ -61,11 +100,22 @@ class Frame:
         return to_bgr(self.pixels, self.colorspace)
 
 
+def _byte_count(data: Any) -> int:
+    """Length in bytes of image data as NAOqi sends it, without copying it."""
+    if isinstance(data, str) and data.startswith(("b'", 'b"')):
+        frame_bytes(data)  # raises the repr-text error
+    if isinstance(data, bytes | bytearray | str):
+        return len(data)
+    if isinstance(data, memoryview | np.ndarray):
+        return int(data.nbytes)
+    raise ImageError(f"frame bytes have unexpected type {type(data).__name__}")
+
+
 def frame_bytes(data: Any) -> bytes:
     """Image bytes as any NAOqi sends them: ``bytes``, ``bytearray``, ``str`` (or an array).
 
     Raises:
-        RobotError: For repr text (a server that sent bytes untyped) or another type.
+        ImageError: For repr text (a server that sent bytes untyped) or another type.
     """
     if isinstance(data, bytes):
         return data
@@ -73,34 +123,72 @@ def frame_bytes(data: Any) -> bytes:
         return bytes(data)
     if isinstance(data, str):
         if data.startswith(("b'", 'b"')):
-            raise RobotError(
+            raise ImageError(
                 "frame bytes arrived as repr text; the server must declare image buffers qi.Buffer"
             )
-        return data.encode("latin-1")
+        try:
+            return data.encode("latin-1")
+        except UnicodeEncodeError:
+            raise ImageError("frame bytes arrived as text that is not latin-1") from None
     if isinstance(data, np.ndarray):
         return data.tobytes()
-    raise RobotError(f"frame bytes have unexpected type {type(data).__name__}")
+    raise ImageError(f"frame bytes have unexpected type {type(data).__name__}")
+
+
+def _int_field(value: Any, name: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        raise ImageError(f"image {name} must be an integer, got {type(value).__name__}")
+    return int(value)
+
+
+def _real_field(value: Any, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        raise ImageError(f"image {name} must be a number, got {type(value).__name__}")
+    number = float(value)
+    if not math.isfinite(number):
+        raise ImageError(f"image {name} must be finite, got {number}")
+    return number
 
 
 def frame_from_naoqi(value: Sequence[Any]) -> Frame:
     """Decode a NAOqi image array into a :class:`Frame`.
 
     Raises:
-        RobotError: If the array is malformed or its byte count does not match.
+        ImageError: (a RobotError) If the array is malformed, its size or colorspace is
+            impossible, or its byte count does not match width x height x layers.
     """
-    if value is None or len(value) < 12:
-        raise RobotError("getImageRemote returned no image (is the camera subscribed?)")
-    width, height, layers, colorspace = (int(v) for v in value[:4])
-    data = frame_bytes(value[6])
-    expected = width * height * layers
-    if width <= 0 or height <= 0 or layers <= 0 or len(data) != expected:
-        raise RobotError(
-            f"image of {width}x{height}x{layers} should have {expected} bytes, got {len(data)}"
+    if not isinstance(value, list | tuple) or len(value) < 12:
+        raise ImageError("getImageRemote returned no image (is the camera subscribed?)")
+    width = _int_field(value[0], "width")
+    height = _int_field(value[1], "height")
+    layers = _int_field(value[2], "layers")
+    colorspace = _int_field(value[3], "colorspace")
+    if not (0 < width <= MAX_SIDE_PX and 0 < height <= MAX_SIDE_PX):
+        raise ImageError(f"image size {width}x{height} is outside 1..{MAX_SIDE_PX} pixels")
+    if colorspace not in COLORSPACE_LAYERS:
+        raise ImageError(f"unknown colorspace {colorspace}; valid: {sorted(COLORSPACE_LAYERS)}")
+    if layers != COLORSPACE_LAYERS[colorspace]:
+        raise ImageError(
+            f"colorspace {colorspace} has {COLORSPACE_LAYERS[colorspace]} layers, "
+            f"the image says {layers}"
         )
+    expected = width * height * layers
+    count = _byte_count(value[6])
+    if count != expected:
+        raise ImageError(
+            f"image of {width}x{height}x{layers} should have {expected} bytes, got {count}"
+        )
+    data = frame_bytes(value[6])
     pixels = np.frombuffer(data, dtype=np.uint8).reshape(height, width, layers)
-    stamp = float(value[4]) + float(value[5]) * 1e-6
-    angles = (float(value[8]), float(value[9]), float(value[10]), float(value[11]))
-    return Frame(pixels, colorspace, stamp, int(value[7]), angles)
+    stamp = _real_field(value[4], "time (s)") + _real_field(value[5], "time (us)") * 1e-6
+    camera = _int_field(value[7], "camera")
+    angles = (
+        _real_field(value[8], "angle left"),
+        _real_field(value[9], "angle top"),
+        _real_field(value[10], "angle right"),
+        _real_field(value[11], "angle bottom"),
+    )
+    return Frame(pixels, colorspace, stamp, camera, angles)
 
 
 def frame_to_naoqi(frame: Frame) -> list[Any]:
@@ -152,8 +240,14 @@ def from_rgb(rgb: np.ndarray, colorspace: int) -> np.ndarray:
 
 
 def to_gray(pixels: np.ndarray, colorspace: int) -> np.ndarray:
-    """Luma of an image in any NAOqi colorspace, ``(h, w)`` uint8."""
+    """Luma of an image in any NAOqi colorspace, ``(h, w)`` uint8.
+
+    Raises:
+        ImageError: An empty or mis-shaped image, or an unknown colorspace.
+    """
     import cv2
+
+    check_pixels(pixels, colorspace)
 
     if colorspace in (kYuvColorSpace, kYUV422ColorSpace, kYUVColorSpace):
         return np.ascontiguousarray(pixels[..., 0])
@@ -165,8 +259,14 @@ def to_gray(pixels: np.ndarray, colorspace: int) -> np.ndarray:
 
 
 def to_bgr(pixels: np.ndarray, colorspace: int) -> np.ndarray:
-    """An image in any NAOqi colorspace as ``(h, w, 3)`` uint8 BGR."""
+    """An image in any NAOqi colorspace as ``(h, w, 3)`` uint8 BGR.
+
+    Raises:
+        ImageError: An empty or mis-shaped image, or an unknown colorspace.
+    """
     import cv2
+
+    check_pixels(pixels, colorspace)
 
     if colorspace == kBGRColorSpace:
         return pixels

@@ -120,3 +120,98 @@ def test_mutated_valid_messages_raise_only_protocol_error(
         return
     assert isinstance(decoded, dict)
     assert decoded["k"] in wire.REQUEST_KINDS
+
+
+@pytest.mark.parametrize(
+    "header",
+    [
+        {"k": [], "i": 1},
+        {"k": {}, "i": 1},
+        {"k": {"a": 1}, "i": 1},
+        {"k": b"ping", "i": 1},
+        {"k": 3.5, "i": 1},
+        {"k": None, "i": 1},
+        {"k": "call", "i": 1, "s": ["ALMotion"], "m": "moveTo", "a": []},
+        {"k": "call", "i": 1, "s": "ALMotion", "m": {"x": 1}, "a": []},
+        {"k": "ping", "i": [1]},
+        {"k": "ping", "i": 1.0},
+        {"k": "ping", "i": 2**64 - 1},
+    ],
+)
+def test_fields_of_the_wrong_type_raise_protocol_error(header: dict[str, object]) -> None:
+    frames = [msgpack.packb(header, use_bin_type=True)]
+    for decode in (wire.decode_request, wire.decode_reply):
+        with pytest.raises(ProtocolError):
+            decode(frames)
+
+
+def test_non_string_map_keys_and_non_bytes_frames_raise_protocol_error() -> None:
+    with pytest.raises(ProtocolError):
+        wire.decode_request([msgpack.packb({1: "ping", "i": 1}, strict_types=False)])
+    with pytest.raises(ProtocolError):
+        wire.decode_request([12345])
+    with pytest.raises(ProtocolError):
+        wire.decode_request("not a list of frames")  # type: ignore[arg-type]
+
+
+def test_msgpack_nesting_beyond_the_depth_limit_is_refused_before_recursion() -> None:
+    head = b"\x83\xa1k\xa4call\xa1i\x01\xa1a" + b"\x91" * 100_000 + b"\xc0"
+    with pytest.raises(ProtocolError):
+        wire.decode_request([head])
+
+
+def test_declared_sizes_larger_than_the_header_are_refused() -> None:
+    # an array header claiming 2**32-1 items, a str header claiming 4 GB: no allocation
+    for head in (b"\xdd\xff\xff\xff\xff", b"\xdb\xff\xff\xff\xff", b"\xdf\xff\xff\xff\xff"):
+        with pytest.raises(ProtocolError):
+            wire.decode_request([head])
+
+
+@pytest.mark.parametrize(
+    ("header", "message"),
+    [
+        ({"k": "welcome", "i": 1, "v": {"services": 5}}, "services"),
+        ({"k": "welcome", "i": 1, "v": {"services": [1, 2]}}, "services"),
+        ({"k": "welcome", "i": 1, "v": [1]}, "welcome"),
+        ({"k": "err", "i": 1, "e": ["x" * 5000, "y"]}, "error reply"),
+    ],
+)
+def test_malformed_replies_raise_protocol_error(header: dict[str, object], message: str) -> None:
+    with pytest.raises(ProtocolError, match=message):
+        wire.decode_reply([msgpack.packb(header)])
+
+
+_VALUES = st.recursive(
+    st.none() | st.booleans() | st.integers(-(2**63), 2**63 - 1) | st.floats() | st.text()
+    | st.binary(max_size=64),
+    lambda kids: st.lists(kids, max_size=4)
+    | st.dictionaries(st.text(max_size=8), kids, max_size=4),
+    max_leaves=20,
+)  # fmt: skip
+
+
+@_FUZZ
+@given(_VALUES)
+def test_any_sendable_value_round_trips(value: object) -> None:
+    frames = wire.encode({"k": "ok", "i": 9, "v": value})
+    decoded = wire.decode_reply(frames)["v"]
+    assert msgpack.packb(decoded, use_bin_type=True) == msgpack.packb(value, use_bin_type=True)
+
+
+@_FUZZ
+@given(
+    st.dictionaries(
+        st.sampled_from(["k", "i", "s", "m", "a", "v", "e", "x"]),
+        _VALUES | st.sampled_from(["call", "ping", "hello", "bye", "ok", "err", "welcome"]),
+        max_size=6,
+    )
+)
+def test_random_headers_decode_or_raise_only_protocol_error(header: dict[str, object]) -> None:
+    frames = [msgpack.packb(header, use_bin_type=True)]
+    for decode in (wire.decode_request, wire.decode_reply):
+        try:
+            decoded = decode(frames)
+        except ProtocolError as err:
+            assert "\n" not in str(err) and len(str(err)) < 300
+            continue
+        assert isinstance(decoded["k"], str) and isinstance(decoded["i"], int)

@@ -23,6 +23,7 @@ from naoloc.backends.naoqi.session import Transport, error_from_text, new_sessio
 from naoloc.backends.naoqi.signatures import WATCHDOG
 
 from naoloc.errors import BackendError, ConnectionLost, NaolocError, RobotError
+from naoloc.urls import parse_url
 
 HEARTBEAT_EVERY_S: Final = 0.2
 HEARTBEAT_TIMEOUT_S: Final = 0.9
@@ -75,6 +76,7 @@ class Link:
         password: str | None = None,
         curve_keys: str | None = None,
     ) -> None:
+        parse_url(url, what="robot.url", allow_any_port=False, default_port=9559)
         if transport == "zmq" and url.startswith("tcps://"):
             raise BackendError("tcps:// (NAOqi 2.9+) needs transport libqi or qimessaging")
         self.url = url

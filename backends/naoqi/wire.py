@@ -36,6 +36,11 @@ MAX_BUFFER_BYTES: Final = 64 << 20
 MAX_DEPTH: Final = 32
 MAX_ID: Final = (1 << 63) - 1
 MAX_NAME_LEN: Final = 128
+MAX_MESSAGE_BYTES: Final = 128 << 20
+MAX_ITEMS: Final = 1 << 16
+MAX_MAP_ITEMS: Final = 1 << 10
+MAX_SERVICES: Final = 256
+MAX_ERROR_CHARS: Final = 4096
 
 REQUEST_KINDS: Final = frozenset({"hello", "ping", "call", "bye"})
 REPLY_KINDS: Final = frozenset({"ok", "err", "pong", "welcome"})
@@ -111,16 +116,33 @@ def _frame_bytes(frame: Any) -> bytes:
     raise ProtocolError(f"a frame must be bytes, got {type(frame).__name__}")
 
 
+def _frame_len(frame: Any) -> int:
+    """Byte length of a frame without copying it (so an oversized one is refused first)."""
+    if isinstance(frame, bytes | bytearray):
+        return len(frame)
+    if isinstance(frame, memoryview):
+        return frame.nbytes
+    buffer = getattr(frame, "buffer", None)  # zmq.Frame
+    if isinstance(buffer, memoryview):
+        return buffer.nbytes
+    raise ProtocolError(f"a frame must be bytes, got {type(frame).__name__}")
+
+
 def _unpack(frames: Sequence[Any]) -> tuple[Any, list[bool]]:
+    if not isinstance(frames, list | tuple):
+        raise ProtocolError(f"a message is a list of frames, got {type(frames).__name__}")
     if not 1 <= len(frames) <= MAX_FRAMES:
         raise ProtocolError(f"a message has 1 to {MAX_FRAMES} frames, got {len(frames)}")
+    sizes = [_frame_len(f) for f in frames]
+    if sizes[0] > MAX_HEADER_BYTES:
+        raise ProtocolError(f"header of {sizes[0]} bytes exceeds {MAX_HEADER_BYTES}")
+    for size in sizes[1:]:
+        if size > MAX_BUFFER_BYTES:
+            raise ProtocolError(f"buffer of {size} bytes exceeds {MAX_BUFFER_BYTES}")
+    if sum(sizes) > MAX_MESSAGE_BYTES:
+        raise ProtocolError(f"message of {sum(sizes)} bytes exceeds {MAX_MESSAGE_BYTES}")
     head = _frame_bytes(frames[0])
-    if len(head) > MAX_HEADER_BYTES:
-        raise ProtocolError(f"header of {len(head)} bytes exceeds {MAX_HEADER_BYTES}")
     buffers = [_frame_bytes(f) for f in frames[1:]]
-    for buf in buffers:
-        if len(buf) > MAX_BUFFER_BYTES:
-            raise ProtocolError(f"buffer of {len(buf)} bytes exceeds {MAX_BUFFER_BYTES}")
     used = [False] * len(buffers)
 
     def ext_hook(code: int, data: bytes) -> bytes:
@@ -133,20 +155,24 @@ def _unpack(frames: Sequence[Any]) -> tuple[Any, list[bool]]:
         return buffers[index]
 
     try:
+        # Every declared length is capped by the header's own size: a 5-byte header that
+        # claims a 4 GB string or 2**32 items is refused before anything is allocated.
         value = msgpack.unpackb(
             head,
             raw=False,
             use_list=True,
             strict_map_key=True,
             ext_hook=ext_hook,
-            max_str_len=MAX_HEADER_BYTES,
-            max_bin_len=MAX_HEADER_BYTES,
-            max_array_len=1 << 16,
-            max_map_len=1 << 10,
+            max_str_len=len(head),
+            max_bin_len=len(head),
+            max_array_len=min(len(head), MAX_ITEMS),
+            max_map_len=min(len(head), MAX_MAP_ITEMS),
             max_ext_len=4,
         )
     except NaolocError:
         raise
+    except RecursionError:
+        raise ProtocolError(f"value nested deeper than {MAX_DEPTH} levels") from None
     except Exception as err:  # msgpack raises many types: all mean bad bytes
         raise ProtocolError(f"undecodable header: {type(err).__name__}") from None
     return value, used
@@ -171,11 +197,32 @@ def _decode(frames: Sequence[Any], kinds: frozenset[str]) -> dict[str, Any]:
     if not all(used):
         raise ProtocolError("a buffer frame is not referenced by the header")
     kind = header.get("k")
-    if kind not in kinds:
-        raise ProtocolError(f"unknown message kind {kind!r}")
+    if not isinstance(kind, str) or kind not in kinds:
+        shown = kind if isinstance(kind, str) and len(kind) <= MAX_NAME_LEN else None
+        what = repr(shown) if shown is not None else f"of type {type(kind).__name__}"
+        raise ProtocolError(f"unknown message kind {what}")
     _check_id(header)
     _check_value(header, 0)
     return header
+
+
+def peek_id(frames: Sequence[Any]) -> int | None:
+    """The id of a message that failed to decode, when one can be read; never raises.
+
+    Lets a server answer a malformed request with an error reply instead of silence.
+    """
+    try:
+        header, _ = _unpack(frames)
+    except ProtocolError:
+        return None
+    if not isinstance(header, dict):
+        return None
+    try:
+        _check_id(header)
+    except ProtocolError:
+        return None
+    ident: int = header["i"]
+    return ident
 
 
 def decode_request(frames: Sequence[Any]) -> dict[str, Any]:
@@ -220,7 +267,18 @@ def decode_reply(frames: Sequence[Any]) -> dict[str, Any]:
         if (
             not isinstance(err, list)
             or len(err) != 2
-            or not all(isinstance(e, str) and len(e) <= 4096 for e in err)
+            or not all(isinstance(e, str) and len(e) <= MAX_ERROR_CHARS for e in err)
         ):
             raise ProtocolError("an error reply needs e = [type, message]")
+    elif header["k"] == "welcome":
+        value = header.get("v")
+        if not isinstance(value, dict):
+            raise ProtocolError("a welcome reply needs a map value")
+        names = value.get("services")
+        if (
+            not isinstance(names, list)
+            or len(names) > MAX_SERVICES
+            or not all(isinstance(n, str) and 0 < len(n) <= MAX_NAME_LEN for n in names)
+        ):
+            raise ProtocolError("a welcome reply needs services = [name, ...]")
     return header

@@ -11,6 +11,12 @@ Server side: a ROUTER socket owned by one I/O thread that answers ``hello`` and
 ``ping`` itself and hands each ``call`` to the worker thread of its service (one
 thread per service, so calls to one service never overlap, like libqi's
 single-threaded objects). Wire format: :mod:`.wire` (msgpack + raw frames, no pickle).
+
+Neither I/O thread dies of a message: a malformed request is answered with an error
+reply when its id can be read, and logged as one line (at most one line a second, with
+a count of the ones left out); a malformed reply ends the client's connection with a
+one-line :class:`~naoloc.errors.ConnectionLost` naming the server. Every error path
+closes its sockets and destroys its context with linger 0, so nothing hangs on exit.
 """
 
 from __future__ import annotations
@@ -32,6 +38,7 @@ from naoloc.backends.naoqi import wire
 from naoloc.backends.naoqi.session import Future, Promise, Signal, error_from_text
 
 from naoloc.errors import BackendError, ConnectionLost, NaolocError, ProtocolError, RobotError
+from naoloc.urls import parse_url
 
 PING_EVERY_S: Final = 0.2
 LOST_AFTER_S: Final = 0.9
@@ -51,6 +58,28 @@ class _Lane:
         self.threads = 0
         self.busy = 0
         self.handles: list[threading.Thread] = []
+
+
+_LOG_EVERY_S: Final = 1.0
+
+
+class _OneLineLog:
+    """One-line notices on stderr, at most one every :data:`_LOG_EVERY_S` (a flood is counted)."""
+
+    def __init__(self, prefix: str) -> None:
+        self._prefix = prefix
+        self._last = -float("inf")
+        self._skipped = 0
+
+    def __call__(self, message: str) -> None:
+        now = time.monotonic()
+        if now - self._last < _LOG_EVERY_S:
+            self._skipped += 1
+            return
+        more = f" (+{self._skipped} more like it since the last notice)" if self._skipped else ""
+        self._last, self._skipped = now, 0
+        line = " ".join(message.split())[:300]
+        print(f"{self._prefix}{line}{more}", file=sys.stderr, flush=True)
 
 
 @runtime_checkable
@@ -77,14 +106,35 @@ def make_curve_keys(folder: str | Path) -> Path:
     return path
 
 
-def _load_pair(path: Path) -> tuple[bytes, bytes]:
+def _load_key(folder: Path, name: str, secret: bool) -> tuple[bytes, bytes | None]:
+    """Read one certificate of the CURVE folder ``folder`` (``robot.curve_keys``).
+
+    Raises:
+        BackendError: One line naming the folder and the missing or bad file.
+    """
+    if not folder.is_dir():
+        raise BackendError(
+            f"robot.curve_keys: {folder} is not a folder of CURVE certificates "
+            "(create one with naoloc.backends.naoqi.zmq_transport.make_curve_keys)"
+        )
+    path = folder / name
+    if not path.is_file():
+        raise BackendError(f"robot.curve_keys: {folder} has no {name}")
     try:
-        public, secret = zmq.auth.load_certificate(str(path))
-    except (OSError, ValueError) as err:
-        raise BackendError(f"cannot read CURVE certificate {path}: {err}") from None
-    if secret is None:
-        raise BackendError(f"{path} holds no secret key")
-    return public, secret
+        public, secret_key = zmq.auth.load_certificate(str(path))
+    except (OSError, ValueError, UnicodeDecodeError) as err:
+        reason = " ".join(str(err).split())[:120]
+        raise BackendError(f"robot.curve_keys: {folder}: cannot read {name}: {reason}") from None
+    if secret and secret_key is None:
+        raise BackendError(f"robot.curve_keys: {folder}: {name} holds no secret key")
+    return public, secret_key
+
+
+def _destroy(ctx: zmq.Context[Any] | None) -> None:
+    """Close every socket of ``ctx`` with linger 0 and terminate it (never blocks)."""
+    if ctx is not None:
+        with contextlib.suppress(zmq.ZMQError):
+            ctx.destroy(linger=0)
 
 
 class _Wake:
@@ -164,6 +214,7 @@ class ZmqSession:
         self._endpoint = ""
         self._auth: Any = None
         self.protocol_errors = 0
+        self._log = _OneLineLog("naoloc serve: ")
 
     # ------------------------------------------------------------------ client
     def connect(self, url: str, _async: bool = False) -> Any:
@@ -175,24 +226,27 @@ class ZmqSession:
         """
         if self._thread is not None:
             raise BackendError("this session is already in use")
-        if not url.startswith(("tcp://", "ipc://")):
-            raise BackendError(f"transport zmq needs a tcp:// URL, got {url!r}")
+        parse_url(url, what="transport zmq", schemes=("tcp",), allow_any_port=False)
+        keys = None
+        if self._curve is not None:  # read before any socket exists: an error leaks nothing
+            public, secret = _load_key(self._curve, "client.key_secret", secret=True)
+            server_public, _ = _load_key(self._curve, "server.key", secret=False)
+            keys = (public, secret, server_public)
         self._url = url
         self._ctx = zmq.Context()
-        sock = self._ctx.socket(zmq.DEALER)
-        sock.setsockopt(zmq.LINGER, 0)
-        sock.setsockopt(zmq.RECONNECT_IVL, 100)
-        if self._curve is not None:
-            public, secret = _load_pair(self._curve / "client.key_secret")
-            server_public, _ = zmq.auth.load_certificate(str(self._curve / "server.key"))
-            sock.curve_publickey, sock.curve_secretkey = public, secret
-            sock.curve_serverkey = server_public
-        monitor = sock.get_monitor_socket(zmq.EVENT_DISCONNECTED)
         try:
+            sock = self._ctx.socket(zmq.DEALER)
+            sock.setsockopt(zmq.LINGER, 0)
+            sock.setsockopt(zmq.RECONNECT_IVL, 100)
+            sock.setsockopt(zmq.MAXMSGSIZE, wire.MAX_BUFFER_BYTES + 1)
+            if keys is not None:
+                sock.curve_publickey, sock.curve_secretkey, sock.curve_serverkey = keys
+            monitor = sock.get_monitor_socket(zmq.EVENT_DISCONNECTED)
+            monitor.setsockopt(zmq.LINGER, 0)
             sock.connect(url)
         except zmq.ZMQError as err:
-            sock.close(0)
-            monitor.close(0)
+            _destroy(self._ctx)
+            self._ctx = None
             raise BackendError(f"cannot connect to {url}: {err}") from None
         self._wake = _Wake()
         self._thread = threading.Thread(
@@ -202,10 +256,10 @@ class ZmqSession:
         hello = self._send_request({"k": "hello"})
         try:
             welcome = hello.value(max(1, int(self._connect_timeout_s * 1000)))
-        except ConnectionLost:
+        except ConnectionLost as err:
             self.close()
-            raise ConnectionLost(f"no virtual NAOqi (zmq) answers at {url}") from None
-        self._services = [str(s) for s in welcome.get("services", [])]
+            raise ConnectionLost(f"no virtual NAOqi (zmq) answers at {url}: {err}") from None
+        self._services = list(welcome["services"])  # checked by wire.decode_reply
         self._connected = True
         self.connected()
         done = Promise()
@@ -233,7 +287,7 @@ class ZmqSession:
             if err is not None:
                 future_names._finish(None, err)
             else:
-                future_names._finish([str(s) for s in f.value().get("services", [])], None)
+                future_names._finish(list(f.value()["services"]), None)
 
         future.addCallback(done)
         return future_names if _async else future_names.value()
@@ -306,7 +360,7 @@ class ZmqSession:
                     sock.send_multipart(self._outbox.popleft(), copy=False)
                     last_tx = now
                 if sock in events:
-                    while sock.poll(0):
+                    while sock.poll(0) and not self._lost_reason:
                         self._on_reply(sock.recv_multipart(copy=False))
                         last_rx = time.monotonic()
                 if monitor in events:
@@ -332,12 +386,19 @@ class ZmqSession:
             sock.close(0)
 
     def _on_reply(self, frames: list[Any]) -> None:
+        """Hand one reply to its waiting call; a malformed one ends the connection."""
         try:
             reply = wire.decode_reply(frames)
         except ProtocolError as err:
             self.protocol_errors += 1
-            print(f"naoloc: dropped a bad reply from {self._url}: {err}", file=sys.stderr)
+            self._fail_all(f"bad reply: {err}")
             return
+        try:
+            self._deliver(reply)
+        except Exception as err:  # a callback's bug must not kill the I/O thread
+            self._fail_all(f"bad reply: {type(err).__name__}: {err}")
+
+    def _deliver(self, reply: dict[str, Any]) -> None:
         if reply["k"] == "pong":
             return
         with self._pending_lock:
@@ -346,8 +407,6 @@ class ZmqSession:
             return
         if reply["k"] == "err":
             promise.setError(error_from_text(f"{reply['e'][0]}: {reply['e'][1]}"))
-        elif reply["k"] == "welcome" and not isinstance(reply.get("v"), dict):
-            promise.setError(ProtocolError("a welcome reply needs a map value"))
         else:
             promise.setValue(reply.get("v"))
 
@@ -360,29 +419,35 @@ class ZmqSession:
         """
         if self._thread is not None:
             raise BackendError("this session is already in use")
+        parse_url(url, what="transport zmq", schemes=("tcp",))
+        keys = None
+        if self._curve is not None:  # read before any socket exists: an error leaks nothing
+            keys = _load_key(self._curve, "server.key_secret", secret=True)
         self._ctx = zmq.Context()
-        sock = self._ctx.socket(zmq.ROUTER)
-        sock.setsockopt(zmq.LINGER, 0)
-        sock.setsockopt(zmq.ROUTER_HANDOVER, 1)
-        # Replies a client does not read wait in zmq's queue up to this many messages,
-        # then are dropped (bounded memory per client; the call times out client-side).
-        sock.setsockopt(zmq.SNDHWM, REPLY_HWM)
-        if self._curve is not None:
-            from zmq.auth.thread import ThreadAuthenticator
-
-            public, secret = _load_pair(self._curve / "server.key_secret")
-            self._auth = ThreadAuthenticator(self._ctx)
-            self._auth.start()
-            self._auth.configure_curve(domain="*", location=str(self._curve))
-            sock.curve_server = True
-            sock.curve_publickey, sock.curve_secretkey = public, secret
         try:
+            sock = self._ctx.socket(zmq.ROUTER)
+            sock.setsockopt(zmq.LINGER, 0)
+            sock.setsockopt(zmq.ROUTER_HANDOVER, 1)
+            # Replies a client does not read wait in zmq's queue up to this many messages,
+            # then are dropped (bounded memory per client; the call times out client-side).
+            sock.setsockopt(zmq.SNDHWM, REPLY_HWM)
+            # a peer sending a frame over the wire limit is disconnected before it is buffered
+            sock.setsockopt(zmq.MAXMSGSIZE, wire.MAX_BUFFER_BYTES + 1)
+            if keys is not None:
+                from zmq.auth.thread import ThreadAuthenticator
+
+                self._auth = ThreadAuthenticator(self._ctx)
+                self._auth.start()
+                self._auth.configure_curve(domain="*", location=str(self._curve))
+                sock.curve_server = True
+                sock.curve_publickey, sock.curve_secretkey = keys
             sock.bind(url)
+            self._endpoint = sock.getsockopt_string(zmq.LAST_ENDPOINT)
         except zmq.ZMQError as err:
-            sock.close(0)
             self._stop_auth()
+            _destroy(self._ctx)
+            self._ctx = None
             raise BackendError(f"cannot listen on {url}: {err}") from None
-        self._endpoint = sock.getsockopt_string(zmq.LAST_ENDPOINT)
         self._wake = _Wake()
         self._thread = threading.Thread(
             target=self._server_loop, args=(sock,), name="naoloc-zmq-server", daemon=True
@@ -492,12 +557,16 @@ class ZmqSession:
                 thread.start()
 
     def _on_request(self, frames: list[Any]) -> None:
+        """Answer or dispatch one request; a malformed one gets an error reply if it has an id."""
         peer = frames[0].bytes
         try:
             request = wire.decode_request(frames[1:])
         except ProtocolError as err:
             self.protocol_errors += 1
-            print(f"naoloc serve: dropped a bad request: {err}", file=sys.stderr)
+            self._log(f"bad request from client {peer.hex()}: {err}")
+            ident = wire.peek_id(frames[1:])
+            if ident is not None:
+                self._reply(peer, {"k": "err", "i": ident, "e": ["ProtocolError", str(err)]})
             return
         kind, ident = request["k"], request["i"]
         core = self._core
@@ -526,20 +595,28 @@ class ZmqSession:
                     self._wake.drain()
                 if sock in events:
                     while sock.poll(0):
-                        frames = sock.recv_multipart(copy=False)
-                        try:
-                            self._on_request(frames)
-                        except Exception as err:  # one bad message never ends the server
-                            self.protocol_errors += 1
-                            why = f"{type(err).__name__}: {err}".splitlines()[0][:200]
-                            print(f"naoloc serve: dropped a request: {why}", file=sys.stderr)
+                        self._serve_one(sock.recv_multipart(copy=False))
                 while self._outbox:
+                    frames = self._outbox.popleft()
                     try:
-                        sock.send_multipart(self._outbox.popleft(), copy=False)
-                    except zmq.ZMQError as err:  # a peer that is gone
-                        print(f"naoloc serve: a reply was not sent: {err}", file=sys.stderr)
+                        sock.send_multipart(frames, copy=False)
+                    except zmq.ZMQError as err:
+                        if err.errno == zmq.ETERM:
+                            raise
+                        self._log(f"cannot answer client {frames[0].hex()}: {err}")
+        except zmq.ZMQError as err:
+            if err.errno != zmq.ETERM and not self._stop.is_set():
+                self._log(f"server socket failed, no longer serving: {err}")
         finally:
             sock.close(0)
+
+    def _serve_one(self, frames: list[Any]) -> None:
+        """Handle one incoming message; nothing a client sends may end the I/O thread."""
+        try:
+            self._on_request(frames)
+        except Exception as err:  # a bug in handling one message: log it, keep serving
+            self.protocol_errors += 1
+            self._log(f"failed to handle a request: {type(err).__name__}: {err}")
 
     def _stop_auth(self) -> None:
         if self._auth is not None:
@@ -566,7 +643,6 @@ class ZmqSession:
         if self._wake is not None:
             self._wake.close()
             self._wake = None
-        if self._ctx is not None:
-            self._ctx.term()
-            self._ctx = None
+        _destroy(self._ctx)
+        self._ctx = None
         self._connected = False

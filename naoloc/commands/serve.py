@@ -27,6 +27,7 @@ from urllib.parse import urlsplit
 
 from naoloc.config import Config
 from naoloc.errors import BackendError, ConfigError
+from naoloc.urls import parse_url
 
 
 def is_loopback(url: str) -> bool:
@@ -47,14 +48,12 @@ def check_listen(url: str, transport: str, allow_remote: bool, curve_keys: str |
         BackendError: A non-loopback address without ``--allow-remote``, or on zmq
             without CURVE keys, or a URL that is not ``tcp://host:port``.
     """
-    parts = urlsplit(url)
-    if parts.scheme != "tcp" or not parts.hostname:
-        raise BackendError(f"--listen needs tcp://HOST:PORT, got {url!r}")
+    host = parse_url(url, what="--listen", schemes=("tcp",)).host
     if is_loopback(url):
         return
     if not allow_remote:
         raise BackendError(
-            f"{parts.hostname} is not a loopback address; pass --allow-remote to expose the robot"
+            f"{host} is not a loopback address; pass --allow-remote to expose the robot"
         )
     if transport == "zmq" and not curve_keys:
         raise BackendError(
