@@ -149,14 +149,35 @@ class DatasetWriter:
         self._mcap = Writer(self._file, use_chunking=False, enable_crcs=True)
         self._mcap.start(profile="", library="naoloc")
         self._channels = self._register_channels()
+        self._config_json = json.dumps(config)
+        self._add_header(meta)
+        self._file.flush()
+
+    def _add_header(self, meta: dict[str, Any]) -> None:
         record = {
             "format": FORMAT_NAME,
             "version": str(FORMAT_VERSION),
-            "config": json.dumps(config),
+            "config": self._config_json,
             "meta": json.dumps(meta),
         }
         self._mcap.add_metadata(METADATA_NAME, record)
-        self._file.flush()
+
+    def update_meta(self, meta: dict[str, Any]) -> None:
+        """Write the survey meta again, e.g. with what the survey measured on the way.
+
+        The reader keeps the last ``naoloc`` metadata record, so a file whose writer died
+        before this call still reads with the meta written at the start.
+
+        Raises:
+            DatasetError: The writer is closed or the disk refused the bytes.
+        """
+        if self._closed:
+            raise DatasetError(f"{self.path}: dataset writer is closed")
+        try:
+            self._add_header(meta)
+            self._file.flush()
+        except OSError as err:
+            raise DatasetError(f"{self.path}: write failed: {err.strerror}") from None
 
     def _register_channels(self) -> dict[str, int]:
         from foxglove import messages as fm

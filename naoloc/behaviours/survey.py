@@ -16,6 +16,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from naoloc.behaviours.camera import DEFAULT_HEAD_PITCH, Camera, look, stand
 from naoloc.behaviours.nearest_wall import (
     ParallaxWall,
@@ -23,11 +25,25 @@ from naoloc.behaviours.nearest_wall import (
     detect_nearest_wall,
     detect_wall_by_parallax,
 )
+from naoloc.behaviours.wall_follow import (
+    FRONT_PITCH,
+    FloorEye,
+    FrontSample,
+    corrected_step,
+    line_dict,
+    metric_scale,
+    trusted,
+)
 from naoloc.config import Config
 from naoloc.errors import MotionError
+from naoloc.floorline import WallLine
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
 from naoloc.keyframe import Keyframe
 from naoloc.robot import Robot, pose_of
+
+FRONT_LOOKAHEAD_M = 1.0  # start looking at the front wall this far before the corner
+FRONT_RANGE_M = 2.6  # the front wall's line is trusted up to this distance
+MAX_EXTRA_STEPS = 8  # steps a side may take beyond its planned count (odometry too short)
 
 FrameSink = Callable[[Keyframe, int, Pose2D], None]
 """Called with (keyframe, lap, raw FRAME_WORLD odometry) right after each picture."""
@@ -177,7 +193,6 @@ def survey(
     """
     t0 = time.monotonic()
     result = SurveyResult()
-    sides = cfg.survey_sides()
     try:
         stand(robot)
         with Camera(robot, cfg.camera, "naoloc_survey") as camera:
@@ -206,26 +221,129 @@ def survey(
             result.meta["head_yaw_source"] = result.yaw_source
             if on_start is not None:
                 on_start(result.meta)
-            here = Pose2D()
-            for point in circuit(sides, cfg.survey.step_m, cfg.survey.laps, turn):
-                before = here
-                walk_to(robot, point.pose, here)
-                if point.picture:  # the keyframe's odometry reading is where the robot is
-                    keyframe, odometry = camera.keyframe(origin, command_origin)
-                    here = keyframe.pose
-                    on_frame(keyframe, point.lap, odometry)
-                    result.frames += 1
-                    if progress is not None:
-                        progress(1)
-                else:
-                    here = relative_pose(origin, pose_of(robot.motion, True))
-                    if point.closes_lap:
-                        result.laps = point.lap + 1
-                result.path_m += before.distance(here)
+            eye = FloorEye(robot, cfg.camera)
+            try:
+                _walk_laps(robot, cfg, camera, eye, origin, command_origin, yaw, pitch, turn,
+                           result, on_frame, progress)  # fmt: skip
+            finally:
+                eye.close()
     finally:
         robot.motion.stopMove()
         result.wall_s = time.monotonic() - t0
     return result
+
+
+def _walk_laps(
+    robot: Robot,
+    cfg: Config,
+    camera: Camera,
+    eye: FloorEye,
+    origin: Pose2D,
+    command_origin: Pose2D,
+    yaw: float,
+    pitch: float,
+    turn: float,
+    result: SurveyResult,
+    on_frame: FrameSink,
+    progress: Callable[[int], None] | None,
+) -> None:
+    """The laps, steered by the floor-wall lines of the side and front walls.
+
+    Each side is walked in steps of about ``survey.step_m``: after each step a picture
+    (the survey's camera) and the side wall's line (the bottom camera, same head pose);
+    the next step goes back to ``survey.wall_offset_m`` and parallel to the wall. Near the
+    side's end (by odometry), the head turns forward and the front wall's line sets where
+    the corner is. With no line in view the step goes straight and the side ends by
+    odometry. Vision and scale facts go to ``result.meta``.
+    """
+    sides = cfg.survey_sides()
+    offset, step = cfg.survey.wall_offset_m, cfg.survey.step_m
+    side_normal = math.copysign(math.pi / 2, yaw) if yaw != 0 else -math.pi / 2
+    vision: list[dict[str, Any]] = []
+    fronts: list[FrontSample] = []
+    deviations: list[float] = []
+    here = Pose2D()
+    side_line = eye.measure(side_normal)
+    for lap in range(cfg.survey.laps):
+        for k in range(4):
+            length = sides[k % 2]
+            n = max(1, round(length / step))
+            nominal = length / n
+            walked, steps, last = 0.0, 0, False
+            while not last:
+                front = None
+                if walked >= length - nominal * 1.5 - FRONT_LOOKAHEAD_M - 0.15 * length:
+                    look(robot, 0.0, FRONT_PITCH)
+                    front = trusted_front(eye.measure(0.0, 0.4), offset)
+                    look(robot, yaw, pitch)
+                    if front is not None:
+                        fronts.append(FrontSample(lap * 4 + k, here, front))
+                if front is not None:
+                    to_go = front.distance - offset
+                    if to_go < 0.5 * nominal:
+                        break  # at the corner already: no step, no picture
+                    length_now = min(nominal, to_go)
+                    last = to_go <= 1.5 * nominal
+                    if last:
+                        length_now = to_go
+                else:
+                    length_now = nominal
+                    last = steps + 1 >= n
+                if steps >= n + MAX_EXTRA_STEPS:
+                    break
+                move, steered = corrected_step(side_line, side_normal, offset, length_now)
+                if not robot.motion.moveTo(move.x, move.y, move.theta):
+                    raise MotionError(
+                        f"moveTo({move.x:.2f}, {move.y:.2f}, {move.theta:.2f}) failed "
+                        f"on side {k + 1} of lap {lap + 1}"
+                    )
+                keyframe, odometry = camera.keyframe(origin, command_origin)
+                result.path_m += here.distance(keyframe.pose)
+                here = keyframe.pose
+                walked += length_now
+                steps += 1
+                side_line = eye.measure(side_normal)
+                good = trusted(side_line, offset)
+                if good is not None:
+                    deviations.append(good.distance - offset)
+                vision.append(
+                    {
+                        "frame": result.frames,
+                        "side": line_dict(side_line),
+                        "front": line_dict(front),
+                        "steered": steered,
+                    }
+                )
+                on_frame(keyframe, lap, odometry)
+                result.frames += 1
+                if progress is not None:
+                    progress(1)
+            if not robot.motion.moveTo(0.0, 0.0, turn):
+                raise MotionError(f"the corner turn after side {k + 1} of lap {lap + 1} failed")
+            after = relative_pose(origin, pose_of(robot.motion, True))
+            result.path_m += here.distance(after)
+            here = after
+            side_line = eye.measure(side_normal)
+        result.laps = lap + 1
+    scale, ratios = metric_scale(fronts)
+    result.meta["vision"] = vision
+    result.meta["wall_follow"] = {
+        "side_normal": side_normal,
+        "side_seen": sum(1 for v in vision if v["side"] is not None),
+        "steered_steps": sum(1 for v in vision if v["steered"]),
+        "front_seen": len(fronts),
+        "offset_dev_mean_m": None if not deviations else float(np.mean(np.abs(deviations))),
+        "offset_dev_max_m": None if not deviations else float(np.max(np.abs(deviations))),
+    }
+    result.meta["metric_scale"] = scale
+    result.meta["metric_scale_samples"] = ratios
+
+
+def trusted_front(line: WallLine | None, offset: float) -> WallLine | None:
+    """A front wall nearer than the bottom camera's range and not behind the offset."""
+    if line is None or line.distance > FRONT_RANGE_M or line.distance < 0.5 * offset:
+        return None
+    return line
 
 
 def _meta(

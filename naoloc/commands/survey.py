@@ -82,6 +82,8 @@ def record_survey(
             robot, cfg, on_frame, on_start=on_start,
             progress=None if progress is None else progress.update,
         )  # fmt: skip
+        if "w" in holder:  # with what the survey measured on the way (vision, metric scale)
+            holder["w"].update_meta(result.meta)
     finally:
         if "w" in holder:
             holder["w"].close()
