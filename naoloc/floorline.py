@@ -115,7 +115,7 @@ def floor_points(
 
 def floor_mask(
     bgr: np.ndarray, sample_rows: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """Pixels that look like the floor; the colour model comes from ``sample_rows``.
 
     Args:
@@ -123,8 +123,8 @@ def floor_mask(
         sample_rows: Boolean ``(h,)``: rows known to look at the near floor.
 
     Returns:
-        Boolean ``(h, w)`` mask, the weighted Lab image ``(h, w, 3)`` and the floor's
-        colour in it ``(3,)``.
+        Boolean ``(h, w)`` mask, the weighted Lab image ``(h, w, 3)``, the floor's
+        colour in it ``(3,)`` and the colour distance taken as floor.
     """
     import cv2
 
@@ -142,21 +142,28 @@ def floor_mask(
     kernel = np.ones((max(7, bgr.shape[0] // 18) | 1, 3), np.uint8)
     mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, kernel)
     mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((5, 5), np.uint8))
-    return mask.astype(bool), lab, centre
+    return mask.astype(bool), lab, centre, threshold
 
 
 def refine_boundary(
-    lab: np.ndarray, floor: np.ndarray, rows: np.ndarray, cols: np.ndarray, reach: int
+    lab: np.ndarray,
+    floor: np.ndarray,
+    threshold: float,
+    rows: np.ndarray,
+    cols: np.ndarray,
+    reach: int,
 ) -> np.ndarray:
     """Move each boundary up through floor pixels darker or lighter than the floor model.
 
     A wall's foot often sits on a band of shadowed floor (contact shadow, a plank of
     another tone): from the first non-floor pixel, each pixel is given to the floor while
-    its colour is nearer the floor's than the wall's (sampled a few pixels higher).
+    its colour is nearer the floor's than the wall's (sampled a few pixels higher) and
+    within three times the floor's threshold.
 
     Args:
         lab: Weighted Lab image from :func:`floor_mask`.
         floor: The floor's colour ``(3,)``.
+        threshold: The floor's colour distance threshold.
         rows: Boundary rows (the top floor pixel of each column).
         cols: Their columns.
         reach: Most pixels to move up.
@@ -173,7 +180,8 @@ def refine_boundary(
         k = r
         while k > r - reach:
             px = lab[k - 1, c]
-            if np.linalg.norm(px - floor) < np.linalg.norm(px - wall):
+            to_floor = np.linalg.norm(px - floor)
+            if to_floor < 3.0 * threshold and to_floor < np.linalg.norm(px - wall):
                 k -= 1
             else:
                 break
@@ -294,9 +302,9 @@ def detect_wall_lines(
     if sample_rows.sum() < 5:
         sample_rows = np.zeros(h, bool)
         sample_rows[int(h * 0.75) :] = True
-    mask, lab, floor = floor_mask(img, sample_rows)
+    mask, lab, floor, threshold = floor_mask(img, sample_rows)
     rows, cols = boundary_pixels(mask, max(4, h // 20))
-    rows = refine_boundary(lab, floor, rows, cols, max(4, h // 24))
+    rows = refine_boundary(lab, floor, threshold, rows, cols, max(4, h // 24))
     if rows.size < MIN_INLIERS:
         return []
     # the foot of the wall is the top edge of the boundary pixel: between its ray and the

@@ -118,9 +118,17 @@ def test_corrected_step_returns_to_the_offset_and_is_bounded() -> None:
 def test_metric_scale_from_front_distances() -> None:
     # odometry reads 3 % long: 0.8 m walked toward the wall shows as 0.824 m
     samples = [
-        FrontSample(0, Pose2D(3.0 + 1.03 * i * 0.2, 0.0, 0.0), _line(2.0 - i * 0.2, 0.0))
+        FrontSample(k, Pose2D(3.0 + 1.03 * i * 0.2, k, 0.0), _line(2.0 - i * 0.2, 0.0))
+        for k in range(3)
         for i in range(5)
     ]
     scale, ratios = metric_scale(samples)
-    assert scale == pytest.approx(1 / 1.03) and len(ratios) == 1
+    assert scale == pytest.approx(1 / 1.03) and len(ratios) == 3
+    assert metric_scale(samples[:5])[0] is None  # one side only
     assert metric_scale(samples[:1]) == (None, [])  # no baseline
+    # sides that disagree (a wrong line): no scale rather than a wrong one
+    bad = [
+        FrontSample(9, Pose2D(0, 0, 0), _line(2.0, 0)),
+        FrontSample(9, Pose2D(0.5, 0, 0), _line(1.2, 0)),
+    ]
+    assert metric_scale(samples[:5] + bad)[0] is None

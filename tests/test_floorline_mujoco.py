@@ -11,6 +11,7 @@ pytest.importorskip("mujoco")
 
 import naoloc
 from naoloc.behaviours.camera import look, stand
+from naoloc.behaviours.nearest_wall import detect_wall_by_floorline
 from naoloc.behaviours.wall_follow import FRONT_PITCH, FloorEye
 from naoloc.config import CameraConfig
 
@@ -36,6 +37,7 @@ def test_side_and_front_walls_match_the_room(posters: int) -> None:
             front = eye.measure(0.0, 0.4)
             look(robot, math.pi / 2, -0.2)
             far_left = eye.measure(math.pi / 2)  # 3.9 m away: out of the camera's reach
+            wall = detect_wall_by_floorline(robot, eye)  # the survey's nearest-wall detector
         finally:
             eye.close()
         x, y, th = robot.sim.true_pose()
@@ -49,3 +51,5 @@ def test_side_and_front_walls_match_the_room(posters: int) -> None:
     assert math.remainder(front.normal + th, 2 * math.pi) == pytest.approx(0.0, abs=0.03)
     assert far_left is None or abs(far_left.distance - 3.9) < 0.2
     assert np.isfinite(side.rms_m) and side.rms_m < 0.02
+    assert wall.side == "right" and wall.head_yaw == pytest.approx(-math.pi / 2)
+    assert wall.right_m == pytest.approx(y, abs=0.03)

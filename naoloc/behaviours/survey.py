@@ -3,9 +3,15 @@
 The start pose is the map origin (O_w = getRobotPosition(True) before the first step). The
 head turns toward the nearest wall (or ``survey.head_yaw_rad``) and stays there; the body
 turns by ``-head_yaw`` at each corner, so a wall on the right gives a counter-clockwise
-circuit. Each step is a ``moveTo`` toward the next waypoint of the rectangle in the map
-frame, computed from the odometry, so odometry errors do not accumulate into the path
-the robot believes it walked. After each step the pose and a picture are recorded.
+circuit. A NAO's odometry drifts (10 % distance scale, several degrees per corner), so the
+walk is steered by vision: after each step the bottom camera measures the side wall's
+floor-wall line and the next step goes back to ``survey.wall_offset_m`` and parallel to
+the wall (bounded corrections, :mod:`naoloc.behaviours.wall_follow`); near each corner
+the head looks ahead and the front wall's line says where to turn. After each step the
+odometry pose and a picture are recorded (the map's input), and the survey meta gets the
+vision measurements per frame (``vision``) and the metric scale of the odometry
+(``metric_scale``, metres per odometry metre, from the front wall's distances), which
+build-map applies. :func:`circuit` gives the nominal waypoints of that rectangle.
 """
 
 from __future__ import annotations
@@ -20,9 +26,11 @@ import numpy as np
 
 from naoloc.behaviours.camera import DEFAULT_HEAD_PITCH, Camera, look, stand
 from naoloc.behaviours.nearest_wall import (
+    FloorLineWall,
     ParallaxWall,
     WallSide,
     detect_nearest_wall,
+    detect_wall_by_floorline,
     detect_wall_by_parallax,
 )
 from naoloc.behaviours.wall_follow import (
@@ -80,8 +88,10 @@ class SurveyResult:
         wall_s: Wall-clock seconds of the survey.
         head_yaw: HeadYaw kept while walking, rad.
         wall: The paper's nearest-wall detection (always run and recorded; not steered by).
-        parallax: The parallax detection that chose the side, when nothing overrode it.
-        yaw_source: Where the head yaw came from: "parallax", "config" or "caller".
+        parallax: The parallax detection that chose the side, when the floor lines did not.
+        floorline: The floor-wall line detection (left and right distances), when run.
+        yaw_source: Where the head yaw came from: "floorline", "parallax", "config" or
+            "caller".
         meta: The meta handed to the start hook.
     """
 
@@ -92,6 +102,7 @@ class SurveyResult:
     head_yaw: float = 0.0
     wall: WallSide | None = None
     parallax: ParallaxWall | None = None
+    floorline: FloorLineWall | None = None
     yaw_source: str = "parallax"
     meta: dict[str, Any] = field(default_factory=dict)
 
@@ -165,9 +176,11 @@ def survey(
 
     The robot stands up, runs the paper's nearest-wall detector (recorded) and turns its
     head to a wall: ``cfg.survey.head_yaw_rad`` if set, else ``head_yaw`` if given, else the
-    side the parallax detector finds (the paper's image cue is weak, and a wrong side walks
-    the robot into a wall; the probe steps forward and back, so the start pose is kept).
-    Then it records the origin and walks. Motion is stopped on every
+    side whose floor-wall line (bottom camera) is nearer, else, when neither line is in
+    reach, the side the parallax detector finds (the paper's image cue is weak, and a wrong
+    side walks the robot into a wall; the probe steps forward and back, so the start pose
+    is kept). Then it records the origin and walks, steered by the floor-wall lines
+    (:func:`_walk_laps`). Motion is stopped on every
     exit path (an exception or Ctrl-C included); frames already handed to ``on_frame``
     stay with the caller.
 
@@ -204,11 +217,7 @@ def survey(
                 yaw = head_yaw
                 result.yaw_source = "caller"
             else:
-                result.parallax = detect_wall_by_parallax(
-                    robot, camera, cfg.survey.step_m, head_pitch
-                )
-                yaw = result.parallax.head_yaw
-                result.yaw_source = "parallax"
+                yaw = _detect_side(robot, cfg, camera, head_pitch, result)
             yaw, pitch = look(robot, yaw, head_pitch)
             result.head_yaw = yaw
             turn = -math.copysign(math.pi / 2, yaw) if yaw != 0 else math.pi / 2
@@ -219,6 +228,12 @@ def survey(
                 robot, cfg, origin, probe, yaw, pitch, turn, result.wall, result.parallax
             )
             result.meta["head_yaw_source"] = result.yaw_source
+            if result.floorline is not None:
+                result.meta["floorline_wall"] = {
+                    "side": result.floorline.side,
+                    "left_m": result.floorline.left_m,
+                    "right_m": result.floorline.right_m,
+                }
             if on_start is not None:
                 on_start(result.meta)
             eye = FloorEye(robot, cfg.camera)
@@ -231,6 +246,23 @@ def survey(
         robot.motion.stopMove()
         result.wall_s = time.monotonic() - t0
     return result
+
+
+def _detect_side(
+    robot: Robot, cfg: Config, camera: Camera, head_pitch: float, result: SurveyResult
+) -> float:
+    """Head yaw toward the nearer side wall: floor-wall lines first, parallax if unseen."""
+    eye = FloorEye(robot, cfg.camera, "naoloc_side")
+    try:
+        result.floorline = detect_wall_by_floorline(robot, eye, head_pitch)
+    finally:
+        eye.close()
+    if result.floorline.side is not None:
+        result.yaw_source = "floorline"
+        return result.floorline.head_yaw
+    result.parallax = detect_wall_by_parallax(robot, camera, cfg.survey.step_m, head_pitch)
+    result.yaw_source = "parallax"
+    return result.parallax.head_yaw
 
 
 def _walk_laps(

@@ -29,8 +29,10 @@ BOTTOM_CAMERA = 1
 MAX_LATERAL_M = 0.12  # largest sideways correction per step
 MAX_TURN_RAD = 0.25  # largest heading correction per step
 MAX_DEVIATION_M = 0.6  # a side line farther than this from the offset is not trusted
-FRONT_PITCH = -0.5  # head pitch for the front wall (the bottom camera sees 0.5-2.5 m ahead)
+FRONT_PITCH = -0.35  # head pitch for the front wall (the bottom camera sees 0.4 m to far ahead)
 MIN_SCALE_BASELINE_M = 0.4  # front-distance change needed for one scale sample
+MIN_SCALE_SIDES = 2
+MAX_SCALE_SPREAD = 0.1  # relative median absolute deviation of the per-side ratios
 SCALE_RANGE_M = 2.1  # front lines used for the scale (farther ones are biased short)
 
 
@@ -136,7 +138,9 @@ def metric_scale(samples: list[FrontSample]) -> tuple[float | None, list[float]]
     normal); their ratio is one sample.
 
     Returns:
-        ``(median ratio or None, the per-side ratios)``.
+        ``(median ratio, the per-side ratios)``; the ratio is None with fewer than
+        :data:`MIN_SCALE_SIDES` sides or when their median absolute deviation exceeds
+        :data:`MAX_SCALE_SPREAD` of the median.
     """
     by_side: dict[int, list[FrontSample]] = {}
     for s in samples:
@@ -155,9 +159,13 @@ def metric_scale(samples: list[FrontSample]) -> tuple[float | None, list[float]]
         odo = dx * math.cos(direction) + dy * math.sin(direction)
         if odo > 0:
             ratios.append(visual / odo)
-    if not ratios:
-        return None, []
-    return float(statistics.median(ratios)), ratios
+    if len(ratios) < MIN_SCALE_SIDES:
+        return None, ratios
+    median = float(statistics.median(ratios))
+    spread = statistics.median(abs(r - median) for r in ratios) / median
+    if spread > MAX_SCALE_SPREAD:
+        return None, ratios  # the sides disagree: a wrong line somewhere, no scale
+    return median, ratios
 
 
 def line_dict(line: WallLine | None) -> dict[str, Any] | None:
