@@ -132,3 +132,13 @@ def test_metric_scale_from_front_distances() -> None:
         FrontSample(9, Pose2D(0.5, 0, 0), _line(1.2, 0)),
     ]
     assert metric_scale(samples[:5] + bad)[0] is None
+
+
+def test_front_wall_must_agree_with_the_odometry() -> None:
+    from naoloc.behaviours.survey import trusted_front
+
+    wall = _line(1.6, 0.0)
+    assert trusted_front(wall, 1.0, 0.7, 4.0) is wall  # the corner 0.6 m ahead, odometry 0.7
+    assert trusted_front(_line(0.61, 0.0), 1.0, 1.3, 4.0) is None  # a rug's edge, not a wall
+    assert trusted_front(_line(3.5, 0.0), 1.0, 2.5, 4.0) is None  # beyond the camera's range
+    assert trusted_front(None, 1.0, 0.7, 4.0) is None

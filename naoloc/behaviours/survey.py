@@ -306,7 +306,7 @@ def _walk_laps(
                 front = None
                 if walked >= length - nominal * 1.5 - FRONT_LOOKAHEAD_M - 0.15 * length:
                     look(robot, 0.0, FRONT_PITCH)
-                    front = trusted_front(eye.measure(0.0, 0.4), offset)
+                    front = trusted_front(eye.measure(0.0, 0.4), offset, length - walked, length)
                     look(robot, yaw, pitch)
                     if front is not None:
                         fronts.append(FrontSample(lap * 4 + k, here, front))
@@ -371,9 +371,26 @@ def _walk_laps(
     result.meta["metric_scale_samples"] = ratios
 
 
-def trusted_front(line: WallLine | None, offset: float) -> WallLine | None:
-    """A front wall nearer than the bottom camera's range and not behind the offset."""
+def trusted_front(
+    line: WallLine | None, offset: float, remaining: float, length: float
+) -> WallLine | None:
+    """The front wall's line, if it agrees with the odometry about where the corner is.
+
+    Args:
+        line: The measured line ahead (FRAME_ROBOT).
+        offset: The survey's wall offset, m.
+        remaining: What the odometry says is left of the side, m.
+        length: The side's length, m.
+
+    Returns:
+        ``line`` when it is within the camera's range, not nearer than half the offset, and
+        puts the corner within ``0.25 * length + 0.3`` m of the odometry's (a NAO's
+        distance scale errs 10 %; a rug's edge or a low piece of furniture would not
+        agree), else None.
+    """
     if line is None or line.distance > FRONT_RANGE_M or line.distance < 0.5 * offset:
+        return None
+    if abs(line.distance - offset - remaining) > 0.25 * length + 0.3:
         return None
     return line
 
