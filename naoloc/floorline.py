@@ -189,6 +189,67 @@ def refine_boundary(
     return out
 
 
+def subpixel_edges(
+    lab: np.ndarray, floor: np.ndarray, rows: np.ndarray, cols: np.ndarray
+) -> np.ndarray:
+    """Sub-pixel image rows of the floor-wall edges (continuous: 0 is the image's top).
+
+    The image was blurred, so the colour goes smoothly from the wall's (sampled just above
+    the edge) to the floor's across a few rows; the edge is where it is half-way, by linear
+    interpolation between pixel centres. Columns where that fails keep the top of their
+    boundary pixel.
+
+    Args:
+        lab: Weighted Lab image from :func:`floor_mask`.
+        floor: The floor's colour ``(3,)``.
+        rows: Boundary rows (the top floor pixel of each column).
+        cols: Their columns.
+    """
+    h = lab.shape[0]
+    out = rows.astype(np.float64)
+    for i, (r, c) in enumerate(zip(rows.tolist(), cols.tolist(), strict=True)):
+        if r < 7 or r + 4 >= h:
+            continue
+        wall = np.median(lab[r - 7 : r - 3, c], axis=0)
+        d = wall - floor
+        n2 = float(d @ d)
+        if n2 < 1e-6:
+            continue
+        t = ((lab[r - 3 : r + 4, c] - floor) @ d) / n2  # ~1 on the wall, ~0 on the floor
+        for k in range(6):
+            if t[k] >= 0.5 > t[k + 1]:
+                out[i] = (r - 3 + k) + 0.5 + (t[k] - 0.5) / (t[k] - t[k + 1])
+                break
+    return out
+
+
+def rays_at(
+    v: np.ndarray,
+    cols: np.ndarray,
+    size: tuple[int, int],
+    hfov: float,
+    vfov: float,
+    pose: np.ndarray,
+) -> np.ndarray:
+    """FRAME_ROBOT rays ``(n, 3)`` through continuous rows ``v`` of columns ``cols`` (centres).
+
+    Args:
+        v: Continuous image rows (0 is the top edge), ``(n,)``.
+        cols: Pixel columns, ``(n,)``.
+        size: ``(width, height)`` in pixels.
+        hfov: Horizontal field of view, rad.
+        vfov: Vertical field of view, rad.
+        pose: The camera's 4x4 pose in FRAME_ROBOT.
+    """
+    w, h = size
+    fx = (w / 2.0) / math.tan(hfov / 2.0)
+    fy = (h / 2.0) / math.tan(vfov / 2.0)
+    u = (cols + 0.5 - w / 2.0) / fx
+    vv = (np.asarray(v, np.float64) - h / 2.0) / fy
+    cam = np.stack([np.ones_like(u), -u, -vv], axis=-1)
+    return cam @ pose[:3, :3].T
+
+
 def boundary_pixels(mask: np.ndarray, min_run: int) -> tuple[np.ndarray, np.ndarray]:
     """Per column, the top of the lowest sustained floor run (the floor's far edge).
 
@@ -307,9 +368,10 @@ def detect_wall_lines(
     rows = refine_boundary(lab, floor, threshold, rows, cols, max(4, h // 24))
     if rows.size < MIN_INLIERS:
         return []
-    # the foot of the wall is the top edge of the boundary pixel: between its ray and the
-    # ray of the pixel above (a pinhole's rays are linear in the pixel coordinates)
-    edge = 0.5 * (rays[rows, cols] + rays[np.maximum(rows - 1, 0), cols])
+    # the foot of the wall, to a fraction of a pixel: a line nearly parallel to the image
+    # rows would otherwise be quantised to whole rows (3 cm at 2 m in QVGA)
+    edge = rays_at(subpixel_edges(lab, floor, rows, cols), cols, (w, h), hfov, vfov,
+                   pose.reshape(4, 4))  # fmt: skip
     pts = floor_points(np.arange(rows.size), np.zeros(rows.size, np.int64), origin, edge[:, None])
     pts = pts[np.all(np.isfinite(pts), axis=1)]
     lines: list[WallLine] = []

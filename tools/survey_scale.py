@@ -1,7 +1,7 @@
 """Metric scale recovery: odometry with a known distance scale error, the map against truth.
 
 For each ``--scale-errors`` value e (odometry reads ``1 + e`` times the true distance), runs
-a one-lap survey on MuJoCo (4.2 x 3.8 m room, other odometry noise small, as the test in
+a two-lap survey on MuJoCo (4.2 x 3.8 m room, other odometry noise small, as the test in
 tests/test_survey_scale.py), builds the map, and prints: the survey's ``metric_scale``
 against the truth ``1 / (1 + e)``, and the ratio of the keyframes' path length to the true
 one before (raw odometry) and after (the built map's keyframe poses). With ``--honest``
@@ -47,7 +47,7 @@ def run(error: float, honest: bool, seed: int = 1) -> dict[str, float | None]:
                 "room": {"size_m": [4.2, 3.8], "seed": 5, "furniture": False},
                 "odometry": odometry,
             },
-            "survey": {"laps": 1, "step_m": 0.2, "wall_offset_m": 1.0, "head_yaw_rad": -1.5708},
+            "survey": {"laps": 2, "step_m": 0.2, "wall_offset_m": 1.0, "head_yaw_rad": -1.5708},
             "map": {"neurons": 20, "epochs": 10, "seed": 0},
         }
     )

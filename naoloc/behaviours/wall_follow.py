@@ -133,9 +133,10 @@ class FrontSample:
 def metric_scale(samples: list[FrontSample]) -> tuple[float | None, list[float]]:
     """Metres per odometry metre, from the front wall's distances along each side.
 
-    On each side, the first and last front measurements give a visual displacement (the
-    change of the wall's distance) and an odometry displacement (projected on the wall's
-    normal); their ratio is one sample.
+    On each side, the front measurements' wall distances against the odometry's
+    displacement (projected on the wall's normal) fall on a line whose slope is one
+    sample (least squares over all of the side's measurements within
+    :data:`SCALE_RANGE_M`).
 
     Returns:
         ``(median ratio, the per-side ratios)``; the ratio is None with fewer than
@@ -150,15 +151,20 @@ def metric_scale(samples: list[FrontSample]) -> tuple[float | None, list[float]]
     ratios = []
     for group in by_side.values():
         first, last = group[0], group[-1]
-        visual = first.line.distance - last.line.distance
-        if visual < MIN_SCALE_BASELINE_M:
+        if first.line.distance - last.line.distance < MIN_SCALE_BASELINE_M:
             continue
         direction = first.odometry.theta + first.line.normal
-        dx = last.odometry.x - first.odometry.x
-        dy = last.odometry.y - first.odometry.y
-        odo = dx * math.cos(direction) + dy * math.sin(direction)
-        if odo > 0:
-            ratios.append(visual / odo)
+        c, sn = math.cos(direction), math.sin(direction)
+        odo = np.array(
+            [(g.odometry.x - first.odometry.x) * c + (g.odometry.y - first.odometry.y) * sn
+             for g in group]
+        )  # fmt: skip
+        dist = np.array([g.line.distance for g in group])
+        if odo[-1] <= 0:
+            continue
+        slope = float(np.polyfit(odo, dist, 1)[0])  # metres of wall distance per odometry m
+        if slope < 0:
+            ratios.append(-slope)
     if len(ratios) < MIN_SCALE_SIDES:
         return None, ratios
     median = float(statistics.median(ratios))
