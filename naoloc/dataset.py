@@ -228,14 +228,35 @@ class DatasetWriter:
         )
         self._mcap.start(profile="", library="naoloc")
         self._channels = self._register_channels()
+        self._config_json = json.dumps(config)
+        self._add_header(meta)
+        self._file.flush()
+
+    def _add_header(self, meta: dict[str, Any]) -> None:
         record = {
             "format": FORMAT_NAME,
             "version": str(FORMAT_VERSION),
-            "config": json.dumps(config),
+            "config": self._config_json,
             "meta": json.dumps({**meta, "complete": False}),  # until naoloc.status says so
         }
         self._mcap.add_metadata(METADATA_NAME, record)
-        self._file.flush()
+
+    def update_meta(self, meta: dict[str, Any]) -> None:
+        """Write the survey meta again, e.g. with what the survey measured on the way.
+
+        The reader keeps the last ``naoloc`` metadata record, so a file whose writer died
+        before this call still reads with the meta written at the start.
+
+        Raises:
+            DatasetError: The writer is closed or the disk refused the bytes.
+        """
+        if self._closed:
+            raise DatasetError(f"{self.path}: dataset writer is closed")
+        try:
+            self._add_header(meta)
+            self._file.flush()
+        except OSError as err:
+            raise DatasetError(f"{self.path}: write failed: {err.strerror}") from None
 
     def _register_channels(self) -> dict[str, int]:
         from foxglove import messages as fm
@@ -540,8 +561,8 @@ def read_dataset(path: str | Path) -> Dataset:
     for rec in read_records(path):
         if isinstance(rec, StreamEnd):
             finished = rec.finished
-        elif isinstance(rec, Metadata) and rec.name == METADATA_NAME and header is None:
-            header = dict(rec.metadata)
+        elif isinstance(rec, Metadata) and rec.name == METADATA_NAME:
+            header = dict(rec.metadata)  # the last one: update_meta() rewrites it at the end
         elif isinstance(rec, Metadata) and rec.name == STATUS_NAME:
             status = dict(rec.metadata)
         elif isinstance(rec, Channel):

@@ -17,6 +17,8 @@ import pytest
 
 from naoloc import connect
 from naoloc.behaviours import frames_per_lap, go_home, localize, survey
+from naoloc.behaviours.camera import Camera, stand
+from naoloc.behaviours.nearest_wall import detect_wall_by_parallax
 from naoloc.commands.survey import record_survey
 from naoloc.config import Config, load_config
 from naoloc.dataset import partial_path_for, read_dataset
@@ -139,7 +141,7 @@ def test_interrupted_survey_stops_the_robot_and_keeps_frames(tmp_path: Path) -> 
     ("start", "side", "direction"),
     [((0.75, 0.75, 0.0), "right", "ccw"), ((0.75, 2.25, 0.0), "left", "cw")],
 )
-def test_parallax_decides_the_direction_in_the_corner(
+def test_floor_lines_decide_the_direction_in_the_corner(
     start: tuple[float, float, float], side: str, direction: str
 ) -> None:
     cfg = small_cfg().with_overrides({"world": {"start_pose": list(start)}})
@@ -147,19 +149,35 @@ def test_parallax_decides_the_direction_in_the_corner(
         res = survey(robot, cfg, lambda kf, lap, odo: None)
         end = robot.sim.true_pose() if robot.sim is not None else None
     assert res.wall is not None  # the paper's detector ran and was recorded
-    assert res.parallax is not None and res.yaw_source == "parallax"
-    assert res.parallax.side == side, res.parallax
-    # The nearer wall (0.75 m) shifts features about 3x more than the far one (2.25 m).
-    near, far = (
-        (res.parallax.right_shift_px, res.parallax.left_shift_px)
-        if side == "right"
-        else (res.parallax.left_shift_px, res.parallax.right_shift_px)
-    )
-    assert near > 2.0 * far
+    assert res.floorline is not None and res.yaw_source == "floorline"
+    assert res.floorline.side == side, res.floorline
+    near = res.floorline.right_m if side == "right" else res.floorline.left_m
+    assert near == pytest.approx(0.75, abs=0.03)  # the far wall (2.25 m) may be out of reach
+    assert res.parallax is None  # no probe step was needed
     assert res.meta["direction"] == direction
-    assert res.meta["parallax"]["side"] == side
+    assert res.meta["floorline_wall"]["side"] == side
+    assert res.meta["wall_follow"]["steered_steps"] == res.frames
     assert res.frames == frames_per_lap((1.5, 1.5), 0.5)
     assert end is not None and math.hypot(end[0] - start[0], end[1] - start[1]) < 0.3
+
+
+@pytest.mark.parametrize(
+    ("start", "side"), [((0.75, 0.75, 0.0), "right"), ((0.75, 2.25, 0.0), "left")]
+)
+def test_parallax_finds_the_nearer_wall(start: tuple[float, float, float], side: str) -> None:
+    cfg = small_cfg().with_overrides({"world": {"start_pose": list(start)}})
+    with connect(cfg) as robot:
+        stand(robot)
+        with Camera(robot, cfg.camera) as camera:
+            res = detect_wall_by_parallax(robot, camera, 0.5)
+    assert res.side == side, res
+    # The nearer wall (0.75 m) shifts features about 3x more than the far one (2.25 m).
+    near, far = (
+        (res.right_shift_px, res.left_shift_px)
+        if side == "right"
+        else (res.left_shift_px, res.right_shift_px)
+    )
+    assert near > 2.0 * far
 
 
 @pytest.mark.parametrize("strategy", ["scan", "paper"])

@@ -3,9 +3,12 @@
 - :func:`nearest_wall` is the paper's: one forward image is split into a left and a right
   half; the side with more A-KAZE keypoints is taken as the nearest wall. Its cue is weak
   (a nearer wall shows less of itself), so naoloc records it but does not steer by it.
-- :func:`detect_wall_by_parallax` is what the survey steers by: the robot looks left and
-  right, steps forward, and looks again; features on a wall at distance d shift by about
-  ``f * step / d`` pixels, so the side whose features move more is the nearer wall.
+- :func:`detect_wall_by_floorline` is what the survey steers by first: the bottom camera's
+  floor-wall line to the left and right (no texture needed, blank walls included).
+- :func:`detect_wall_by_parallax` is the fallback when neither wall's foot is in reach:
+  the robot looks left and right, steps forward, and looks again; features on a wall at
+  distance d shift by about ``f * step / d`` pixels, so the side whose features move more
+  is the nearer wall.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from typing import Literal
 import numpy as np
 
 from naoloc.behaviours.camera import DEFAULT_HEAD_PITCH, Camera, look
+from naoloc.behaviours.wall_follow import FloorEye
 from naoloc.errors import FeatureError, MotionError
 from naoloc.robot import Robot
 
@@ -197,6 +201,49 @@ def detect_wall_by_parallax(
     else:
         side = "left" if ls > rs else "right"
     return ParallaxWall(side, yaws[side], ls, rs, lm, rm)
+
+
+@dataclass(frozen=True, slots=True)
+class FloorLineWall:
+    """Result of the floor-wall line detector (bottom camera, works on blank walls).
+
+    Attributes:
+        side: "left" or "right" of the robot, or None when neither wall's foot was seen
+            (both walls beyond the bottom camera's reach, or floor and walls alike).
+        head_yaw: HeadYaw that faces that wall, rad (0.0 when ``side`` is None).
+        left_m: Distance to the left wall's line, m (None: not seen).
+        right_m: The same on the right.
+    """
+
+    side: Side | None
+    head_yaw: float
+    left_m: float | None
+    right_m: float | None
+
+
+def detect_wall_by_floorline(
+    robot: Robot, eye: FloorEye, pitch: float = DEFAULT_HEAD_PITCH
+) -> FloorLineWall:
+    """Look left and right with the bottom camera; the nearer floor-wall line wins.
+
+    Needs no texture on the walls and no step. The robot's body does not move.
+
+    Args:
+        robot: The robot (the head is moved).
+        eye: The bottom camera (:class:`naoloc.behaviours.wall_follow.FloorEye`).
+        pitch: Head pitch for the pictures, rad.
+    """
+    yaws = {"left": math.pi / 2, "right": -math.pi / 2}
+    seen: dict[str, float | None] = {}
+    for name, yaw in yaws.items():
+        look(robot, yaw, pitch)
+        line = eye.measure(yaw)
+        seen[name] = None if line is None else line.distance
+    left, right = seen["left"], seen["right"]
+    if left is None and right is None:
+        return FloorLineWall(None, 0.0, None, None)
+    side: Side = "left" if right is None or (left is not None and left < right) else "right"
+    return FloorLineWall(side, yaws[side], left, right)
 
 
 def nearest_side_in_room(size: tuple[float, float], start: tuple[float, float, float]) -> WallSide:

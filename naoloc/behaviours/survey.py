@@ -3,9 +3,15 @@
 The start pose is the map origin (O_w = getRobotPosition(True) before the first step). The
 head turns toward the nearest wall (or ``survey.head_yaw_rad``) and stays there; the body
 turns by ``-head_yaw`` at each corner, so a wall on the right gives a counter-clockwise
-circuit. Each step is a ``moveTo`` toward the next waypoint of the rectangle in the map
-frame, computed from the odometry, so odometry errors do not accumulate into the path
-the robot believes it walked. After each step the pose and a picture are recorded.
+circuit. A NAO's odometry drifts (10 % distance scale, several degrees per corner), so the
+walk is steered by vision: after each step the bottom camera measures the side wall's
+floor-wall line and the next step goes back to ``survey.wall_offset_m`` and parallel to
+the wall (bounded corrections, :mod:`naoloc.behaviours.wall_follow`); near each corner
+the head looks ahead and the front wall's line says where to turn. After each step the
+odometry pose and a picture are recorded (the map's input), and the survey meta gets the
+vision measurements per frame (``vision``) and the metric scale of the odometry
+(``metric_scale``, metres per odometry metre, from the front wall's distances), which
+build-map applies. :func:`circuit` gives the nominal waypoints of that rectangle.
 """
 
 from __future__ import annotations
@@ -16,18 +22,36 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from naoloc.behaviours.camera import DEFAULT_HEAD_PITCH, Camera, look, stand
 from naoloc.behaviours.nearest_wall import (
+    FloorLineWall,
     ParallaxWall,
     WallSide,
     detect_nearest_wall,
+    detect_wall_by_floorline,
     detect_wall_by_parallax,
+)
+from naoloc.behaviours.wall_follow import (
+    FRONT_PITCH,
+    FloorEye,
+    FrontSample,
+    corrected_step,
+    line_dict,
+    metric_scale,
+    trusted,
 )
 from naoloc.config import Config
 from naoloc.errors import MotionError
+from naoloc.floorline import WallLine
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
 from naoloc.keyframe import Keyframe
 from naoloc.robot import Robot, pose_of
+
+FRONT_LOOKAHEAD_M = 1.0  # start looking at the front wall this far before the corner
+FRONT_RANGE_M = 2.6  # the front wall's line is trusted up to this distance
+MAX_EXTRA_STEPS = 8  # steps a side may take beyond its planned count (odometry too short)
 
 FrameSink = Callable[[Keyframe, int, Pose2D], None]
 """Called with (keyframe, lap, raw FRAME_WORLD odometry) right after each picture."""
@@ -64,8 +88,10 @@ class SurveyResult:
         wall_s: Wall-clock seconds of the survey.
         head_yaw: HeadYaw kept while walking, rad.
         wall: The paper's nearest-wall detection (always run and recorded; not steered by).
-        parallax: The parallax detection that chose the side, when nothing overrode it.
-        yaw_source: Where the head yaw came from: "parallax", "config" or "caller".
+        parallax: The parallax detection that chose the side, when the floor lines did not.
+        floorline: The floor-wall line detection (left and right distances), when run.
+        yaw_source: Where the head yaw came from: "floorline", "parallax", "config" or
+            "caller".
         meta: The meta handed to the start hook.
     """
 
@@ -76,6 +102,7 @@ class SurveyResult:
     head_yaw: float = 0.0
     wall: WallSide | None = None
     parallax: ParallaxWall | None = None
+    floorline: FloorLineWall | None = None
     yaw_source: str = "parallax"
     meta: dict[str, Any] = field(default_factory=dict)
 
@@ -149,9 +176,11 @@ def survey(
 
     The robot stands up, runs the paper's nearest-wall detector (recorded) and turns its
     head to a wall: ``cfg.survey.head_yaw_rad`` if set, else ``head_yaw`` if given, else the
-    side the parallax detector finds (the paper's image cue is weak, and a wrong side walks
-    the robot into a wall; the probe steps forward and back, so the start pose is kept).
-    Then it records the origin and walks. Motion is stopped on every
+    side whose floor-wall line (bottom camera) is nearer, else, when neither line is in
+    reach, the side the parallax detector finds (the paper's image cue is weak, and a wrong
+    side walks the robot into a wall; the probe steps forward and back, so the start pose
+    is kept). Then it records the origin and walks, steered by the floor-wall lines
+    (:func:`_walk_laps`). Motion is stopped on every
     exit path (an exception or Ctrl-C included); frames already handed to ``on_frame``
     stay with the caller.
 
@@ -177,7 +206,6 @@ def survey(
     """
     t0 = time.monotonic()
     result = SurveyResult()
-    sides = cfg.survey_sides()
     try:
         stand(robot)
         with Camera(robot, cfg.camera, "naoloc_survey") as camera:
@@ -189,11 +217,7 @@ def survey(
                 yaw = head_yaw
                 result.yaw_source = "caller"
             else:
-                result.parallax = detect_wall_by_parallax(
-                    robot, camera, cfg.survey.step_m, head_pitch
-                )
-                yaw = result.parallax.head_yaw
-                result.yaw_source = "parallax"
+                yaw = _detect_side(robot, cfg, camera, head_pitch, result)
             yaw, pitch = look(robot, yaw, head_pitch)
             result.head_yaw = yaw
             turn = -math.copysign(math.pi / 2, yaw) if yaw != 0 else math.pi / 2
@@ -204,28 +228,171 @@ def survey(
                 robot, cfg, origin, probe, yaw, pitch, turn, result.wall, result.parallax
             )
             result.meta["head_yaw_source"] = result.yaw_source
+            if result.floorline is not None:
+                result.meta["floorline_wall"] = {
+                    "side": result.floorline.side,
+                    "left_m": result.floorline.left_m,
+                    "right_m": result.floorline.right_m,
+                }
             if on_start is not None:
                 on_start(result.meta)
-            here = Pose2D()
-            for point in circuit(sides, cfg.survey.step_m, cfg.survey.laps, turn):
-                before = here
-                walk_to(robot, point.pose, here)
-                if point.picture:  # the keyframe's odometry reading is where the robot is
-                    keyframe, odometry = camera.keyframe(origin, command_origin)
-                    here = keyframe.pose
-                    on_frame(keyframe, point.lap, odometry)
-                    result.frames += 1
-                    if progress is not None:
-                        progress(1)
-                else:
-                    here = relative_pose(origin, pose_of(robot.motion, True))
-                    if point.closes_lap:
-                        result.laps = point.lap + 1
-                result.path_m += before.distance(here)
+            eye = FloorEye(robot, cfg.camera)
+            try:
+                _walk_laps(robot, cfg, camera, eye, origin, command_origin, yaw, pitch, turn,
+                           result, on_frame, progress)  # fmt: skip
+            finally:
+                eye.close()
     finally:
         robot.motion.stopMove()
         result.wall_s = time.monotonic() - t0
     return result
+
+
+def _detect_side(
+    robot: Robot, cfg: Config, camera: Camera, head_pitch: float, result: SurveyResult
+) -> float:
+    """Head yaw toward the nearer side wall: floor-wall lines first, parallax if unseen."""
+    eye = FloorEye(robot, cfg.camera, "naoloc_side")
+    try:
+        result.floorline = detect_wall_by_floorline(robot, eye, head_pitch)
+    finally:
+        eye.close()
+    if result.floorline.side is not None:
+        result.yaw_source = "floorline"
+        return result.floorline.head_yaw
+    result.parallax = detect_wall_by_parallax(robot, camera, cfg.survey.step_m, head_pitch)
+    result.yaw_source = "parallax"
+    return result.parallax.head_yaw
+
+
+def _walk_laps(
+    robot: Robot,
+    cfg: Config,
+    camera: Camera,
+    eye: FloorEye,
+    origin: Pose2D,
+    command_origin: Pose2D,
+    yaw: float,
+    pitch: float,
+    turn: float,
+    result: SurveyResult,
+    on_frame: FrameSink,
+    progress: Callable[[int], None] | None,
+) -> None:
+    """The laps, steered by the floor-wall lines of the side and front walls.
+
+    Each side is walked in steps of about ``survey.step_m``: after each step a picture
+    (the survey's camera) and the side wall's line (the bottom camera, same head pose);
+    the next step goes back to ``survey.wall_offset_m`` and parallel to the wall. Near the
+    side's end (by odometry), the head turns forward and the front wall's line sets where
+    the corner is. With no line in view the step goes straight and the side ends by
+    odometry. Vision and scale facts go to ``result.meta``.
+    """
+    sides = cfg.survey_sides()
+    offset, step = cfg.survey.wall_offset_m, cfg.survey.step_m
+    side_normal = math.copysign(math.pi / 2, yaw) if yaw != 0 else -math.pi / 2
+    vision: list[dict[str, Any]] = []
+    fronts: list[FrontSample] = []
+    deviations: list[float] = []
+    here = Pose2D()
+    side_line = eye.measure(side_normal)
+    for lap in range(cfg.survey.laps):
+        for k in range(4):
+            length = sides[k % 2]
+            n = max(1, round(length / step))
+            nominal = length / n
+            walked, steps, last = 0.0, 0, False
+            while not last:
+                front = None
+                if walked >= length - nominal * 1.5 - FRONT_LOOKAHEAD_M - 0.15 * length:
+                    look(robot, 0.0, FRONT_PITCH)
+                    front = trusted_front(eye.measure(0.0, 0.4), offset, length - walked, length)
+                    look(robot, yaw, pitch)
+                    if front is not None:
+                        fronts.append(FrontSample(lap * 4 + k, here, front))
+                if front is not None:
+                    to_go = front.distance - offset
+                    if to_go < 0.5 * nominal:
+                        break  # at the corner already: no step, no picture
+                    length_now = min(nominal, to_go)
+                    last = to_go <= 1.5 * nominal
+                    if last:
+                        length_now = to_go
+                else:
+                    length_now = nominal
+                    last = steps + 1 >= n
+                if steps >= n + MAX_EXTRA_STEPS:
+                    break
+                move, steered = corrected_step(side_line, side_normal, offset, length_now)
+                if not robot.motion.moveTo(move.x, move.y, move.theta):
+                    raise MotionError(
+                        f"moveTo({move.x:.2f}, {move.y:.2f}, {move.theta:.2f}) failed "
+                        f"on side {k + 1} of lap {lap + 1}"
+                    )
+                keyframe, odometry = camera.keyframe(origin, command_origin)
+                result.path_m += here.distance(keyframe.pose)
+                here = keyframe.pose
+                walked += length_now
+                steps += 1
+                side_line = eye.measure(side_normal)
+                good = trusted(side_line, offset)
+                if good is not None:
+                    deviations.append(good.distance - offset)
+                vision.append(
+                    {
+                        "frame": result.frames,
+                        "side": line_dict(side_line),
+                        "front": line_dict(front),
+                        "steered": steered,
+                    }
+                )
+                on_frame(keyframe, lap, odometry)
+                result.frames += 1
+                if progress is not None:
+                    progress(1)
+            if not robot.motion.moveTo(0.0, 0.0, turn):
+                raise MotionError(f"the corner turn after side {k + 1} of lap {lap + 1} failed")
+            after = relative_pose(origin, pose_of(robot.motion, True))
+            result.path_m += here.distance(after)
+            here = after
+            side_line = eye.measure(side_normal)
+        result.laps = lap + 1
+    scale, ratios = metric_scale(fronts)
+    result.meta["vision"] = vision
+    result.meta["wall_follow"] = {
+        "side_normal": side_normal,
+        "side_seen": sum(1 for v in vision if v["side"] is not None),
+        "steered_steps": sum(1 for v in vision if v["steered"]),
+        "front_seen": len(fronts),
+        "offset_dev_mean_m": None if not deviations else float(np.mean(np.abs(deviations))),
+        "offset_dev_max_m": None if not deviations else float(np.max(np.abs(deviations))),
+    }
+    result.meta["metric_scale"] = scale
+    result.meta["metric_scale_samples"] = ratios
+
+
+def trusted_front(
+    line: WallLine | None, offset: float, remaining: float, length: float
+) -> WallLine | None:
+    """The front wall's line, if it agrees with the odometry about where the corner is.
+
+    Args:
+        line: The measured line ahead (FRAME_ROBOT).
+        offset: The survey's wall offset, m.
+        remaining: What the odometry says is left of the side, m.
+        length: The side's length, m.
+
+    Returns:
+        ``line`` when it is within the camera's range, not nearer than half the offset, and
+        puts the corner within ``0.25 * length + 0.3`` m of the odometry's (a NAO's
+        distance scale errs 10 %; a rug's edge or a low piece of furniture would not
+        agree), else None.
+    """
+    if line is None or line.distance > FRONT_RANGE_M or line.distance < 0.5 * offset:
+        return None
+    if abs(line.distance - offset - remaining) > 0.25 * length + 0.3:
+        return None
+    return line
 
 
 def _meta(

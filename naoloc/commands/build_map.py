@@ -9,17 +9,55 @@ interrupted survey's ``DATASET.partial.mcap``) is read only when named, and said
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 from typing import Any
 
 from naoloc.config import Config
 from naoloc.dataset import read_dataset
 from naoloc.errors import DatasetError
+from naoloc.geometry import Pose2D
+from naoloc.keyframe import Keyframe
 from naoloc.outputs import staged
 from naoloc.progress import Progress
 
 # Fewest frames a map is built from: one or two pictures give no place to tell apart.
 MIN_MAP_FRAMES = 3
+# A survey's metric scale outside this range is a failed measurement, not the odometry.
+SCALE_RANGE = (0.6, 1.6)
+
+
+def apply_metric_scale(
+    keyframes: list[Keyframe], meta: dict[str, Any]
+) -> tuple[list[Keyframe], float | None]:
+    """Scale the keyframes' odometry positions to metres, by the survey's ``metric_scale``.
+
+    The survey measures it (metres per odometry metre) from the floor-wall line's
+    distances, which the camera height from the kinematics makes metric
+    (:func:`naoloc.behaviours.wall_follow.metric_scale`). Positions scale about the map
+    origin (the survey start); headings are unchanged.
+
+    Args:
+        keyframes: Keyframes with odometry poses in the map frame.
+        meta: The survey meta (``metric_scale`` may be missing or null).
+
+    Returns:
+        The keyframes to build from and the scale applied (None: left as they were).
+    """
+    scale = meta.get("metric_scale")
+    if not isinstance(scale, (int, float)) or not SCALE_RANGE[0] <= scale <= SCALE_RANGE[1]:
+        return keyframes, None
+    k = float(scale)
+
+    def scaled(p: Pose2D | None) -> Pose2D | None:
+        return None if p is None else Pose2D(p.x * k, p.y * k, p.theta)
+
+    out = [
+        dataclasses.replace(kf, pose=Pose2D(kf.pose.x * k, kf.pose.y * k, kf.pose.theta),
+                            command_pose=scaled(kf.command_pose))
+        for kf in keyframes
+    ]  # fmt: skip
+    return out, k
 
 
 def build_from_dataset(
@@ -55,8 +93,15 @@ def build_from_dataset(
     from naoloc.plots import plot_map
 
     meta = dict(data.meta)
+    meta.pop("vision", None)  # per-frame survey measurements stay in the dataset
+    keyframes, scale = apply_metric_scale(data.keyframes, meta)
     meta.update(
-        {"dataset": str(dataset), "dataset_complete": data.complete, "frames": len(data.keyframes)}
+        {
+            "dataset": str(dataset),
+            "dataset_complete": data.complete,
+            "frames": len(data.keyframes),
+            "metric_scale": scale,
+        }
     )
     bars: dict[str, Progress] = {}
 
@@ -70,7 +115,7 @@ def build_from_dataset(
         bar.update(done - bar.count)
 
     try:
-        vmap = build_map(data.keyframes, cfg.map, meta=meta, progress=progress)
+        vmap = build_map(keyframes, cfg.map, meta=meta, progress=progress)
     finally:
         for bar in bars.values():
             bar.close()
@@ -93,6 +138,7 @@ def build_from_dataset(
         "map": str(output),
         "png": str(png),
         "dataset_complete": data.complete,
+        "metric_scale": scale,
     }
     if not data.complete:
         summary["dataset_reason"] = data.meta.get("reason")

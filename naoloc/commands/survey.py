@@ -91,6 +91,7 @@ def record_survey(
     writer = holder.get("w")
     if writer is None:
         return result, 0
+    writer.update_meta(result.meta)  # with what the survey measured (vision, metric scale)
     if result.laps < cfg.survey.laps:  # not expected: survey() walks every lap or raises
         writer.close(complete=False, reason=f"{result.laps} of {cfg.survey.laps} laps")
     else:
@@ -120,6 +121,9 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
             f"right {par.right_shift_px:.0f} px), "
         )
     detected += f"head yaw from the {result.yaw_source}, "
+    follow = result.meta.get("wall_follow") or {}
+    if follow:
+        detected += f"{follow.get('steered_steps', 0)} steps steered by the floor line, "
     print(
         f"survey: {frames} frames in {result.laps} laps of {sides[0]:.2f} x {sides[1]:.2f} m, "
         f"{detected}{result.meta.get('direction', '?')} circuit, {result.path_m:.1f} m walked, "
@@ -134,4 +138,6 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         "direction": result.meta.get("direction"),
         "head_yaw": round(result.head_yaw, 4),
         "head_yaw_source": result.yaw_source,
+        "metric_scale": result.meta.get("metric_scale"),
+        "wall_follow": result.meta.get("wall_follow"),
     }

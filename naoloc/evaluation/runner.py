@@ -314,13 +314,18 @@ def map_task(task: MapTask) -> dict[str, Any]:
         ``{"name", "map", "images", "neurons", "epochs", "features", "distinct_poses",
         "timings"}``.
     """
+    from naoloc.commands.build_map import apply_metric_scale
     from naoloc.config import MapConfig
     from naoloc.dataset import read_dataset
     from naoloc.mapping import build_map
 
     data = read_dataset(task.dataset_path)
     cfg = MapConfig.model_validate(task.map_config)
-    vmap = build_map(data.keyframes, cfg, meta=dict(data.meta))
+    meta = dict(data.meta)
+    meta.pop("vision", None)  # per-frame survey measurements stay in the dataset
+    keyframes, scale = apply_metric_scale(data.keyframes, meta)  # as naoloc build-map does
+    meta["metric_scale"] = scale
+    vmap = build_map(keyframes, cfg, meta=meta)
     Path(task.map_path).parent.mkdir(parents=True, exist_ok=True)
     vmap.save(task.map_path)
     return {

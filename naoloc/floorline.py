@@ -1,0 +1,442 @@
+"""The floor-wall line: a wall's distance and direction from one image of the floor.
+
+Pure numpy + OpenCV, no robot. The camera's pose in FRAME_ROBOT (NAOqi's
+``getTransform(name, FRAME_ROBOT, True)``) and its field of view give each pixel's ray; a
+pixel on the floor (z = 0) back-projects to a metric point in FRAME_ROBOT, because the
+camera's height is known from the kinematics. The floor-wall line needs no texture on the
+wall: only a floor that looks different from what stands on it.
+
+The detector:
+
+1. models the floor's colour from the image rows that look at the floor nearest the robot
+   (robust median and spread in CIE Lab, lightness down-weighted against shading);
+2. marks each pixel floor or not, closes thin gaps (plank seams, carpet speckle);
+3. in each column, takes the top of the lowest run of floor that reaches the image bottom
+   or the robot's own body (the first non-floor pixel above it is the wall's foot, or
+   whatever stands on the floor in front of the wall);
+4. back-projects those pixels to z = 0 and fits a line by RANSAC, then least squares.
+
+A line is reported only with enough inliers spread along it; otherwise None (a floor and a
+wall of the same colour, no wall in view, or a view filled with furniture).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from naoloc.errors import FeatureError
+
+MIN_INLIERS = 12
+MIN_INLIER_FRACTION = 0.5
+MIN_SPAN_M = 0.3
+RANSAC_TOLERANCE_M = 0.03
+MAX_RANGE_M = 4.0
+
+
+@dataclass(frozen=True, slots=True)
+class WallLine:
+    """A wall's foot on the floor, in FRAME_ROBOT (x forward, y left, metres, radians).
+
+    Attributes:
+        distance: Perpendicular distance from FRAME_ROBOT's origin to the line, m.
+        normal: Direction from the origin to the line's nearest point, rad (``-pi/2``: a
+            wall straight to the right, parallel to the robot).
+        inliers: Boundary pixels on the line.
+        fraction: ``inliers`` over the boundary pixels found.
+        rms_m: RMS distance of the inliers to the line, m.
+        span_m: Length of the line covered by inliers, m.
+    """
+
+    distance: float
+    normal: float
+    inliers: int
+    fraction: float
+    rms_m: float
+    span_m: float
+
+    def to_dict(self) -> dict[str, float]:
+        """JSON-able form (distance m, normal rad, rms and span m)."""
+        return {
+            "distance_m": round(self.distance, 4),
+            "normal_rad": round(self.normal, 4),
+            "inliers": self.inliers,
+            "fraction": round(self.fraction, 3),
+            "rms_m": round(self.rms_m, 4),
+            "span_m": round(self.span_m, 3),
+        }
+
+
+def pixel_rays(
+    width: int, height: int, hfov: float, vfov: float, camera_pose: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Rays of every pixel centre in FRAME_ROBOT.
+
+    Args:
+        width: Image width, px.
+        height: Image height, px.
+        hfov: Horizontal field of view, rad.
+        vfov: Vertical field of view, rad.
+        camera_pose: 4x4 pose of the camera (NAOqi frame: x optical axis, y left, z up) in
+            FRAME_ROBOT, or its 16 floats row-major.
+
+    Returns:
+        ``(origin (3,), directions (height, width, 3))``, directions not normalised.
+    """
+    t = np.asarray(camera_pose, dtype=np.float64).reshape(4, 4)
+    fx = (width / 2.0) / math.tan(hfov / 2.0)
+    fy = (height / 2.0) / math.tan(vfov / 2.0)
+    u = (np.arange(width) + 0.5 - width / 2.0) / fx
+    v = (np.arange(height) + 0.5 - height / 2.0) / fy
+    uu, vv = np.meshgrid(u, v)
+    # optical (x right, y down, z forward) -> NAOqi camera (x forward, y left, z up)
+    cam = np.stack([np.ones_like(uu), -uu, -vv], axis=-1)
+    return t[:3, 3].copy(), cam @ t[:3, :3].T
+
+
+def floor_points(
+    rows: np.ndarray, cols: np.ndarray, origin: np.ndarray, rays: np.ndarray
+) -> np.ndarray:
+    """Back-project pixels ``(rows, cols)`` onto the floor z = 0; ``(n, 2)`` x, y in m.
+
+    Pixels whose ray does not go down, or that land beyond :data:`MAX_RANGE_M`, come back NaN.
+    """
+    d = rays[rows, cols]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = -origin[2] / d[:, 2]
+    s = np.where(d[:, 2] < -1e-6, s, np.nan)
+    xy = origin[None, :2] + s[:, None] * d[:, :2]
+    far = np.hypot(xy[:, 0] - origin[0], xy[:, 1] - origin[1]) > MAX_RANGE_M
+    xy[far] = np.nan
+    return xy
+
+
+def floor_mask(
+    bgr: np.ndarray, sample_rows: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Pixels that look like the floor; the colour model comes from ``sample_rows``.
+
+    Args:
+        bgr: ``(h, w, 3)`` uint8 image.
+        sample_rows: Boolean ``(h,)``: rows known to look at the near floor.
+
+    Returns:
+        Boolean ``(h, w)`` mask, the weighted Lab image ``(h, w, 3)``, the floor's
+        colour in it ``(3,)`` and the colour distance taken as floor.
+    """
+    import cv2
+
+    lab = cv2.cvtColor(cv2.GaussianBlur(bgr, (5, 5), 0), cv2.COLOR_BGR2LAB).astype(np.float32)
+    lab[..., 0] *= 0.3  # shading and plank tones change lightness more than colour
+    sample = lab[sample_rows].reshape(-1, 3)
+    centre = np.median(sample, axis=0)
+    dist = np.linalg.norm(lab - centre, axis=-1)
+    sdist = dist[sample_rows].ravel()
+    # the near floor is mostly floor: its 75th percentile bounds the floor's own spread
+    threshold = max(8.0, 2.5 * float(np.percentile(sdist, 75)))
+    mask = (dist < threshold).astype(np.uint8)
+    # bands of another tone across the floor (plank rows, seams, shadows) are shorter in
+    # the image than what stands on the floor: close them
+    kernel = np.ones((max(7, bgr.shape[0] // 18) | 1, 3), np.uint8)
+    mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, kernel)
+    mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((5, 5), np.uint8))
+    return mask.astype(bool), lab, centre, threshold
+
+
+def refine_boundary(
+    lab: np.ndarray,
+    floor: np.ndarray,
+    threshold: float,
+    rows: np.ndarray,
+    cols: np.ndarray,
+    reach: int,
+) -> np.ndarray:
+    """Move each boundary up through floor pixels darker or lighter than the floor model.
+
+    A wall's foot often sits on a band of shadowed floor (contact shadow, a plank of
+    another tone): from the first non-floor pixel, each pixel is given to the floor while
+    its colour is nearer the floor's than the wall's (sampled a few pixels higher) and
+    within three times the floor's threshold.
+
+    Args:
+        lab: Weighted Lab image from :func:`floor_mask`.
+        floor: The floor's colour ``(3,)``.
+        threshold: The floor's colour distance threshold.
+        rows: Boundary rows (the top floor pixel of each column).
+        cols: Their columns.
+        reach: Most pixels to move up.
+
+    Returns:
+        The refined rows.
+    """
+    out = rows.copy()
+    for i, (r, c) in enumerate(zip(rows.tolist(), cols.tolist(), strict=True)):
+        top = r - reach - 6
+        if top < 0:
+            continue
+        wall = np.median(lab[top : top + 6, c], axis=0)
+        k = r
+        while k > r - reach:
+            px = lab[k - 1, c]
+            to_floor = np.linalg.norm(px - floor)
+            if to_floor < 3.0 * threshold and to_floor < np.linalg.norm(px - wall):
+                k -= 1
+            else:
+                break
+        out[i] = k
+    return out
+
+
+def subpixel_edges(
+    lab: np.ndarray, floor: np.ndarray, rows: np.ndarray, cols: np.ndarray
+) -> np.ndarray:
+    """Sub-pixel image rows of the floor-wall edges (continuous: 0 is the image's top).
+
+    The image was blurred, so the colour goes smoothly from the wall's (sampled just above
+    the edge) to the floor's across a few rows; the edge is where it is half-way, by linear
+    interpolation between pixel centres. Columns where that fails keep the top of their
+    boundary pixel.
+
+    Args:
+        lab: Weighted Lab image from :func:`floor_mask`.
+        floor: The floor's colour ``(3,)``.
+        rows: Boundary rows (the top floor pixel of each column).
+        cols: Their columns.
+    """
+    h = lab.shape[0]
+    out = rows.astype(np.float64)
+    for i, (r, c) in enumerate(zip(rows.tolist(), cols.tolist(), strict=True)):
+        if r < 7 or r + 4 >= h:
+            continue
+        wall = np.median(lab[r - 7 : r - 3, c], axis=0)
+        d = wall - floor
+        n2 = float(d @ d)
+        if n2 < 1e-6:
+            continue
+        t = ((lab[r - 3 : r + 4, c] - floor) @ d) / n2  # ~1 on the wall, ~0 on the floor
+        for k in range(6):
+            if t[k] >= 0.5 > t[k + 1]:
+                out[i] = (r - 3 + k) + 0.5 + (t[k] - 0.5) / (t[k] - t[k + 1])
+                break
+    return out
+
+
+def rays_at(
+    v: np.ndarray,
+    cols: np.ndarray,
+    size: tuple[int, int],
+    hfov: float,
+    vfov: float,
+    pose: np.ndarray,
+) -> np.ndarray:
+    """FRAME_ROBOT rays ``(n, 3)`` through continuous rows ``v`` of columns ``cols`` (centres).
+
+    Args:
+        v: Continuous image rows (0 is the top edge), ``(n,)``.
+        cols: Pixel columns, ``(n,)``.
+        size: ``(width, height)`` in pixels.
+        hfov: Horizontal field of view, rad.
+        vfov: Vertical field of view, rad.
+        pose: The camera's 4x4 pose in FRAME_ROBOT.
+    """
+    w, h = size
+    fx = (w / 2.0) / math.tan(hfov / 2.0)
+    fy = (h / 2.0) / math.tan(vfov / 2.0)
+    u = (cols + 0.5 - w / 2.0) / fx
+    vv = (np.asarray(v, np.float64) - h / 2.0) / fy
+    cam = np.stack([np.ones_like(u), -u, -vv], axis=-1)
+    return cam @ pose[:3, :3].T
+
+
+def boundary_pixels(mask: np.ndarray, min_run: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per column, the top of the lowest sustained floor run (the floor's far edge).
+
+    Scanning up from the image bottom, non-floor pixels at the very bottom (the robot's own
+    body) are skipped; the floor run that follows must be at least ``min_run`` pixels long;
+    its top, when something non-floor lies above it in the image, is the column's boundary.
+
+    Returns:
+        ``(rows, cols)`` of the boundary pixels (the last floor pixel of each column).
+    """
+    h, w = mask.shape
+    rows, cols = [], []
+    for c in range(w):
+        col = mask[::-1, c]  # from the bottom up
+        idx = np.flatnonzero(col)
+        if idx.size == 0:
+            continue
+        start = int(idx[0])
+        gaps = np.flatnonzero(~col[start:])
+        end = start + int(gaps[0]) if gaps.size else h
+        if end >= h or end - start < min_run:
+            continue  # floor up to the top of the image, or no sustained floor
+        rows.append(h - end)  # first row (from the top) of the floor run
+        cols.append(c)
+    return np.asarray(rows, dtype=np.int64), np.asarray(cols, dtype=np.int64)
+
+
+def fit_line(points: np.ndarray, seed: int = 0) -> tuple[np.ndarray, np.ndarray] | None:
+    """RANSAC then least-squares line through 2-D points.
+
+    Returns:
+        ``(point on the line, unit direction)`` and the inlier mask as a pair, or None.
+    """
+    n = len(points)
+    if n < MIN_INLIERS:
+        return None
+    rng = np.random.default_rng(seed)
+    best: np.ndarray | None = None
+    best_count = 0
+    for _ in range(200):
+        i, j = rng.choice(n, 2, replace=False)
+        d = points[j] - points[i]
+        norm = float(np.hypot(*d))
+        if norm < 0.05:
+            continue
+        normal = np.array([-d[1], d[0]]) / norm
+        res = np.abs((points - points[i]) @ normal)
+        inl = res < RANSAC_TOLERANCE_M
+        count = int(inl.sum())
+        if count > best_count:
+            best, best_count = inl, count
+    if best is None or best_count < MIN_INLIERS:
+        return None
+    inl = best
+    for _ in range(2):
+        p = points[inl]
+        centre = p.mean(axis=0)
+        _, _, vt = np.linalg.svd(p - centre)
+        direction = vt[0]
+        normal = np.array([-direction[1], direction[0]])
+        inl = np.abs((points - centre) @ normal) < RANSAC_TOLERANCE_M
+        if inl.sum() < MIN_INLIERS:
+            return None
+    return np.vstack([centre, direction]), inl
+
+
+def detect_wall_lines(
+    image: np.ndarray,
+    hfov: float,
+    vfov: float,
+    camera_pose: np.ndarray,
+    *,
+    near_m: float = 0.6,
+    max_lines: int = 2,
+    seed: int = 0,
+) -> list[WallLine]:
+    """The floor-wall lines in one image (up to ``max_lines``, most inliers first), FRAME_ROBOT.
+
+    Args:
+        image: ``(h, w, 3)`` BGR uint8 (a grey ``(h, w)`` image is accepted).
+        hfov: Horizontal field of view, rad.
+        vfov: Vertical field of view, rad.
+        camera_pose: The camera's 4x4 pose in FRAME_ROBOT (NAOqi camera frame), or 16 floats.
+        near_m: Floor nearer than this (from FRAME_ROBOT's origin) models the floor's colour;
+            the rows looking there must be mostly floor.
+        max_lines: Most lines to fit (a corner shows two walls).
+        seed: Seed of RANSAC.
+
+    Returns:
+        The lines seen well enough (possibly none).
+
+    Raises:
+        FeatureError: The image or camera pose has the wrong shape.
+    """
+    import cv2
+
+    img = np.asarray(image)
+    if img.ndim == 2:
+        img = cv2.cvtColor(img, cv2.COLOR_GRAY2BGR)
+    if img.ndim != 3 or img.shape[2] != 3 or img.dtype != np.uint8:
+        raise FeatureError(f"floor line: expected an (h, w, 3) uint8 image, got {img.shape}")
+    pose = np.asarray(camera_pose, dtype=np.float64)
+    if pose.size != 16 or not np.all(np.isfinite(pose)):
+        raise FeatureError("floor line: the camera pose must be 16 finite floats (4x4)")
+    h, w = img.shape[:2]
+    origin, rays = pixel_rays(w, h, hfov, vfov, pose)
+    # the rows whose centre column looks at the floor between 0.25 m and near_m
+    centre = floor_points(np.arange(h), np.full(h, w // 2), origin, rays)
+    reach = np.hypot(centre[:, 0], centre[:, 1])
+    sample_rows = (reach > 0.2) & (reach < near_m)
+    if sample_rows.sum() < 5:
+        sample_rows = np.zeros(h, bool)
+        sample_rows[int(h * 0.75) :] = True
+    mask, lab, floor, threshold = floor_mask(img, sample_rows)
+    rows, cols = boundary_pixels(mask, max(4, h // 20))
+    rows = refine_boundary(lab, floor, threshold, rows, cols, max(4, h // 24))
+    if rows.size < MIN_INLIERS:
+        return []
+    # the foot of the wall, to a fraction of a pixel: a line nearly parallel to the image
+    # rows would otherwise be quantised to whole rows (3 cm at 2 m in QVGA)
+    edge = rays_at(subpixel_edges(lab, floor, rows, cols), cols, (w, h), hfov, vfov,
+                   pose.reshape(4, 4))  # fmt: skip
+    pts = floor_points(np.arange(rows.size), np.zeros(rows.size, np.int64), origin, edge[:, None])
+    pts = pts[np.all(np.isfinite(pts), axis=1)]
+    lines: list[WallLine] = []
+    remaining = pts
+    for k in range(max_lines):
+        line, outliers = _one_line(remaining, seed + k)
+        if line is None:
+            break
+        lines.append(line)
+        remaining = outliers
+    return lines
+
+
+def _one_line(pts: np.ndarray, seed: int) -> tuple[WallLine | None, np.ndarray]:
+    """The best line through ``pts`` and the points it leaves; (None, pts) when none."""
+    fit = fit_line(pts, seed)
+    if fit is None:
+        return None, pts
+    (point, direction), inl = fit
+    p = pts[inl]
+    normal = np.array([-direction[1], direction[0]])
+    offset = float(point @ normal)
+    if offset < 0:
+        normal, offset = -normal, -offset
+    along = p @ direction
+    span = float(along.max() - along.min())
+    fraction = float(inl.sum()) / len(pts)
+    if span < MIN_SPAN_M or fraction < MIN_INLIER_FRACTION / 2:
+        return None, pts
+    rms = float(np.sqrt(np.mean(((p - point) @ normal) ** 2)))
+    line = WallLine(offset, math.atan2(normal[1], normal[0]), int(inl.sum()), fraction, rms, span)
+    return line, pts[~inl]
+
+
+def detect_wall_line(
+    image: np.ndarray,
+    hfov: float,
+    vfov: float,
+    camera_pose: np.ndarray,
+    *,
+    expect_normal: float | None = None,
+    tolerance: float = 0.5,
+    seed: int = 0,
+) -> WallLine | None:
+    """The floor-wall line nearest in direction to ``expect_normal`` (or the best one).
+
+    Args:
+        image: ``(h, w, 3)`` BGR uint8.
+        hfov: Horizontal field of view, rad.
+        vfov: Vertical field of view, rad.
+        camera_pose: The camera's 4x4 pose in FRAME_ROBOT, or 16 floats.
+        expect_normal: Expected direction of the wall's normal in FRAME_ROBOT, rad (e.g.
+            ``-pi/2`` for a wall on the right); None takes the line with most inliers.
+        tolerance: Largest accepted difference from ``expect_normal``, rad.
+        seed: Seed of RANSAC.
+
+    Returns:
+        The line with at least half of the boundary pixels it was fitted among, or None.
+    """
+    lines = detect_wall_lines(image, hfov, vfov, camera_pose, seed=seed)
+    if expect_normal is not None:
+        lines = [ln for ln in lines if abs(_wrap(ln.normal - expect_normal)) <= tolerance]
+    lines = [ln for ln in lines if ln.fraction >= MIN_INLIER_FRACTION or ln is lines[0]]
+    return lines[0] if lines else None
+
+
+def _wrap(a: float) -> float:
+    return (a + math.pi) % (2 * math.pi) - math.pi
