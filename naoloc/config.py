@@ -56,6 +56,11 @@ class RoomConfig(_Model):
     seed: int = Field(0, ge=0, description="seed of posters, textures and furniture")
     posters_per_wall: int = Field(5, ge=0, le=50, description="posters on each wall")
     furniture: bool = Field(True, description="tables, chairs, shelves from primitives")
+    style: Literal["home", "office", "posters"] = Field(
+        "home",
+        description="home/office: art at real heights (1.2-1.8 m), skirting, doors, windows, "
+        "radiators; posters: posters in the camera's band (the rooms of earlier versions)",
+    )
     poster_dir: str | None = Field(
         None, description="folder of photographs to use as posters instead of procedural ones"
     )
@@ -108,12 +113,52 @@ class OdometryConfig(_Model):
 
 
 class CameraRealismConfig(_Model):
-    """Image degradations of simulated cameras; all off by default."""
+    """Image formation of simulated cameras (``naoloc/simulated/camera_model.py``).
 
-    noise_std: float = Field(0.0, ge=0, le=64, description="Gaussian pixel noise, 0-255 units")
-    blur_px: float = Field(0.0, ge=0, le=10, description="Gaussian blur sigma in pixels")
-    exposure: float = Field(1.0, gt=0, le=4, description="brightness gain")
-    jpeg_quality: int | None = Field(None, ge=5, le=100, description="JPEG round trip quality")
+    ``profile: nao`` models a NAO's camera: sensor noise (SNR at most 37 dB, more at high
+    gain), auto exposure and auto white balance, vignetting, YUV422 chroma, NAO's lens
+    calibration, motion blur. ``profile: ideal`` gives the clean rendered frames. A key left
+    at ``null`` takes the profile's value; an explicit value overrides the profile.
+    """
+
+    profile: Literal["nao", "ideal"] = Field(
+        "nao", description="nao (a NAO's camera) | ideal (clean frames, for unit tests)"
+    )
+    noise_std: float | None = Field(
+        None,
+        ge=0,
+        le=64,
+        description="Gaussian pixel noise std, 0-255 units; null = profile "
+        "(nao: shot and read noise of the sensor at its gain)",
+    )
+    blur_px: float | None = Field(
+        None, ge=0, le=10, description="extra Gaussian blur sigma in pixels; null = profile"
+    )
+    exposure: float | None = Field(
+        None,
+        gt=0,
+        le=16,
+        description="fixed brightness gain (turns auto exposure off); "
+        "null = profile (nao: auto exposure)",
+    )
+    jpeg_quality: int | None = Field(
+        None, ge=5, le=100, description="JPEG round trip quality; null = none"
+    )
+    auto_white_balance: bool | None = Field(None, description="gray-world AWB; null = profile")
+    vignetting: float | None = Field(
+        None, ge=0, lt=1, description="brightness loss in the image corners; null = profile"
+    )
+    yuv422: bool | None = Field(None, description="chroma halved horizontally; null = profile")
+    distortion: bool | None = Field(
+        None, description="NAO's lens calibration (k1, focal, principal point); null = profile"
+    )
+    motion_blur: bool | None = Field(
+        None, description="blur along the camera's motion during the exposure; null = profile"
+    )
+    rolling_shutter: bool = Field(False, description="rows exposed one after another")
+    ae_target: float = Field(
+        110.0, gt=10, lt=245, description="auto exposure's target mean luma, 0-255"
+    )
     seed: int = Field(0, ge=0, description="seed of the noise")
 
 

@@ -37,7 +37,11 @@ def small_cfg(**survey: Any) -> Config:
     return load_config(
         {
             "robot": {"backend": "fake"},
-            "world": {"room": {"size_m": [3.0, 3.0], "seed": 3}, "odometry": {"profile": "ideal"}},
+            "world": {
+                "room": {"size_m": [3.0, 3.0], "seed": 3, "style": "posters"},
+                "camera_realism": {"profile": "ideal"},
+                "odometry": {"profile": "ideal"},
+            },  # the pre-issue-11 world: pipeline logic, not realism
             "survey": {"laps": 1, "step_m": 0.5, "wall_offset_m": 0.75, **survey},
             "go_home": {"tolerance_m": 0.15, "max_tries": 4},
         }

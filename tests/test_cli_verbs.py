@@ -17,7 +17,11 @@ pytest.importorskip("naoloc.backends.fake")
 # drift walks the survey into a wall (keeping it off by vision is issue 12's).
 SMALL = {
     "robot": {"backend": "fake"},
-    "world": {"room": {"size_m": [3.0, 3.0], "seed": 5}, "odometry": {"profile": "ideal"}},
+    "world": {
+        "room": {"size_m": [3.0, 3.0], "seed": 5, "style": "posters"},
+        "camera_realism": {"profile": "ideal"},
+        "odometry": {"profile": "ideal"},
+    },  # the pre-issue-11 world: pipeline logic, not realism
     "survey": {"laps": 1, "step_m": 0.25, "wall_offset_m": 0.75},
     "map": {"neurons": 40, "epochs": 30, "vocabulary_size": 64},
     "go_home": {"tolerance_m": 0.15, "max_tries": 4},

@@ -20,7 +20,11 @@ TINY = {
     "robot": {"backend": "fake"},
     # Exact odometry: about the evaluation's plumbing; a NAO's drift walks this tiny room's
     # survey into a wall (issue 12 keeps it off by vision).
-    "world": {"room": {"size_m": [3.2, 3.2], "seed": 5}, "odometry": {"profile": "ideal"}},
+    "world": {
+        "room": {"size_m": [3.2, 3.2], "seed": 5, "style": "posters"},
+        "camera_realism": {"profile": "ideal"},
+        "odometry": {"profile": "ideal"},
+    },  # the pre-issue-11 world: pipeline logic, not realism
     "survey": {"laps": 1, "step_m": 0.3, "wall_offset_m": 0.9},
     "map": {"neurons": 12, "epochs": 12, "vocabulary_size": 48},
 }
@@ -105,7 +109,11 @@ def test_evaluate_paper_protocol_writes_table3(tmp_path: Path) -> None:
         {
             "robot": {"backend": "fake"},
             # Exact odometry: about writing Table 3 (issue 12 keeps a drifting survey on course).
-            "world": {"room": {"size_m": [6.0, 6.0], "seed": 2}, "odometry": {"profile": "ideal"}},
+            "world": {
+                "room": {"size_m": [6.0, 6.0], "seed": 2, "style": "posters"},
+                "camera_realism": {"profile": "ideal"},
+                "odometry": {"profile": "ideal"},
+            },  # the pre-issue-11 world: pipeline logic, not realism
             "survey": {"laps": 1, "step_m": 0.5, "wall_offset_m": 1.0},
             "map": {"vocabulary_size": 48},
         }

@@ -31,7 +31,11 @@ def world() -> tuple[Config, list[Keyframe], list[tuple[list[Keyframe], Pose2D]]
             "robot": {"backend": "fake"},
             # Exact odometry: these tests are about the map; under a NAO's drift a 4 m room's
             # survey strays (keeping it on the circuit by vision is issue 12's).
-            "world": {"room": {"size_m": [4.0, 4.0], "seed": 3}, "odometry": {"profile": "ideal"}},
+            "world": {
+                "room": {"size_m": [4.0, 4.0], "seed": 3, "style": "posters"},
+                "camera_realism": {"profile": "ideal"},
+                "odometry": {"profile": "ideal"},
+            },  # the pre-issue-11 world: pipeline logic, not realism
             "survey": {"wall_offset_m": 0.9},
         }
     )

@@ -23,7 +23,12 @@ from naoloc.image import frame_from_naoqi
 from naoloc.keyframe import CameraInfo, camera_in_robot
 
 pytestmark = pytest.mark.sim
-SMALL = {"world": {"room": {"size_m": [4.0, 4.0], "seed": 2, "posters_per_wall": 3}}}
+SMALL = {
+    "world": {
+        "room": {"size_m": [4.0, 4.0], "seed": 2, "posters_per_wall": 3, "style": "posters"},
+        "camera_realism": {"profile": "ideal"},  # exact rendered pixels
+    }
+}
 
 
 def _parts(robot: naoloc.Robot) -> tuple[Simulation, MujocoVideo]:
@@ -83,7 +88,9 @@ ROOMS = [
 @pytest.mark.parametrize("room", ROOMS, ids=["paper", "lab", "seed41", "seed77"])
 def test_akaze_finds_100_keypoints_on_a_poster_wall_from_one_metre(room: Any) -> None:
     akaze = cv2.AKAZE_create()  # type: ignore[attr-defined]
-    with naoloc.connect(room) as robot:
+    posters = {"world": {"room": {"style": "posters"}}}  # posters in the camera's band
+    cfg = naoloc.config.load_config(room).with_overrides(posters)
+    with naoloc.connect(cfg) as robot:
         sim, video = _parts(robot)
         handle = video.subscribeCamera("akaze", 0, kQVGA, kYuvColorSpace, 30)
         # Level the view: StandInit's torso leans 0.1 rad forward (the camera looks 6.9 deg down).
@@ -122,7 +129,10 @@ def test_time_stamps_colorspaces_and_bottom_camera() -> None:
 
 def test_realism_is_seeded_and_changes_the_image() -> None:
     frames = []
-    realism = {"noise_std": 8.0, "blur_px": 1.0, "exposure": 1.3, "jpeg_quality": 60, "seed": 5}
+    realism = {
+        "profile": "ideal",
+        **{"noise_std": 8.0, "blur_px": 1.0, "exposure": 1.3, "jpeg_quality": 60, "seed": 5},
+    }
     degraded: dict[str, Any] = {**SMALL, "world": {**SMALL["world"], "camera_realism": realism}}
     for cfg in (SMALL, degraded, degraded):
         with naoloc.connect(cfg) as robot:

@@ -93,9 +93,12 @@ def test_standinit_camera_height_matches_keyframe_geometry() -> None:
         assert in_robot == pytest.approx(expected, abs=1e-3)
 
 
+@pytest.mark.parametrize("style", ["home", "office", "posters"])
 @pytest.mark.parametrize("path", CONFIGS, ids=[p.stem for p in CONFIGS])
-def test_every_config_compiles_and_steps_without_warnings(path: Path) -> None:
-    cfg = load_config(path).with_overrides({"robot": {"backend": "mujoco"}})
+def test_every_config_compiles_and_steps_without_warnings(path: Path, style: str) -> None:
+    cfg = load_config(path).with_overrides(
+        {"robot": {"backend": "mujoco"}, "world": {"room": {"style": style}}}
+    )
     with naoloc.connect(cfg) as robot:
         sim = _sim(robot)
         robot.motion.move(0.1, 0.0, 0.3)
@@ -117,7 +120,14 @@ def test_room_layout_posters_unique_and_furniture_clear_of_the_circuit(
 ) -> None:
     cfg = load_config(
         {
-            "world": {"room": {"size_m": list(size), "seed": seed, "posters_per_wall": 4}},
+            "world": {
+                "room": {
+                    "size_m": list(size),
+                    "seed": seed,
+                    "posters_per_wall": 4,
+                    "style": "posters",
+                }
+            },
             "survey": {"wall_offset_m": 0.7},
         }
     )
@@ -153,7 +163,8 @@ def test_posters_from_a_folder_of_photographs(tmp_path: Path) -> None:
         photo = rng.integers(0, 256, (60 + i, 80, 3), dtype=np.uint8)
         assert cv2.imwrite(str(tmp_path / f"photo_{i}.png"), photo)
     (tmp_path / "notes.txt").write_text("not an image")
-    cfg = load_config({"world": {"room": {"posters_per_wall": 1, "poster_dir": str(tmp_path)}}})
+    room = {"posters_per_wall": 1, "poster_dir": str(tmp_path), "style": "posters"}
+    cfg = load_config({"world": {"room": room}})
     posters = build_layout(cfg).posters
     assert len(posters) == 4
     firsts = {p.image.tobytes()[:30] for p in posters[:3]}
@@ -173,3 +184,35 @@ def test_missing_mujoco_names_the_pip_extra(monkeypatch: pytest.MonkeyPatch) -> 
     monkeypatch.setitem(__import__("sys").modules, "mujoco", None)
     with pytest.raises(naoloc.errors.DependencyNotInstalled, match=r"naoloc\[sim\]"):
         naoloc.connect({"robot": {"backend": "mujoco"}})
+
+
+@pytest.mark.parametrize("style", ["home", "office"])
+@pytest.mark.parametrize("path", CONFIGS[1:], ids=[p.stem for p in CONFIGS[1:]])
+def test_furnished_rooms_hang_art_at_real_heights_and_repeat(path: Path, style: str) -> None:
+    cfg = load_config(path).with_overrides({"world": {"room": {"style": style}}})
+    layout = build_layout(cfg)
+    assert len(layout.posters) >= 4 and layout.fixtures
+    for p in layout.posters:
+        assert 1.2 <= p.center[2] <= 1.8, p.name  # picture centres as in real rooms
+        assert p.center[2] - p.height / 2 >= 0.95, p.name  # above the camera's band
+    again = build_layout(cfg)  # same seed, same room
+    assert [p.center for p in again.posters] == [p.center for p in layout.posters]
+    assert all(
+        np.array_equal(a.image, b.image) for a, b in zip(layout.posters, again.posters, strict=True)
+    )
+    assert [f.rect for f in again.furniture] == [f.rect for f in layout.furniture]
+    other = build_layout(cfg.with_overrides({"world": {"room": {"seed": cfg.world.room.seed + 1}}}))
+    assert [p.center for p in other.posters] != [p.center for p in layout.posters]
+    low = [f for f in layout.fixtures if f.pos[2] + f.size[-1] <= 0.95]
+    assert len(low) >= 4  # skirting, sockets, radiators: the camera's band is not empty
+    for x, y in survey_circuit(cfg):
+        assert layout.is_free(x, y, 0.2)
+
+
+def test_posters_style_keeps_the_rooms_of_earlier_versions() -> None:
+    cfg = load_config({"world": {"room": {"style": "posters", "seed": 3}}})
+    layout = build_layout(cfg)
+    assert layout.fixtures == () and layout.materials == {}
+    assert all(0.45 <= p.center[2] <= 0.75 for p in layout.posters)
+    default = build_layout(load_config({"world": {"room": {"seed": 3}}}))
+    assert default.style == "home"

@@ -18,7 +18,11 @@ pytestmark = pytest.mark.net
 
 ROOM: dict[str, Any] = {
     # Exact odometry: about the network; a NAO's drift walks this room's survey off course.
-    "world": {"room": {"size_m": [4.0, 4.0], "seed": 3}, "odometry": {"profile": "ideal"}},
+    "world": {
+        "room": {"size_m": [4.0, 4.0], "seed": 3, "style": "posters"},
+        "camera_realism": {"profile": "ideal"},
+        "odometry": {"profile": "ideal"},
+    },  # the pre-issue-11 world: pipeline logic, not realism
     # The nearest wall is found by parallax through the network too.
     "survey": {"laps": 1, "step_m": 0.4},
     "map": {"neurons": 30, "epochs": 10, "vocabulary_size": 32, "seed": 4},

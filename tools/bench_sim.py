@@ -6,6 +6,8 @@ Prints, for the same scene in the same run:
 - a raw ``mujoco.Renderer`` loop (``update_scene`` + ``render``) on the same model, camera
   and scene options, at the same sizes;
 - their ratio (getImageRemote time per frame / raw time per frame);
+- all of that twice, with ``world.camera_realism.profile`` ``ideal`` and ``nao``, and the
+  time of the camera model alone (``naoloc/simulated/camera_model.py``) per frame;
 - the simulated-time / wall-time ratio while walking with the camera off (moveTo legs of a
   survey-like square: 1 m forward, a quarter turn, repeated).
 
@@ -33,7 +35,9 @@ from naoloc.backends.mujoco.sim import Simulation, mujoco
 from naoloc.backends.mujoco.video import HIDDEN_GROUPS, MujocoVideo
 
 import naoloc
+from naoloc.config import load_config
 from naoloc.constants import kQVGA, kRGBColorSpace, kVGA
+from naoloc.simulated.camera_model import CameraModel, Motion
 
 
 def _time_get_image(video: MujocoVideo, resolution: int, frames: int) -> float:
@@ -66,6 +70,20 @@ def _time_raw(sim: Simulation, width: int, height: int, frames: int) -> float:
         renderer.close()
 
 
+def _time_model(sim: Simulation, video: MujocoVideo, width: int, height: int, frames: int) -> float:
+    """Seconds per frame of the camera model alone on a rendered frame (turning camera)."""
+    rgb = video.render_rgb(0, width, height).copy()
+    model = CameraModel(sim.cfg.world.camera_realism, 0, 0)
+    motion = Motion(omega=(0.0, 0.5, 0.0))
+    hfov, vfov = sim.fov
+    for i in range(5):
+        model.process(rgb, time_s=i / 30, fps=30, hfov=hfov, vfov=vfov, motion=motion)
+    start = time.perf_counter()
+    for i in range(frames):
+        model.process(rgb, time_s=(i + 5) / 30, fps=30, hfov=hfov, vfov=vfov, motion=motion)
+    return (time.perf_counter() - start) / frames
+
+
 def _walk_ratio(robot: naoloc.Robot, sim: Simulation, legs: int) -> tuple[float, float]:
     sim.teleport(1.0, 1.0, 0.0)
     t_sim0, t_wall0 = sim.sim_time(), time.perf_counter()
@@ -86,33 +104,42 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", action="store_true", help="print one JSON line at the end")
     args = parser.parse_args(argv)
 
-    with naoloc.connect(args.config) as robot:
-        sim, video = robot.sim, robot.video
-        assert isinstance(sim, Simulation) and isinstance(video, MujocoVideo)
-        out: dict[str, Any] = {
-            "config": args.config,
-            "mujoco_gl": os.environ.get("MUJOCO_GL"),
-            "cpus": os.cpu_count(),
-        }
-        for name, res, (w, h) in (("qvga", kQVGA, (320, 240)), ("vga", kVGA, (640, 480))):
-            ours = _time_get_image(video, res, args.frames)
-            raw = _time_raw(sim, w, h, args.frames)
-            out[f"{name}_get_image_fps"] = round(1.0 / ours, 1)
-            out[f"{name}_raw_renderer_fps"] = round(1.0 / raw, 1)
-            out[f"{name}_cost_ratio"] = round(ours / raw, 3)
-            print(
-                f"{name.upper():5s} getImageRemote {1 / ours:7.1f} frames/s ({ours * 1e3:6.2f} ms)"
-                f" | raw mujoco.Renderer {1 / raw:7.1f} frames/s ({raw * 1e3:6.2f} ms)"
-                f" | ratio {ours / raw:5.2f}"
-            )
-        sim_s, wall_s = _walk_ratio(robot, sim, args.legs)
-        out["walk_sim_s"] = round(sim_s, 2)
-        out["walk_wall_s"] = round(wall_s, 3)
-        out["walk_realtime_factor"] = round(sim_s / wall_s, 1)
-        print(
-            f"walking, camera off: {sim_s:.1f} s simulated in {wall_s:.2f} s wall "
-            f"= {sim_s / wall_s:.0f}x real time"
+    out: dict[str, Any] = {
+        "config": args.config,
+        "mujoco_gl": os.environ.get("MUJOCO_GL"),
+        "cpus": os.cpu_count(),
+    }
+    for profile in ("ideal", "nao"):
+        cfg = load_config(args.config).with_overrides(
+            {"world": {"camera_realism": {"profile": profile}}}
         )
+        with naoloc.connect(cfg) as robot:
+            sim, video = robot.sim, robot.video
+            assert isinstance(sim, Simulation) and isinstance(video, MujocoVideo)
+            for name, res, (w, h) in (("qvga", kQVGA, (320, 240)), ("vga", kVGA, (640, 480))):
+                ours = _time_get_image(video, res, args.frames)
+                raw = _time_raw(sim, w, h, args.frames)
+                model = _time_model(sim, video, w, h, args.frames)
+                key = f"{profile}_{name}"
+                out[f"{key}_get_image_fps"] = round(1.0 / ours, 1)
+                out[f"{key}_raw_renderer_fps"] = round(1.0 / raw, 1)
+                out[f"{key}_cost_ratio"] = round(ours / raw, 3)
+                out[f"{key}_camera_model_ms"] = round(model * 1e3, 3)
+                print(
+                    f"{profile:5s} {name.upper():4s} getImageRemote {1 / ours:6.1f} frames/s "
+                    f"({ours * 1e3:6.2f} ms) | raw mujoco.Renderer {1 / raw:6.1f} frames/s "
+                    f"({raw * 1e3:6.2f} ms) | ratio {ours / raw:4.2f} | camera model "
+                    f"{model * 1e3:5.2f} ms"
+                )
+            if profile == "nao":
+                sim_s, wall_s = _walk_ratio(robot, sim, args.legs)
+                out["walk_sim_s"] = round(sim_s, 2)
+                out["walk_wall_s"] = round(wall_s, 3)
+                out["walk_realtime_factor"] = round(sim_s / wall_s, 1)
+                print(
+                    f"walking, camera off: {sim_s:.1f} s simulated in {wall_s:.2f} s wall "
+                    f"= {sim_s / wall_s:.0f}x real time"
+                )
     if args.json:
         print(json.dumps(out))
     return 0

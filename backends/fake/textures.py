@@ -1,9 +1,11 @@
 """Procedural, seeded room textures packed into one mip-mapped atlas.
 
-Every wall is a plain painted surface with a skirting board and ``posters_per_wall``
-unique posters (gradients, filled shapes, stripes, checkers, words drawn with
-``cv2.putText``, fine noise) so that A-KAZE finds plenty of keypoints and different
-places on the walls look different. The floor carries mild tiles, the ceiling is
+``world.room.style: posters``: every wall is a plain painted surface with a skirting
+board and ``posters_per_wall`` unique posters (gradients, filled shapes, stripes, checkers,
+words drawn with ``cv2.putText``, fine noise) so that A-KAZE finds plenty of keypoints and different
+places on the walls look different. ``home`` and ``office`` walls follow the MuJoCo rooms
+in 2-D (:func:`make_furnished_wall`): art at 1.2-1.8 m above a band of skirting, sockets,
+doors, radiators and blank wall. The floor carries mild tiles, the ceiling is
 almost plain.
 
 Surfaces (ids used by :mod:`naoloc.backends.fake.render`), room frame:
@@ -285,6 +287,80 @@ def make_wall(
     return img
 
 
+def make_furnished_wall(
+    rng: np.random.Generator, length_m: float, height_m: float, ppm: float, art: int, office: bool
+) -> np.ndarray:
+    """A wall of a ``home`` or ``office`` room, ``(H, W, 3)`` uint8 RGB.
+
+    As the MuJoCo rooms (``backends/mujoco/interior.py``), drawn flat: skirting board
+    (0.08 m), at most one door (0.9 x 2.05 m) and one window (sill 0.9 m, bright daylight)
+    over a ribbed radiator, sockets at 0.3 m, and up to ``art`` pictures and photographs
+    with centres at 1.2-1.8 m (bottom edges above 0.95 m) with blank wall between them.
+    """
+    w, h = max(8, round(length_m * ppm)), max(8, round(height_m * ppm))
+    paint = (226, 228, 230) if office else _random_colour(rng, (0.05, 0.2), (0.8, 0.92))
+    shade = 1.0 + 0.03 * _smooth_noise(rng, h, w, max(4, int(0.5 * ppm)))
+    img = (np.array(paint, np.float32)[None, None, :] * shade[..., None]).clip(0, 255)
+    img = np.ascontiguousarray(img.astype(np.uint8))
+
+    def px(u_m: float, z_m: float) -> tuple[int, int]:  # wall metres -> pixel (column, row)
+        return round(u_m * ppm), round((height_m - z_m) * ppm)
+
+    def rect(u0: float, z0: float, u1: float, z1: float, colour: tuple[int, ...]) -> None:
+        cv2.rectangle(img, px(u0, z1), px(u1, z0), tuple(int(c) for c in colour), -1)
+
+    used: list[tuple[float, float]] = []
+    if rng.random() < 0.5 and length_m > 2.0:  # a door with architrave and handle
+        a = float(rng.uniform(0.6, length_m - 0.6))
+        rect(a - 0.53, 0.0, a + 0.53, 2.12, (238, 238, 232))
+        rect(a - 0.45, 0.0, a + 0.45, 2.05, (140, 95, 58))
+        rect(a + 0.3, 0.99, a + 0.42, 1.01, (150, 150, 155))
+        used.append((a - 0.6, a + 0.6))
+    if rng.random() < 0.6 and length_m > 2.0:  # a window over a radiator
+        ww = float(rng.uniform(1.0, 1.5))
+        a = float(rng.uniform(ww / 2 + 0.3, length_m - ww / 2 - 0.3))
+        if all(a + ww / 2 + 0.1 < lo or a - ww / 2 - 0.1 > hi for lo, hi in used):
+            z1 = min(height_m - 0.25, 2.15)
+            rect(a - ww / 2 - 0.05, 0.85, a + ww / 2 + 0.05, z1 + 0.05, (240, 240, 238))
+            rect(a - ww / 2, 0.9, a + ww / 2, z1, (250, 252, 255))  # daylight: near white
+            rect(a - 0.025, 0.9, a + 0.025, z1, (240, 240, 238))
+            rw = 0.8 * ww
+            rect(a - rw / 2, 0.15, a + rw / 2, 0.75, (236, 236, 232))
+            for k in range(int(rw / 0.06)):
+                u = a - rw / 2 + 0.03 + k * 0.06
+                rect(u + 0.022, 0.16, u + 0.03, 0.74, (200, 200, 198))
+            used.append((a - ww / 2 - 0.1, a + ww / 2 + 0.1))
+    for _ in range(int(rng.integers(1, 3))):  # sockets at 0.3 m
+        a = float(rng.uniform(0.2, length_m - 0.2))
+        rect(a - 0.04, 0.26, a + 0.04, 0.34, (245, 245, 240))
+        cv2.circle(img, px(a - 0.012, 0.3), max(1, int(0.006 * ppm)), (60, 60, 60), -1)
+        cv2.circle(img, px(a + 0.012, 0.3), max(1, int(0.006 * ppm)), (60, 60, 60), -1)
+    u, count = float(rng.uniform(0.3, 1.0)), 0
+    while u < length_m - 0.5 and count < art:
+        n = int(rng.integers(2, 4)) if rng.random() < 0.3 else 1
+        pw = float(rng.uniform(0.3, 0.4)) if n > 1 else float(rng.uniform(0.35, 0.9))
+        ph = pw * float(rng.uniform(0.7, 1.3))
+        span = n * pw + (n - 1) * 0.12
+        if u + span > length_m - 0.3 or not all(u + span < lo or u > hi for lo, hi in used):
+            u += 0.3
+            continue
+        zc = min(
+            max(float(rng.uniform(1.35, 1.65)), 0.97 + ph / 2, 1.2), 1.8, height_m - 0.1 - ph / 2
+        )
+        pw_px, ph_px = max(4, round(pw * ppm)), max(4, round(ph * ppm))
+        picture = make_poster(rng, pw_px, ph_px)
+        for k in range(n):
+            x0, y0 = px(u + k * (pw + 0.12), zc + ph / 2)
+            part = img[y0 : y0 + ph_px, x0 : x0 + pw_px]
+            part[:] = picture[: part.shape[0], : part.shape[1]]
+        count += n
+        u += span + float(rng.uniform(0.4, 1.3))
+    board_h = max(2, int(0.08 * ppm))
+    img[h - board_h :, :] = (236, 236, 230) if office else (120, 82, 50)
+    img[h - board_h, :] = (60, 60, 60)
+    return img
+
+
 def make_floor(rng: np.random.Generator, sx: float, sy: float, ppm: float) -> np.ndarray:
     """Mildly textured floor tiles, ``(H, W, 3)`` uint8 RGB; rows along y, columns along x."""
     w, h = max(8, round(sx * ppm)), max(8, round(sy * ppm))
@@ -325,11 +401,20 @@ def make_atlas(room: RoomConfig) -> Atlas:
     wall_ppm = min(256.0, 7000.0 / max(sx, sy), 4500.0 / wall_h)
     floor_ppm = min(128.0, 4096.0 / max(sx, sy))
     ceil_ppm = min(32.0, 2048.0 / max(sx, sy))
+    if room.style == "posters":
+        walls = [
+            make_wall(rng, length, wall_h, wall_ppm, room.posters_per_wall)
+            for length in (sx, sy, sx, sy)
+        ]
+    else:
+        rng = np.random.default_rng([room.seed, 0x686F6D65])
+        office = room.style == "office"
+        walls = [
+            make_furnished_wall(rng, length, wall_h, wall_ppm, room.posters_per_wall, office)
+            for length in (sx, sy, sx, sy)
+        ]
     textures = [
-        make_wall(rng, sx, wall_h, wall_ppm, room.posters_per_wall),
-        make_wall(rng, sy, wall_h, wall_ppm, room.posters_per_wall),
-        make_wall(rng, sx, wall_h, wall_ppm, room.posters_per_wall),
-        make_wall(rng, sy, wall_h, wall_ppm, room.posters_per_wall),
+        *walls,
         make_floor(rng, sx, sy, floor_ppm),
         make_ceiling(rng, sx, sy, ceil_ppm),
     ]

@@ -11,8 +11,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+import cv2
 import numpy as np
-from naoloc.backends.fake.render import RoomRenderer, apply_realism
+from naoloc.backends.fake.render import RoomRenderer
 from naoloc.backends.fake.world import FakeWorld
 
 from naoloc.constants import (
@@ -27,6 +28,7 @@ from naoloc.constants import (
 from naoloc.errors import HandleError, RobotError
 from naoloc.image import Frame, frame_to_naoqi, from_rgb
 from naoloc.kinematics import optical_from_camera
+from naoloc.simulated.camera_model import CameraModel, Motion
 
 MAX_SUBSCRIBERS = 64
 
@@ -65,9 +67,8 @@ class FakeVideo:
     def __init__(self, world: FakeWorld, renderer: RoomRenderer) -> None:
         self._world = world
         self._renderer = renderer
-        realism = world.cfg.world.camera_realism
-        self._realism = realism
-        self._rng = np.random.default_rng(realism.seed)
+        realism, seed = world.cfg.world.camera_realism, world.cfg.world.sim.seed
+        self._cameras = {c: CameraModel(realism, seed, c) for c in (kTopCamera, kBottomCamera)}
         self._fov = FOV_V6 if world.cfg.world.model == "v6" else FOV_V5
         self._subs: dict[str, Subscription] = {}
         self._active = kTopCamera
@@ -124,26 +125,54 @@ class FakeVideo:
         """
         sub = self._sub(nameId)
         self._world.tick()
-        return frame_to_naoqi(self.capture(sub.camera, sub.resolution, sub.colorspace))
+        return frame_to_naoqi(self.capture(sub.camera, sub.resolution, sub.colorspace, sub.fps))
 
-    def capture(self, camera: int, resolution: int, colorspace: int) -> Frame:
+    def capture(self, camera: int, resolution: int, colorspace: int, fps: int = 30) -> Frame:
         """Render a frame of the current view without a subscription (no time advance).
 
         Args:
             camera: Camera index (0 top, 1 bottom).
             resolution: NAOqi resolution id.
             colorspace: NAOqi colorspace id.
+            fps: Frame rate the camera runs at (auto exposure adapts per camera frame).
         """
         w = self._world
         width, height = RESOLUTIONS[resolution]
         cam = optical_from_camera(w.camera_in_room(camera))  # joints' kinematics, with sway
         hfov, vfov = self._fov
         rgb = self._renderer.render(cam, width, height, hfov, vfov)
-        r = self._realism
-        rgb = apply_realism(rgb, self._rng, r.noise_std, r.blur_px, r.exposure, r.jpeg_quality)
+        light = w.cfg.world.sim.light
+        if light != 1.0:  # the room's light scale, as the MuJoCo lights take it
+            rgb = cv2.convertScaleAbs(rgb, alpha=light)
+        rgb = self._cameras[camera].process(
+            rgb, time_s=w.time_s, fps=fps, hfov=hfov, vfov=vfov, motion=self._motion(cam)
+        )
         pixels = from_rgb(rgb, colorspace)
         angles = (hfov / 2, vfov / 2, -hfov / 2, -vfov / 2)
         return Frame(pixels, colorspace, w.time_s, camera, angles)
+
+    def _motion(self, cam_in_room: np.ndarray) -> Motion:
+        """The camera's velocity in its optical frame: the body's walk plus the head's joints."""
+        w = self._world
+        rates = []
+        for name in ("HeadYaw", "HeadPitch"):
+            cmd, target = w.joint_cmd[name], w.joint_target[name]
+            rates.append(
+                0.0 if cmd == target else float(np.copysign(w.joint_speed[name], target - cmd))
+            )
+        vx, vy, wz = w.velocity
+        heading = w.true_pose.theta
+        yaw = heading + w.head_angles()[0]
+        c, s = np.cos(heading), np.sin(heading)
+        omega_room = np.array(
+            [-np.sin(yaw) * rates[1], np.cos(yaw) * rates[1], wz + rates[0]]
+        )  # pitch turns about the head's left (y) axis, yaw and the walk about z
+        v_room = np.array([c * vx - s * vy, s * vx + c * vy, 0.0])
+        rot = cam_in_room[:3, :3].T
+        om, v = rot @ omega_room, rot @ v_room
+        return Motion(
+            (float(om[0]), float(om[1]), float(om[2])), (float(v[0]), float(v[1]), float(v[2]))
+        )
 
     def releaseImage(self, nameId: str) -> None:
         """No-op for remote images (checks the handle)."""

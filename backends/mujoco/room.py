@@ -2,8 +2,11 @@
 
 Room frame: origin at a room corner, x and y along the walls, z up, metres. The inner
 floor is ``[0, sx] x [0, sy]``. Walls are named by the coordinate they stand at: ``x0``
-(x = 0), ``x1`` (x = sx), ``y0`` (y = 0), ``y1`` (y = sy). Posters hang on the inside of
-the walls around the camera's height (about 0.5 m); furniture stands in the middle of the
+(x = 0), ``x1`` (x = sx), ``y0`` (y = 0), ``y1`` (y = sy). ``world.room.style: posters``:
+posters hang on the inside of the walls around the camera's height (about 0.5 m), as in
+earlier versions; ``home`` and ``office``: pictures hang at real heights and the walls get
+doors, windows, radiators, sockets, skirting and wall-side furniture (``interior.py``).
+Furniture stands in the middle of the
 room, clear of the survey circuit (by 0.45 m), of the start pose and of the room's centre
 (by 0.5 m) and, whenever the room is large enough, of the band 0.6-1.4 m from the walls
 where the ``random`` evaluation protocol draws poses.
@@ -19,7 +22,9 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
+from naoloc.backends.mujoco import interior
 from naoloc.backends.mujoco import posters as poster_images
 
 from naoloc.config import Config
@@ -35,6 +40,12 @@ CENTRE_CLEARANCE = 0.5  # m, and this far from the centre of the room
 # Walls in order around the room; yaw turns a poster box so that its local -y face (which
 # MuJoCo textures unmirrored) looks into the room with local +x to the viewer's right.
 _NO_CONTACT = 'contype="0" conaffinity="0"'
+# Diffuse colour of the two room lights: white, warm lamps at home, cool tubes in offices.
+_LIGHTS = {
+    "posters": ("0.5 0.5 0.5", "0.4 0.4 0.4"),
+    "home": ("0.55 0.5 0.42", "0.44 0.4 0.34"),
+    "office": ("0.48 0.5 0.53", "0.38 0.4 0.43"),
+}
 _WALL_YAW = {"y0": math.pi, "x1": -math.pi / 2, "y1": 0.0, "x0": math.pi / 2}
 
 
@@ -65,10 +76,11 @@ class Poster:
 class Part:
     """One visual primitive of a piece of furniture (room frame, m)."""
 
-    kind: str  # "box" or "cylinder"
+    kind: str  # "box", "cylinder" or "sphere"
     pos: tuple[float, float, float]
     size: tuple[float, ...]
     rgba: tuple[float, float, float, float]
+    material: str = ""  # a texture of RoomLayout.materials (tinted by rgba), or none
 
 
 @dataclass(frozen=True)
@@ -101,6 +113,10 @@ class RoomLayout:
         furniture: The furniture in the room.
         wall_image: Wall paint texture (covers 1 m x 1 m), RGB.
         floor_image: Floor texture (covers 1 m x 1 m), RGB.
+        style: ``world.room.style``.
+        fixtures: Visual-only primitives on the walls (skirting, doors, windows, radiators,
+            sockets); none in ``posters`` rooms.
+        materials: Extra textures by material name (wood, fabric, window...).
     """
 
     size: tuple[float, float]
@@ -109,6 +125,9 @@ class RoomLayout:
     furniture: tuple[Furniture, ...]
     wall_image: np.ndarray = field(repr=False, compare=False)
     floor_image: np.ndarray = field(repr=False, compare=False)
+    style: str = "posters"
+    fixtures: tuple[Part, ...] = ()
+    materials: dict[str, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
 
     def is_free(self, x: float, y: float, clearance: float) -> bool:
         """True when a disc of radius ``clearance`` (m) at ``(x, y)`` (room frame) is clear.
@@ -332,6 +351,9 @@ def _rect_gap(a: tuple[float, float, float, float], b: tuple[float, float, float
 def build_layout(cfg: Config) -> RoomLayout:
     """Generate the room a config describes; the same config gives the same room.
 
+    ``style: posters`` gives the rooms of earlier versions exactly (same seed, same room);
+    ``home`` and ``office`` furnish the walls (see ``interior.py``).
+
     Args:
         cfg: The validated config (world.room.*, world.start_pose, survey.*).
 
@@ -340,6 +362,8 @@ def build_layout(cfg: Config) -> RoomLayout:
     """
     room = cfg.world.room
     rng = np.random.default_rng([room.seed, 0x6E616F])
+    if room.style != "posters":
+        return _furnished_layout(cfg, rng)
     posters = _place_posters(cfg, rng)
     furniture = _place_furniture(cfg, rng) if room.furniture else ()
     wall_rgb = tuple(int(v) for v in rng.integers(170, 235, 3))
@@ -353,8 +377,97 @@ def build_layout(cfg: Config) -> RoomLayout:
     )
 
 
+def _textured(f: Furniture) -> Furniture:
+    """Wood on tables and shelves, fabric on chairs (texture tinted by the part's colour)."""
+    parts = []
+    for k, p in enumerate(f.parts):
+        r, g, b = (min(1.0, 0.6 + 0.5 * c) for c in p.rgba[:3])
+        tint = (r, g, b, 1.0)
+        top = f.kind == "table" and k == 0
+        board = f.kind == "shelf" and (k < 2 or p.size[-1] <= 0.012)
+        if top or board:
+            parts.append(Part(p.kind, p.pos, p.size, tint, "wood"))
+        elif f.kind == "chair" and p.kind == "box":
+            parts.append(Part(p.kind, p.pos, p.size, (1.0, 1.0, 1.0, 1.0), "fabric"))
+        else:
+            parts.append(p)
+    return Furniture(f.name, f.kind, f.rect, f.height, tuple(parts))
+
+
+def _furnished_layout(cfg: Config, rng: np.random.Generator) -> RoomLayout:
+    room = cfg.world.room
+    size = (float(room.size_m[0]), float(room.size_m[1]))
+    office = room.style == "office"
+    plan = interior.plan_walls(cfg)
+    corners = survey_circuit(cfg)
+    loop = list(zip(corners, corners[1:] + corners[:1], strict=True))
+    books = np.random.default_rng([room.seed, 0xB00C])
+    posters = []
+    depth = POSTER_GAP + POSTER_THICKNESS / 2
+    counts = dict.fromkeys(("x0", "x1", "y0", "y1"), 0)
+    for art in plan.art:
+        x, y = wall_point(art.wall, art.along, depth, size)
+        k = counts[art.wall]
+        counts[art.wall] += 1
+        posters.append(
+            Poster(
+                f"poster_{art.wall}_{k}",
+                art.wall,
+                (x, y, art.z),
+                art.width,
+                art.height,
+                _WALL_YAW[art.wall],
+                art.image,
+            )
+        )
+    furniture = list(_place_furniture(cfg, rng) if room.furniture else ())
+    furniture = [_textured(f) for f in furniture]
+    for name, kind, rect, height, boxes in plan.objects if room.furniture else ():
+        clear = min(_segment_distance(rect, p, q) for p, q in loop)
+        if clear < interior.WALL_ITEM_CLEARANCE:
+            continue  # the robot walks there
+        if any(_rect_gap(rect, f.rect) < 0.1 for f in furniture):
+            continue
+        if kind == "bookcase":
+            cx, cy = (rect[0] + rect[2]) / 2, (rect[1] + rect[3]) / 2
+            along_x = rect[2] - rect[0] > rect[3] - rect[1]
+            furniture.append(_textured(_shelf(name, cx, cy, along_x, books)))
+            continue
+        parts = tuple(Part(b.kind, b.pos, b.size, b.rgba, b.material) for b in boxes)
+        furniture.append(Furniture(name, kind, rect, height, parts))
+    fixtures = tuple(Part(b.kind, b.pos, b.size, b.rgba, b.material) for b in plan.fixtures)
+    materials = interior.material_images(room.seed)
+    paint_rng = np.random.default_rng([room.seed, 0x7A1])
+    if office:
+        wall_rgb = tuple(int(v) for v in paint_rng.integers(215, 240, 3))
+        floor = cv2.resize(materials["carpet"], (512, 512), interpolation=cv2.INTER_NEAREST)
+    else:
+        warm = np.array([235, 222, 200]) * paint_rng.uniform(0.85, 1.0)
+        wall_rgb = tuple(int(v) for v in np.clip(warm + paint_rng.integers(-12, 12, 3), 0, 255))
+        floor = poster_images.floor_texture(512, room.seed)
+    return RoomLayout(
+        size=size,
+        wall_height=float(room.wall_height_m),
+        posters=tuple(posters),
+        furniture=tuple(furniture),
+        wall_image=poster_images.plaster_texture(256, wall_rgb, room.seed),  # type: ignore[arg-type]
+        floor_image=floor,
+        style=room.style,
+        fixtures=fixtures,
+        materials=materials,
+    )
+
+
 def _f(values: Sequence[float]) -> str:
     return " ".join(f"{v:.6g}" for v in values)
+
+
+def _part_geom(name: str, part: Part) -> str:
+    material = f'material="{part.material}" ' if part.material else ""
+    return (
+        f'<geom name="{name}" type="{part.kind}" pos="{_f(part.pos)}" size="{_f(part.size)}" '
+        f'{material}rgba="{_f(part.rgba)}" contype="0" conaffinity="0"/>'
+    )
 
 
 def room_mjcf(layout: RoomLayout, timestep: float) -> str:
@@ -380,16 +493,32 @@ def room_mjcf(layout: RoomLayout, timestep: float) -> str:
         '<material name="ceiling" rgba="0.95 0.95 0.95 1" specular="0"/>',
         '<material name="marker" rgba="1 0 0 1" emission="1" specular="0"/>',
     ]
+    for name, image in layout.materials.items():
+        th, tw = image.shape[:2]
+        assets.append(
+            f'<texture name="{name}" type="2d" builtin="flat" width="{tw}" height="{th}"/>'
+        )
+        if name in ("window", "screen"):  # daylight and a monitor glow: brighter than lit
+            glow = 1 if name == "window" else 0.6
+            assets.append(
+                f'<material name="{name}" texture="{name}" emission="{glow}" specular="0"/>'
+            )
+        else:
+            assets.append(
+                f'<material name="{name}" texture="{name}" texuniform="true" texrepeat="3 3" '
+                'specular="0"/>'
+            )
     for p in layout.posters:
         ph, pw = p.image.shape[:2]
         assets.append(
             f'<texture name="{p.name}" type="2d" builtin="flat" width="{pw}" height="{ph}"/>'
         )
         assets.append(f'<material name="{p.name}" texture="{p.name}" specular="0"/>')
+    d0, d1 = _LIGHTS.get(layout.style, _LIGHTS["posters"])
     body = [
-        '<light name="light0" directional="true" dir="0.35 0.55 -0.75" diffuse="0.5 0.5 0.5" '
+        f'<light name="light0" directional="true" dir="0.35 0.55 -0.75" diffuse="{d0}" '
         'specular="0 0 0" castshadow="false"/>',
-        '<light name="light1" directional="true" dir="-0.55 -0.35 -0.75" diffuse="0.4 0.4 0.4" '
+        f'<light name="light1" directional="true" dir="-0.55 -0.35 -0.75" diffuse="{d1}" '
         'specular="0 0 0" castshadow="false"/>',
         f'<geom name="floor" type="plane" pos="{_f((sx / 2, sy / 2, 0))}" '
         f'size="{_f((sx / 2 + t, sy / 2 + t, 1.0))}" material="floor" {_NO_CONTACT}/>',
@@ -422,10 +551,9 @@ def room_mjcf(layout: RoomLayout, timestep: float) -> str:
             'contype="0" conaffinity="2" condim="1"/>'
         )
         for k, part in enumerate(f.parts):
-            body.append(
-                f'<geom name="{f.name}_{k}" type="{part.kind}" pos="{_f(part.pos)}" '
-                f'size="{_f(part.size)}" rgba="{_f(part.rgba)}" contype="0" conaffinity="0"/>'
-            )
+            body.append(_part_geom(f"{f.name}_{k}", part))
+    for k, part in enumerate(layout.fixtures):
+        body.append(_part_geom(f"fixture_{k}", part))
     body.append(
         '<body name="marker" mocap="true" pos="0 0 -1">'
         '<geom name="marker" type="sphere" size="0.01" material="marker" contype="0" '

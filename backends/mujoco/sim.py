@@ -67,6 +67,7 @@ def fill_textures(model: Any, layout: RoomLayout) -> None:
     """Copy the generated pixels into the compiled model's flat placeholder textures."""
     images = {"wall": layout.wall_image, "floor": layout.floor_image}
     images.update({p.name: p.image for p in layout.posters})
+    images.update(layout.materials)  # textures of home and office rooms (wood, fabric...)
     for name, image in images.items():
         i = _obj_id(model, mujoco.mjtObj.mjOBJ_TEXTURE, name)
         adr, w, h = int(model.tex_adr[i]), int(model.tex_width[i]), int(model.tex_height[i])

@@ -3,9 +3,10 @@
 One ``mujoco.Renderer`` per image size, created on first use and reused; frames are
 rendered into preallocated buffers. Rendering happens only in ``getImageRemote``, which
 advances simulated time by one ALMotion cycle and then renders the scene at that time
-(the timestamp in slots [4] and [5]). Optional realism (``world.camera_realism``) is
-applied to the RGB frame before the colorspace conversion: exposure gain, Gaussian blur,
-Gaussian noise, then a JPEG round trip, in that order; all off by default.
+(the timestamp in slots [4] and [5]). The pipeline is render -> camera model -> colorspace:
+``naoloc.simulated.camera_model`` (one per camera, shared with the fake backend) applies
+``world.camera_realism`` (by default a NAO's camera: lens, auto exposure, white balance,
+noise, YUV422, motion blur from the camera's velocity in the physics).
 """
 
 from __future__ import annotations
@@ -15,12 +16,10 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-import cv2
 import numpy as np
 from naoloc.backends.mujoco.gl import import_mujoco
 from naoloc.backends.mujoco.sim import CAMERA_NAMES, Simulation
 
-from naoloc.config import CameraRealismConfig
 from naoloc.constants import (
     CAMERA_FPS,
     COLORSPACE_LAYERS,
@@ -32,6 +31,7 @@ from naoloc.constants import (
 )
 from naoloc.errors import HandleError, RenderError, RobotError
 from naoloc.image import from_rgb
+from naoloc.simulated.camera_model import CameraModel, Motion
 
 # mujoco reads MUJOCO_GL when first imported: import_mujoco chooses the platform first.
 mujoco: Any = import_mujoco()
@@ -54,40 +54,6 @@ class Subscription:
     fps: int
 
 
-class Realism:
-    """Seeded image degradations of a simulated camera (``world.camera_realism``)."""
-
-    def __init__(self, cfg: CameraRealismConfig, sim_seed: int) -> None:
-        """Prepare the degradations a config asks for."""
-        self.cfg = cfg
-        self.rng = np.random.default_rng([sim_seed, cfg.seed, 0xCA4])
-        self.enabled = bool(
-            cfg.noise_std > 0 or cfg.blur_px > 0 or cfg.exposure != 1.0 or cfg.jpeg_quality
-        )
-
-    def apply(self, rgb: np.ndarray) -> np.ndarray:
-        """Degrade an ``(h, w, 3)`` uint8 RGB frame; returns a new array when enabled."""
-        if not self.enabled:
-            return rgb
-        c = self.cfg
-        img: np.ndarray = rgb.astype(np.float32)
-        if c.exposure != 1.0:
-            img *= c.exposure
-        if c.blur_px > 0:
-            img = cv2.GaussianBlur(img, (0, 0), c.blur_px)
-        if c.noise_std > 0:
-            img += self.rng.normal(0.0, c.noise_std, img.shape).astype(np.float32)
-        out = np.clip(img, 0, 255).astype(np.uint8)
-        if c.jpeg_quality:
-            ok, buf = cv2.imencode(
-                ".jpg", out[..., ::-1], [cv2.IMWRITE_JPEG_QUALITY, c.jpeg_quality]
-            )
-            decoded = cv2.imdecode(buf, cv2.IMREAD_COLOR) if ok else None
-            if decoded is not None:
-                out = np.ascontiguousarray(decoded[..., ::-1])
-        return out
-
-
 class MujocoVideo:
     """ALVideoDevice: subscribe to the simulated cameras and render their images."""
 
@@ -101,7 +67,9 @@ class MujocoVideo:
         self._option = mujoco.MjvOption()
         for g in HIDDEN_GROUPS:
             self._option.geomgroup[g] = 0
-        self._realism = Realism(sim.cfg.world.camera_realism, sim.cfg.world.sim.seed)
+        realism, seed = sim.cfg.world.camera_realism, sim.cfg.world.sim.seed
+        self._cameras = {c: CameraModel(realism, seed, c) for c in (kTopCamera, kBottomCamera)}
+        self._velocity = np.zeros(6)
 
     # ------------------------------------------------------------------ subscriptions
     def subscribeCamera(
@@ -221,6 +189,19 @@ class MujocoVideo:
         renderer.render(out=buf)
         return buf
 
+    def _camera_motion(self, camera: int) -> Motion:
+        """The camera's angular and linear velocity now, in its optical frame."""
+        sim = self._sim
+        cam = int(mujoco.mj_name2id(sim.model, mujoco.mjtObj.mjOBJ_CAMERA, CAMERA_NAMES[camera]))
+        mujoco.mj_objectVelocity(
+            sim.model, sim.data, mujoco.mjtObj.mjOBJ_CAMERA, cam, self._velocity, 1
+        )
+        w, v = self._velocity[:3], self._velocity[3:]
+        # MuJoCo's camera frame: x right, y up, looking along -z; optical: y down, z forward.
+        return Motion(
+            (float(w[0]), -float(w[1]), -float(w[2])), (float(v[0]), -float(v[1]), -float(v[2]))
+        )
+
     def getImageRemote(self, nameId: str) -> list[Any]:
         """Advance one cycle, render, and return the NAOqi image array.
 
@@ -231,12 +212,15 @@ class MujocoVideo:
         sub = self._sub(nameId)
         self._sim.cycle()
         width, height = RESOLUTIONS[sub.resolution]
-        rgb = self._realism.apply(self.render_rgb(sub.camera, width, height))
-        pixels = from_rgb(rgb, sub.colorspace)
         stamp = self._sim.sim_time()
+        hfov, vfov = self._sim.fov
+        rgb = self._cameras[sub.camera].process(
+            self.render_rgb(sub.camera, width, height),
+            time_s=stamp, fps=sub.fps, hfov=hfov, vfov=vfov, motion=self._camera_motion(sub.camera),
+        )  # fmt: skip
+        pixels = from_rgb(rgb, sub.colorspace)
         sec = math.floor(stamp)
         usec = min(999_999, round((stamp - sec) * 1e6))
-        hfov, vfov = self._sim.fov
         return [
             width, height, int(pixels.shape[2]) if pixels.ndim == 3 else 1, sub.colorspace,
             sec, usec, pixels.tobytes(), sub.camera,
