@@ -237,6 +237,13 @@ class SurveyConfig(_Model):
     head_yaw_rad: float | None = Field(
         None, description="head yaw while walking; null = from the nearest-wall detector"
     )
+    head_pitch_rad: float = Field(
+        -0.672,
+        ge=-0.672,
+        le=0.515,
+        description="head pitch of the survey's pictures (rad, negative looks up; clamped to "
+        "the head's limits at its yaw): up toward the art at 1.2-1.8 m",
+    )
 
 
 class MapConfig(_Model):
@@ -247,6 +254,9 @@ class MapConfig(_Model):
     epochs: int = Field(300, ge=1, le=10000, description="passes over the training images")
     seed: int = Field(0, ge=0, description="seed of vocabulary and GCS")
     vocabulary_size: int = Field(256, ge=8, le=4096, description="visual words")
+    akaze_threshold: float = Field(
+        0.001, gt=0, le=0.1, description="A-KAZE detector threshold (lower finds more keypoints)"
+    )
 
 
 class LocalizeConfig(_Model):
@@ -256,6 +266,13 @@ class LocalizeConfig(_Model):
         "verified", description="paper: GCS winners' mean pose; verified: RANSAC-checked retrieval"
     )
     images: int = Field(2, ge=1, le=8, description="images taken per estimate")
+    head_pitch_rad: float = Field(
+        -0.672,
+        ge=-0.672,
+        le=0.515,
+        description="head pitch of the query pictures (rad, negative looks up; clamped to "
+        "the head's limits at each yaw)",
+    )
 
 
 class GoHomeConfig(_Model):

@@ -222,7 +222,8 @@ def localize(
     Args:
         robot: The robot, standing where it should be localized.
         vmap: The map.
-        cfg: Config; uses ``localize.mode``, ``localize.images`` (paper strategy) and ``camera``.
+        cfg: Config; uses ``localize.mode``, ``localize.images`` (paper strategy),
+            ``localize.head_pitch_rad`` and ``camera``.
         mode: "verified" or "paper"; default ``cfg.localize.mode``.
         strategy: "scan" or "paper"; default "paper" for mode paper, else "scan".
         yaws: Head yaws of a scan, rad.
@@ -248,12 +249,13 @@ def localize(
     own = camera is None
     cam = camera if camera is not None else Camera(robot, cfg.camera, "naoloc_localize")
     added = 0
+    pitch = cfg.localize.head_pitch_rad  # up toward the art; clamped per yaw by look()
     try:
         stand(robot)
         if strategy == "paper":
-            queries = paper_queries(cam, cfg.localize.images)
+            queries = paper_queries(cam, cfg.localize.images, pitch=pitch)
         else:
-            queries = scan_queries(cam, yaws, turns=turns)
+            queries = scan_queries(cam, yaws, turns=turns, pitch=pitch)
         if on_step is not None:
             on_step(f"{len(queries)} pictures")
         estimate = vmap.localize(queries, mode=mode)  # type: ignore[arg-type]
@@ -262,7 +264,7 @@ def localize(
             try:
                 if not robot.motion.moveTo(0.0, 0.0, EXTRA_TURN_RAD):
                     raise MotionError("turning in place failed during the localization scan")
-                queries += sweep(cam, order)
+                queries += sweep(cam, order, pitch)
             finally:
                 robot.motion.stopMove()
             order.reverse()  # sweep back from where the head is

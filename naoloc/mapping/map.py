@@ -203,7 +203,7 @@ def build_map(
     report = progress or (lambda _s, _d, _t: None)
     n = len(keyframes)
     t0 = time.perf_counter()
-    extractor = FeatureExtractor(cfg.features)
+    extractor = FeatureExtractor(cfg.features, akaze_threshold=cfg.akaze_threshold)
     feats: list[Features] = []
     for i, kf in enumerate(keyframes):
         feats.append(extractor.extract(kf.gray()))
