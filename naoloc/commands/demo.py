@@ -166,7 +166,10 @@ def _survey(robot: Robot, cfg: Config, dataset: Path) -> tuple[SurveyResult, int
             return SurveyResult(), 0, partial, str(err)
         from naoloc.dataset import read_dataset
 
-        data = read_dataset(partial)
+        try:
+            data = read_dataset(partial)
+        except NaolocError:  # unreadable: the map build says why in one line
+            return SurveyResult(), 0, partial, str(err)
         result = SurveyResult(meta=dict(data.meta), frames=len(data.keyframes))
         return result, len(data.keyframes), partial, str(err)
     print(
