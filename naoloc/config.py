@@ -246,6 +246,13 @@ class SurveyConfig(_Model):
     head_yaw_rad: float | None = Field(
         None, description="head yaw while walking; null = from the nearest-wall detector"
     )
+    head_pitch_rad: float = Field(
+        -0.672,
+        ge=-0.672,
+        le=0.515,
+        description="head pitch of the survey's pictures (rad, negative looks up; clamped to "
+        "the head's limits at its yaw): up toward the art at 1.2-1.8 m",
+    )
 
 
 # --- Map building and localizing tuning (naoloc.mapping): defaults are the tuned values. ---
@@ -413,6 +420,9 @@ class MapConfig(_Model):
     tuning: MapTuning = Field(
         MapTuning(), description="landmark, pose-graph, bundle and localizer tuning"
     )
+    akaze_threshold: float = Field(
+        0.001, gt=0, le=0.1, description="A-KAZE detector threshold (lower finds more keypoints)"
+    )
 
 
 class LocalizeMode(enum.StrEnum):
@@ -437,6 +447,13 @@ class LocalizeConfig(_Model):
         description="paper: GCS winners' mean pose; verified: RANSAC-checked retrieval",
     )
     images: int = Field(2, ge=1, le=8, description="images taken per estimate")
+    head_pitch_rad: float = Field(
+        -0.672,
+        ge=-0.672,
+        le=0.515,
+        description="head pitch of the query pictures (rad, negative looks up; clamped to "
+        "the head's limits at each yaw)",
+    )
 
 
 class GoHomeConfig(_Model):

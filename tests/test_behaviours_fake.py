@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from naoloc import connect
-from naoloc.behaviours import frames_per_lap, go_home, localize, survey
+from naoloc.behaviours import SCAN_YAWS, frames_per_lap, go_home, localize, survey
 from naoloc.behaviours.camera import Camera, stand
 from naoloc.behaviours.nearest_wall import detect_wall_by_parallax
 from naoloc.commands.survey import record_survey
@@ -193,7 +193,7 @@ def test_localize_never_translates_and_reports_error(strategy: str) -> None:
         loc = localize(robot, vmap, cfg, strategy=strategy)  # type: ignore[arg-type]
         after = Pose2D.from_list(sim.true_pose())
     assert before.distance(after) < 0.02
-    assert vmap.calls == [5 if strategy == "scan" else 2]
+    assert vmap.calls == [len(SCAN_YAWS) if strategy == "scan" else 2]
     assert loc.error_m == pytest.approx(0.5, abs=1e-6)
     assert loc.truth is not None and loc.truth.distance(relative_pose(origin, after)) < 1e-9
     yaws = [q.head_yaw for q in loc.queries]
@@ -211,7 +211,7 @@ def test_localize_scan_with_a_turn_in_place() -> None:
         sim.teleport(1.5, 1.5, 0.0)
         loc = localize(robot, TruthMap(robot, origin, (0.0, 0.0)), cfg, turns=2)  # type: ignore[arg-type]
         after = Pose2D.from_list(sim.true_pose())
-    assert len(loc.queries) == 10
+    assert len(loc.queries) == 2 * len(SCAN_YAWS)
     assert math.hypot(after.x - 1.5, after.y - 1.5) < 0.05
     assert abs(abs(after.theta) - math.pi) < 0.1
 
@@ -266,7 +266,7 @@ class UnsureMap(TruthMap):
 
 @pytest.mark.parametrize(
     ("confidences", "calls", "turned"),
-    [((0.3, 0.5, 0.99), [5, 10, 15], 2), ((0.2,), [5, 10, 15, 20], 3), ((0.99,), [5], 0)],
+    [((0.3, 0.5, 0.99), [1, 2, 3], 2), ((0.2,), [1, 2, 3, 4], 3), ((0.99,), [1], 0)],
 )
 def test_localize_turns_in_place_until_confident(
     confidences: tuple[float, ...], calls: list[int], turned: int
@@ -281,7 +281,7 @@ def test_localize_turns_in_place_until_confident(
         loc = localize(robot, vmap, cfg)  # type: ignore[arg-type]
         after = Pose2D.from_list(sim.true_pose())
         assert not robot.motion.moveIsActive()
-    assert vmap.calls == calls
+    assert vmap.calls == [len(SCAN_YAWS) * k for k in calls]  # sweeps so far
     assert loc.extra_turns == turned and loc.summary()["extra_turns"] == turned
     assert math.hypot(after.x - 1.5, after.y - 1.4) < 0.05  # turned, never translated
     assert abs(naoloc_modulo(after.theta - 0.3 - turned * math.pi / 2)) < 0.1
@@ -334,5 +334,6 @@ def test_go_home_steps_when_nothing_is_recognised() -> None:
         vmap = UnsureMap(robot, origin, (0.0, 0.0, 0.0, 0.0, 0.99))
         result = go_home(robot, vmap, cfg)  # type: ignore[arg-type]
     # Lost all around (4 sweeps), one step forward, then a confident estimate leads home.
-    assert vmap.calls[:5] == [5, 10, 15, 20, 5]
+    n = len(SCAN_YAWS)  # pictures per sweep
+    assert vmap.calls[:5] == [n, 2 * n, 3 * n, 4 * n, n]
     assert result.reached and result.error_m is not None and result.error_m < 0.15

@@ -67,8 +67,10 @@ def test_clockwise_rectangle_with_uneven_sides() -> None:
 def test_head_clamped_to_limits_and_shell() -> None:
     assert clamp_head(3.0, 0.0)[0] < 2.0857
     assert clamp_head(-3.0, 0.0)[0] > -2.0857
-    assert clamp_head(1.57, -0.6)[1] == pytest.approx(-0.33)
+    assert clamp_head(1.57, -0.6)[1] == pytest.approx(-0.338, abs=2e-3)  # the shell
+    assert clamp_head(0.8, -0.672)[1] == pytest.approx(-0.527, abs=2e-3)
     assert clamp_head(0.0, -0.6)[1] == pytest.approx(-0.6)
+    assert clamp_head(0.0, -0.9)[1] == pytest.approx(-0.671, abs=2e-3)
 
 
 def test_nearest_side_from_the_room_layout() -> None:

@@ -20,22 +20,55 @@ from naoloc.image import Frame, frame_from_naoqi
 from naoloc.keyframe import CameraInfo, Keyframe
 from naoloc.robot import Robot, pose_of
 
-# Head pitch while taking pictures, rad (negative looks up): walls carry their texture above
-# the camera's height, and the shell limits pitch to about -0.33 rad at +-90 degrees of yaw.
-DEFAULT_HEAD_PITCH = -0.2
+# Head pitch while taking pictures, rad (negative looks up): as far up as the head goes.
+# Real rooms hang their art at 1.2-1.8 m and the top camera sits at about 0.5 m, looking
+# 6.9 deg down in StandInit; with the head level the band it sees from 1 m (0.07-0.95 m) is
+# skirting and blank wall. Measured in the home room at 1 m from the walls (median A-KAZE
+# keypoints per QVGA frame, tools/look_figures.py): pitch 0 -> 0, -0.4 -> 3, -0.67 -> 32.
+# The config keys survey.head_pitch_rad and localize.head_pitch_rad default to this.
+DEFAULT_HEAD_PITCH = -0.672
 HEAD_SPEED = 0.3  # fraction of the maximum head joint speed
 
 _YAW_MIN, _YAW_MAX, _ = JOINT_LIMITS["HeadYaw"]
 _PITCH_MIN, _PITCH_MAX, _ = JOINT_LIMITS["HeadPitch"]
+# NAOqi's head anti-collision limits (the shell meets the shoulders): HeadPitch range (deg)
+# at HeadYaw (deg), linearly interpolated, from the NAO "Joints" documentation page (head
+# section); backends/mujoco/nao.py applies the same table to the simulated joints.
+_SHELL_YAW_DEG = (-119.52, -87.49, -62.45, -51.74, -43.32, -27.85, 0.0,
+                  27.85, 43.32, 51.74, 62.45, 87.49, 119.52)  # fmt: skip
+_SHELL_PITCH_MIN_DEG = (-25.73, -18.91, -24.64, -27.50, -31.40, -38.50, -38.50,
+                        -38.50, -31.40, -27.50, -24.64, -18.91, -25.73)  # fmt: skip
+_SHELL_PITCH_MAX_DEG = (18.91, 11.46, 17.19, 18.91, 21.20, 24.18, 29.51,
+                        24.18, 21.20, 18.91, 17.19, 11.46, 18.91)  # fmt: skip
+
+
+def _interp(x: float, xs: tuple[float, ...], ys: tuple[float, ...]) -> float:
+    """Piecewise-linear interpolation of ``ys`` over increasing ``xs``, clamped at the ends."""
+    if x <= xs[0]:
+        return ys[0]
+    for x0, x1, y0, y1 in zip(xs, xs[1:], ys, ys[1:], strict=False):
+        if x <= x1:
+            return y0 + (y1 - y0) * (x - x0) / (x1 - x0)
+    return ys[-1]
+
+
+def head_pitch_limits(yaw: float) -> tuple[float, float]:
+    """HeadPitch range (rad) the head can reach at a HeadYaw (rad), the shell's limits included.
+
+    At yaw 0 it is the joint's own range (-0.672..+0.515 rad); at +-1.53 rad (87.5 deg) it is
+    about -0.33..+0.20 rad.
+    """
+    deg = math.degrees(yaw)
+    lo = math.radians(_interp(deg, _SHELL_YAW_DEG, _SHELL_PITCH_MIN_DEG))
+    hi = math.radians(_interp(deg, _SHELL_YAW_DEG, _SHELL_PITCH_MAX_DEG))
+    return max(lo, _PITCH_MIN), min(hi, _PITCH_MAX)
 
 
 def clamp_head(yaw: float, pitch: float) -> tuple[float, float]:
     """Clamp head angles (rad) to the joint limits, including the shell's at large yaw."""
     yaw = min(max(yaw, _YAW_MIN + 1e-3), _YAW_MAX - 1e-3)
-    lo, hi = _PITCH_MIN, _PITCH_MAX
-    if abs(yaw) > 1.2:  # the shell: about -18.9 to +11.5 degrees at +-87.5 degrees of yaw
-        lo, hi = -0.33, 0.2
-    return yaw, min(max(pitch, lo), hi)
+    lo, hi = head_pitch_limits(yaw)
+    return yaw, min(max(pitch, lo + 1e-3), hi - 1e-3)
 
 
 def look(robot: Robot, yaw: float, pitch: float = DEFAULT_HEAD_PITCH) -> tuple[float, float]:

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from naoloc.behaviours.camera import DEFAULT_HEAD_PITCH, Camera, look, stand
+from naoloc.behaviours.camera import Camera, look, stand
 from naoloc.behaviours.nearest_wall import (
     FloorLineWall,
     ParallaxWall,
@@ -169,7 +169,7 @@ def survey(
     *,
     on_start: StartHook | None = None,
     progress: Callable[[int], None] | None = None,
-    head_pitch: float = DEFAULT_HEAD_PITCH,
+    head_pitch: float | None = None,
     head_yaw: float | None = None,
 ) -> SurveyResult:
     """Walk ``cfg.survey.laps`` closed laps and record a picture after each step.
@@ -193,7 +193,7 @@ def survey(
         on_start: Receives the survey meta before the first step: camera, origin,
             origin_room_pose and room_size_m on a simulator, head angles, direction.
         progress: Called with the number of new frames after each picture.
-        head_pitch: Head pitch while walking, rad.
+        head_pitch: Head pitch while walking, rad; None = ``cfg.survey.head_pitch_rad``.
         head_yaw: Head yaw to use instead of the detector's (rad), e.g. known from the
             room's layout; ``cfg.survey.head_yaw_rad`` still wins.
 
@@ -206,6 +206,7 @@ def survey(
     """
     t0 = time.monotonic()
     result = SurveyResult()
+    head_pitch = cfg.survey.head_pitch_rad if head_pitch is None else head_pitch
     try:
         stand(robot)
         with Camera(robot, cfg.camera, "naoloc_survey") as camera:
