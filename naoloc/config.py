@@ -423,6 +423,12 @@ class MapConfig(_Model):
     akaze_threshold: float = Field(
         0.001, gt=0, le=0.1, description="A-KAZE detector threshold (lower finds more keypoints)"
     )
+    apply_metric_scale: bool = Field(
+        False,
+        description="scale the keyframe poses by the survey's floor-line metric_scale; off by "
+        "default: NAO's lens distortion (not yet undone by the floor-line detector) biases it "
+        "by about 15 % in the default world (docs/RESULTS.md)",
+    )
 
 
 class LocalizeMode(enum.StrEnum):

@@ -32,7 +32,10 @@ def test_three_percent_scale_error_is_gone_from_the_map(tmp_path: Path) -> None:
         {
             "robot": {"backend": "mujoco"},
             "world": {
-                "room": {"size_m": [4.2, 3.8], "seed": 5, "furniture": False},
+                # The world the scale measurement was built in (posters, a clean camera):
+                # in home rooms with NAO's lens it is not yet reliable (docs/RESULTS.md).
+                "room": {"size_m": [4.2, 3.8], "seed": 5, "furniture": False, "style": "posters"},
+                "camera_realism": {"profile": "ideal"},
                 "odometry": {
                     "profile": "nao",
                     "seed": 1,
@@ -46,7 +49,7 @@ def test_three_percent_scale_error_is_gone_from_the_map(tmp_path: Path) -> None:
                 },
             },
             "survey": {"laps": 2, "step_m": 0.2, "wall_offset_m": 1.0, "head_yaw_rad": -1.5708},
-            "map": {"neurons": 20, "epochs": 10, "seed": 0},
+            "map": {"neurons": 20, "epochs": 10, "seed": 0, "apply_metric_scale": True},
         }
     )
     dataset = tmp_path / "s.mcap"

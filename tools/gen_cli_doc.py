@@ -35,6 +35,8 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "direction": "`ccw` or `cw`: the circuit's direction",
         "head_yaw": "HeadYaw held during the laps (rad): toward the nearer side wall",
         "head_yaw_source": "what chose the wall side: `parallax`, `keypoints` or the config",
+        "metric_scale": "metres per odometry metre measured from the floor-wall line (null: none)",
+        "wall_follow": "how the floor-wall line steered the survey (corrections, lines seen)",
     },
     "build-map": {
         "images": "keyframes the map was built from",
@@ -47,6 +49,7 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "map": "the map file written (.npz)",
         "png": "the picture of the map written beside it",
         "dataset_complete": "false when the dataset's writer died (frames up to there used)",
+        "metric_scale": "the survey's metric scale applied to the keyframe poses (null: none)",
     },
     "localize": {
         "x": "estimate, map frame (m); null when nothing was recognised",

@@ -94,7 +94,11 @@ def build_from_dataset(
 
     meta = dict(data.meta)
     meta.pop("vision", None)  # per-frame survey measurements stay in the dataset
-    keyframes, scale = apply_metric_scale(data.keyframes, meta)
+    keyframes, scale = (
+        apply_metric_scale(data.keyframes, meta)
+        if cfg.map.apply_metric_scale
+        else (data.keyframes, None)
+    )
     meta.update(
         {
             "dataset": str(dataset),

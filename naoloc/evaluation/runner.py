@@ -323,7 +323,11 @@ def map_task(task: MapTask) -> dict[str, Any]:
     cfg = MapConfig.model_validate(task.map_config)
     meta = dict(data.meta)
     meta.pop("vision", None)  # per-frame survey measurements stay in the dataset
-    keyframes, scale = apply_metric_scale(data.keyframes, meta)  # as naoloc build-map does
+    keyframes, scale = (  # as naoloc build-map does
+        apply_metric_scale(data.keyframes, meta)
+        if cfg.apply_metric_scale
+        else (data.keyframes, None)
+    )
     meta["metric_scale"] = scale
     vmap = build_map(keyframes, cfg, meta=meta)
     Path(task.map_path).parent.mkdir(parents=True, exist_ok=True)
