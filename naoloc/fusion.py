@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -114,6 +115,16 @@ def fix_from_confidence(pose: Pose2D, confidence: float, inliers: int | None = N
         return Fix(pose, sigma, max(0.02, 0.5 / math.sqrt(inliers)))
     c = min(max(confidence, 1e-3), 1.0)
     return Fix(pose, 0.1 + 0.4 * (1.0 - c), 0.1 + 0.4 * (1.0 - c))
+
+
+def fix_from_estimate(estimate: Any) -> Fix:
+    """The fix a map estimate gives (:func:`fix_from_confidence`; PnP inliers when it has them).
+
+    Args:
+        estimate: A found :class:`naoloc.mapping.Estimate` (map frame).
+    """
+    inliers = estimate.details.get("inliers") if estimate.method == "pnp" else None
+    return fix_from_confidence(estimate.pose(), estimate.confidence, inliers)
 
 
 class ParticleFilter:

@@ -23,7 +23,7 @@ import numpy as np
 from naoloc.behaviours.camera import Camera
 from naoloc.behaviours.localize import Localization, estimate_fields, localize, truth_in_map
 from naoloc.config import Config
-from naoloc.fusion import Belief, ParticleFilter, fix_from_confidence
+from naoloc.fusion import Belief, ParticleFilter, fix_from_estimate
 from naoloc.geometry import Pose2D, relative_pose
 from naoloc.planning import BLOCKED, FloorGrid, NoPath, grid_from_map
 from naoloc.robot import Robot, pose_of
@@ -181,8 +181,7 @@ def go_home(
                     pf.predict(relative_pose(odo_prev, odo))
                 odo_prev = odo
                 if est.found:
-                    inliers = est.details.get("inliers") if est.method == "pnp" else None
-                    fix = fix_from_confidence(est.pose(), est.confidence, inliers)
+                    fix = fix_from_estimate(est)
                     if pf is None:
                         pf = ParticleFilter(
                             PARTICLES, seed=cfg.map.seed, bounds=grid.bounds(),

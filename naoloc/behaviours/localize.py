@@ -68,15 +68,14 @@ def estimate_covariance(est: Estimate) -> dict[str, Any]:
     """The estimate's uncertainty as the JSON ``covariance`` (3 x 3 of x, y, theta).
 
     The standard deviations are those the particle filter gives a fix
-    (:func:`naoloc.fusion.fix_from_confidence`: from the PnP inliers, or the confidence);
+    (:func:`naoloc.fusion.fix_from_estimate`: from the PnP inliers, or the confidence);
     nothing when there is no estimate.
     """
     if not est.found:
         return {}
-    from naoloc.fusion import fix_from_confidence
+    from naoloc.fusion import fix_from_estimate
 
-    inliers = est.details.get("inliers") if est.method == "pnp" else None
-    fix = fix_from_confidence(est.pose(), est.confidence, inliers)
+    fix = fix_from_estimate(est)
     sxy, sth = fix.sigma_xy_m**2, fix.sigma_theta_rad**2
     cov = [[sxy, 0.0, 0.0], [0.0, sxy, 0.0], [0.0, 0.0, sth]]
     return {"covariance": [[round(v, 6) for v in row] for row in cov]}
