@@ -124,3 +124,19 @@ def test_the_naoloc_link_logs_in_over_qimessaging(tls_url: str) -> None:
     with pytest.raises(ConnectionLost, match="wrong user or password") as info:
         refused.open()
     assert "\n" not in str(info.value)
+
+
+def test_tls_survives_concurrent_callers(tls_url: str) -> None:
+    """Calls from several threads while the reader waits: one SSL state, never shared."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    session = QiSession()
+    session.set_login("nao", "s3cret")
+    session.connect(tls_url)
+    try:
+        twice = session.service("Twice")
+        with ThreadPoolExecutor(4) as pool:
+            got = list(pool.map(lambda x: twice.twice(x), range(400)))
+        assert got == [2 * x for x in range(400)]
+    finally:
+        session.close()

@@ -19,6 +19,7 @@ from collections.abc import Callable, Sequence
 from typing import Final
 from urllib.parse import urlsplit
 
+from naoloc.backends.naoqi.qimessaging import tls
 from naoloc.backends.naoqi.qimessaging.message import (
     HEADER_SIZE,
     MAX_PAYLOAD,
@@ -82,7 +83,7 @@ def keepalive(sock: socket.socket, idle_s: int = 5, interval_s: int = 2, probes:
                 sock.setsockopt(socket.IPPROTO_TCP, option, value)
 
 
-def open_socket(url: str, timeout_s: float) -> socket.socket:
+def open_socket(url: str, timeout_s: float) -> socket.socket | tls.TlsSocket:
     """Connect to ``url`` (TLS for ``tcps://``, without certificate checks, like libqi).
 
     NAOqi 2.9 robots present self-signed certificates, which libqi accepts; the login
@@ -103,10 +104,12 @@ def open_socket(url: str, timeout_s: float) -> socket.socket:
         context.check_hostname = False
         context.verify_mode = ssl.CERT_NONE
         try:
-            sock = context.wrap_socket(sock, server_hostname=host)
+            wrapped = tls.client(sock, context, host)
         except (OSError, ssl.SSLError) as err:
             sock.close()
             raise ConnectionLost(f"TLS handshake with {url} failed ({err})") from None
+        sock.settimeout(None)
+        return wrapped
     sock.settimeout(None)
     return sock
 
@@ -115,7 +118,8 @@ class Connection:
     """A framed, thread-safe QiMessaging connection.
 
     Args:
-        sock: A connected socket (plain or TLS).
+        sock: A connected socket, plain or :class:`tls.TlsSocket` (never an
+            ``ssl.SSLSocket``: the reader and the senders would share its SSL state).
         on_message: Called on the reader thread for every valid message.
         on_close: Called once with the reason when the connection ends.
         max_payload: Largest payload accepted, bytes.
@@ -124,7 +128,7 @@ class Connection:
 
     def __init__(
         self,
-        sock: socket.socket,
+        sock: socket.socket | tls.TlsSocket,
         on_message: OnMessage,
         on_close: OnClose,
         *,
@@ -141,7 +145,7 @@ class Connection:
         self._ids = itertools.count(1)
         self._closed = threading.Event()
         self._reason = ""
-        self._scatter = not isinstance(sock, ssl.SSLSocket) and hasattr(sock, "sendmsg")
+        self._scatter = isinstance(sock, socket.socket)
         self._thread = threading.Thread(target=self._read_loop, name=name, daemon=True)
 
     def start(self) -> None:

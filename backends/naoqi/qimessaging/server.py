@@ -27,7 +27,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any, Final
 
-from naoloc.backends.naoqi.qimessaging import capability, codec, message
+from naoloc.backends.naoqi.qimessaging import capability, codec, message, tls
 from naoloc.backends.naoqi.qimessaging.connection import Connection, parse_url
 from naoloc.backends.naoqi.qimessaging.memory import MemoryHub
 from naoloc.backends.naoqi.qimessaging.message import Header
@@ -232,17 +232,18 @@ class QiServer:
     def _open(self, sock: socket.socket) -> None:
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         _send_timeout(sock, SEND_TIMEOUT_S)
+        stream: socket.socket | tls.TlsSocket = sock
         if self._tls is not None:
             try:
                 sock.settimeout(5.0)
-                sock = self._tls.wrap_socket(sock, server_side=True)
+                stream = tls.server(sock, self._tls)
                 sock.settimeout(None)
             except (OSError, ssl.SSLError):
                 sock.close()
                 return
         caller = f"qim-{next(self._callers)}"
         conn = Connection(
-            sock, self._on_message, self._on_close, max_payload=MAX_INCOMING, name=caller
+            stream, self._on_message, self._on_close, max_payload=MAX_INCOMING, name=caller
         )
         with self._lock:
             self._clients[conn] = _Client(conn, caller)
