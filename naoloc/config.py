@@ -246,6 +246,15 @@ class SurveyConfig(_Model):
     head_yaw_rad: float | None = Field(
         None, description="head yaw while walking; null = from the nearest-wall detector"
     )
+    look_ahead_rad: float = Field(
+        0.77,
+        ge=0.0,
+        le=1.2,
+        description="pictures are taken with the head turned this far from the side wall "
+        "toward the walking direction (0 = straight at the wall, as in the paper); at 0.77 "
+        "the top camera sees the art hung above its band at 1 m; the floor-wall line is "
+        "still measured facing the wall",
+    )
     head_pitch_rad: float = Field(
         -0.672,
         ge=-0.672,
@@ -423,11 +432,24 @@ class MapConfig(_Model):
     akaze_threshold: float = Field(
         0.001, gt=0, le=0.1, description="A-KAZE detector threshold (lower finds more keypoints)"
     )
+    min_keypoints: int = Field(
+        100,
+        ge=0,
+        le=5000,
+        description="A-KAZE: an image with fewer keypoints is described again with the "
+        "threshold / sqrt(10), down to 3e-5 (0 = a fixed threshold)",
+    )
     apply_metric_scale: bool = Field(
         False,
         description="scale the keyframe poses by the survey's floor-line metric_scale; off by "
         "default: NAO's lens distortion (not yet undone by the floor-line detector) biases it "
         "by about 15 % in the default world (docs/RESULTS.md)",
+    )
+    wall_poses: bool = Field(
+        True,
+        description="take the keyframe poses from the survey's walls (the known circuit, the "
+        "side and front floor-wall lines, odometry only for the distance along a side) "
+        "instead of the odometry; surveys without floor-line records keep their odometry",
     )
 
 

@@ -1,9 +1,10 @@
 """Metric scale: a 3 % odometry scale error no longer shows in the built map.
 
-The survey walks on odometry that reads 3 % long (other odometry noise small); the
-floor-wall line of the front wall gives metric distances (camera height from the
-kinematics), build-map scales the keyframe poses, and the map's keyframe distances then
-match the simulator's truth within 1 %.
+The survey walks on odometry that reads 3 % long (other odometry noise small). Two ways
+to metric keyframes are checked on it: the default wall-referenced poses (the known
+circuit and the floor-wall lines, :mod:`naoloc.wall_poses`) and the floor-line metric
+scale (``map.apply_metric_scale``: the front wall's distances, camera height from the
+kinematics). Either way the map's keyframe distances match the simulator's truth.
 """
 
 from __future__ import annotations
@@ -19,16 +20,17 @@ pytest.importorskip("mujoco")
 import naoloc
 from naoloc.commands.build_map import apply_metric_scale, build_from_dataset
 from naoloc.commands.survey import record_survey
-from naoloc.config import load_config
+from naoloc.config import Config, load_config
 from naoloc.dataset import read_dataset
+from naoloc.geometry import Pose2D
 
 
 def _path_length(poses: np.ndarray) -> float:
     return float(np.sum(np.hypot(*np.diff(poses[:, :2], axis=0).T)))
 
 
-def test_three_percent_scale_error_is_gone_from_the_map(tmp_path: Path) -> None:
-    cfg = load_config(
+def _config(wall_poses: bool) -> Config:
+    return load_config(
         {
             "robot": {"backend": "mujoco"},
             "world": {
@@ -49,13 +51,51 @@ def test_three_percent_scale_error_is_gone_from_the_map(tmp_path: Path) -> None:
                 },
             },
             "survey": {"laps": 2, "step_m": 0.2, "wall_offset_m": 1.0, "head_yaw_rad": -1.5708},
-            "map": {"neurons": 20, "epochs": 10, "seed": 0, "apply_metric_scale": True},
+            "map": {
+                "neurons": 20,
+                "epochs": 10,
+                "seed": 0,
+                "apply_metric_scale": True,
+                "wall_poses": wall_poses,
+            },
         }
     )
-    dataset = tmp_path / "s.mcap"
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    cfg = _config(False)
+    path = tmp_path_factory.mktemp("scale") / "s.mcap"
     with naoloc.connect(cfg) as robot:
-        result, frames = record_survey(robot, cfg, dataset)
+        result, frames = record_survey(robot, cfg, path)
     assert frames == result.frames > 40  # two laps, as the paper surveys
+    return path
+
+
+def test_wall_poses_take_the_scale_error_out_of_the_map(dataset: Path, tmp_path: Path) -> None:
+    cfg = _config(True)
+    data = read_dataset(dataset)
+    truth = np.array([kf.true_pose.to_list() for kf in data.keyframes])
+    vmap, summary = build_from_dataset(dataset, cfg, tmp_path / "m.npz", show_progress=False)
+    assert summary["metric_scale"] is None
+    assert summary["wall_poses"]["sides_with_corner"] == 8
+    poses = np.asarray(vmap.keyframe_poses)
+    assert _path_length(poses) / _path_length(truth) == pytest.approx(1.0, abs=0.01)
+    i, j = 0, len(poses) // 4
+    d_map = math.dist(poses[i, :2], poses[j, :2])
+    assert d_map / math.dist(truth[i, :2], truth[j, :2]) == pytest.approx(1.0, abs=0.01)
+    origin = Pose2D(*data.meta["origin_room_pose"])
+    in_map = np.array([(origin.inverse() * kf.true_pose).to_list() for kf in data.keyframes])
+    errors = np.hypot(*(poses[:, :2] - in_map[:, :2]).T)
+    assert float(np.median(errors)) < 0.05
+    raw = np.array([kf.pose.to_list() for kf in data.keyframes])
+    assert float(np.median(np.hypot(*(raw[:, :2] - in_map[:, :2]).T))) > float(np.median(errors))
+
+
+def test_floor_line_scale_takes_the_scale_error_out_of_the_map(
+    dataset: Path, tmp_path: Path
+) -> None:
+    cfg = _config(False)
     data = read_dataset(dataset)
     scale = data.meta["metric_scale"]
     assert scale == pytest.approx(1 / 1.03, rel=0.01)

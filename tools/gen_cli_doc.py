@@ -50,6 +50,8 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "png": "the picture of the map written beside it",
         "dataset_complete": "false when the dataset's writer died (frames up to there used)",
         "metric_scale": "the survey's metric scale applied to the keyframe poses (null: none)",
+        "wall_poses": "keyframe poses from the survey's walls (`map.wall_poses`): sides, "
+        "sides_with_corner, median_scale, lines_used, frames (null: odometry poses kept)",
     },
     "localize": {
         "x": "estimate, map frame (m); null when nothing was recognised",

@@ -283,7 +283,8 @@ def _walk_laps(
     """The laps, steered by the floor-wall lines of the side and front walls.
 
     Each side is walked in steps of about ``survey.step_m``: after each step a picture
-    (the survey's camera) and the side wall's line (the bottom camera, same head pose);
+    (the survey's camera, the head turned ``survey.look_ahead_rad`` from the wall toward
+    the walking direction) and the side wall's line (the bottom camera, facing the wall);
     the next step goes back to ``survey.wall_offset_m`` and parallel to the wall. Near the
     side's end (by odometry), the head turns forward and the front wall's line sets where
     the corner is. With no line in view the step goes straight and the side ends by
@@ -291,12 +292,16 @@ def _walk_laps(
     """
     sides = cfg.survey_sides()
     offset, step = cfg.survey.wall_offset_m, cfg.survey.step_m
+    ahead = cfg.survey.look_ahead_rad
+    picture_yaw = yaw - math.copysign(ahead, yaw) if yaw != 0 and ahead > 0 else yaw
+    result.meta["picture_yaw"] = picture_yaw
     side_normal = math.copysign(math.pi / 2, yaw) if yaw != 0 else -math.pi / 2
     vision: list[dict[str, Any]] = []
     fronts: list[FrontSample] = []
     deviations: list[float] = []
     here = Pose2D()
     side_line = eye.measure(side_normal)
+    result.meta["start_side"] = line_dict(side_line)  # where the map frame's origin stands
     for lap in range(cfg.survey.laps):
         for k in range(4):
             length = sides[k % 2]
@@ -330,7 +335,11 @@ def _walk_laps(
                         f"moveTo({move.x:.2f}, {move.y:.2f}, {move.theta:.2f}) failed "
                         f"on side {k + 1} of lap {lap + 1}"
                     )
+                if picture_yaw != yaw:
+                    look(robot, picture_yaw, pitch)
                 keyframe, odometry = camera.keyframe(origin, command_origin)
+                if picture_yaw != yaw:
+                    look(robot, yaw, pitch)
                 result.path_m += here.distance(keyframe.pose)
                 here = keyframe.pose
                 walked += length_now
@@ -342,6 +351,7 @@ def _walk_laps(
                 vision.append(
                     {
                         "frame": result.frames,
+                        "side_index": lap * 4 + k,
                         "side": line_dict(side_line),
                         "front": line_dict(front),
                         "steered": steered,

@@ -13,7 +13,7 @@ import dataclasses
 from pathlib import Path
 from typing import Any
 
-from naoloc.config import Config
+from naoloc.config import Config, MapConfig
 from naoloc.dataset import read_dataset
 from naoloc.errors import DatasetError
 from naoloc.geometry import Pose2D
@@ -60,6 +60,42 @@ def apply_metric_scale(
     return out, k
 
 
+def survey_keyframes(
+    data: Any, cfg: MapConfig, offset: float | None = None
+) -> tuple[list[Keyframe], dict[str, Any]]:
+    """The keyframes a map is built from, with the poses ``cfg`` asks for.
+
+    ``map.wall_poses`` (default): poses from the survey's walls
+    (:func:`naoloc.wall_poses.wall_poses`), which also fixes the metric scale (the known
+    circuit); a survey without floor-line records keeps its odometry. Otherwise, and
+    ``map.apply_metric_scale``: odometry scaled by the survey's ``metric_scale``.
+
+    Args:
+        data: The :class:`naoloc.dataset.Dataset`.
+        cfg: The map config.
+        offset: ``survey.wall_offset_m`` when the dataset's own config lacks it.
+
+    Returns:
+        The keyframes and facts for the map's meta (``metric_scale``, ``wall_poses``).
+    """
+    from naoloc.wall_poses import wall_poses
+
+    facts: dict[str, Any] = {"metric_scale": None, "wall_poses": None}
+    if cfg.wall_poses:
+        survey = data.config.get("survey") if isinstance(data.config, dict) else None
+        value = survey.get("wall_offset_m") if isinstance(survey, dict) else None
+        if isinstance(value, (int, float)) and value > 0:
+            offset = float(value)  # the survey walked at its own offset
+        walled = None if offset is None else wall_poses(data.keyframes, data.meta, offset=offset)
+        if walled is not None:
+            facts["wall_poses"] = walled.summary()
+            return walled.keyframes, facts
+    if cfg.apply_metric_scale:
+        keyframes, facts["metric_scale"] = apply_metric_scale(data.keyframes, data.meta)
+        return keyframes, facts
+    return list(data.keyframes), facts
+
+
 def build_from_dataset(
     dataset: Path,
     cfg: Config,
@@ -92,19 +128,15 @@ def build_from_dataset(
     from naoloc.mapping import build_map
     from naoloc.plots import plot_map
 
+    keyframes, facts = survey_keyframes(data, cfg.map, cfg.survey.wall_offset_m)
     meta = dict(data.meta)
     meta.pop("vision", None)  # per-frame survey measurements stay in the dataset
-    keyframes, scale = (
-        apply_metric_scale(data.keyframes, meta)
-        if cfg.map.apply_metric_scale
-        else (data.keyframes, None)
-    )
     meta.update(
         {
             "dataset": str(dataset),
             "dataset_complete": data.complete,
             "frames": len(data.keyframes),
-            "metric_scale": scale,
+            **facts,
         }
     )
     bars: dict[str, Progress] = {}
@@ -142,7 +174,8 @@ def build_from_dataset(
         "map": str(output),
         "png": str(png),
         "dataset_complete": data.complete,
-        "metric_scale": scale,
+        "metric_scale": facts["metric_scale"],
+        "wall_poses": facts["wall_poses"],
     }
     if not data.complete:
         summary["dataset_reason"] = data.meta.get("reason")

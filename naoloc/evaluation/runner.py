@@ -314,21 +314,17 @@ def map_task(task: MapTask) -> dict[str, Any]:
         ``{"name", "map", "images", "neurons", "epochs", "features", "distinct_poses",
         "timings"}``.
     """
-    from naoloc.commands.build_map import apply_metric_scale
+    from naoloc.commands.build_map import survey_keyframes
     from naoloc.config import MapConfig
     from naoloc.dataset import read_dataset
     from naoloc.mapping import build_map
 
     data = read_dataset(task.dataset_path)
     cfg = MapConfig.model_validate(task.map_config)
+    keyframes, facts = survey_keyframes(data, cfg)  # as naoloc build-map does
     meta = dict(data.meta)
     meta.pop("vision", None)  # per-frame survey measurements stay in the dataset
-    keyframes, scale = (  # as naoloc build-map does
-        apply_metric_scale(data.keyframes, meta)
-        if cfg.apply_metric_scale
-        else (data.keyframes, None)
-    )
-    meta["metric_scale"] = scale
+    meta.update(facts)
     vmap = build_map(keyframes, cfg, meta=meta)
     Path(task.map_path).parent.mkdir(parents=True, exist_ok=True)
     vmap.save(task.map_path)

@@ -77,7 +77,9 @@ def build_map_data(
     report = progress or (lambda _s, _d, _t: None)
     n = len(keyframes)
     t0 = time.perf_counter()
-    extractor = extractor or FeatureExtractor(cfg.features, akaze_threshold=cfg.akaze_threshold)
+    extractor = extractor or FeatureExtractor(
+        cfg.features, akaze_threshold=cfg.akaze_threshold, min_keypoints=cfg.min_keypoints
+    )
     tune = cfg.tuning
     feats: list[Features] = []
     for i, kf in enumerate(keyframes):

@@ -3,6 +3,11 @@
 A-KAZE and ORB give binary descriptors (uint8 bytes, compared by Hamming distance);
 SIFT gives float32 descriptors (compared by Euclidean distance). An image without
 keypoints yields empty arrays, never an error.
+
+A-KAZE's threshold adapts: an image with fewer than ``min_keypoints`` keypoints (a blank
+wall, a dim room) is described again with the threshold divided by sqrt(10), down to
+:data:`AKAZE_FLOOR`. In the default honest world the top camera's QVGA frames give a
+median of 8 keypoints at OpenCV's default 0.001 and 106 at 0.0001 (docs/RESULTS.md).
 """
 
 from __future__ import annotations
@@ -17,6 +22,8 @@ from naoloc.errors import DependencyNotInstalled, FeatureError
 FEATURE_KINDS = ("akaze", "orb", "sift")
 # Descriptor width in bytes (binary) or values (SIFT) per kind, OpenCV defaults.
 DESCRIPTOR_WIDTH = {"akaze": 61, "orb": 32, "sift": 128}
+AKAZE_FLOOR = 3e-5  # lowest adaptive A-KAZE threshold (below it, sensor noise is detected)
+AKAZE_STEP = 10**0.5  # threshold divisor per retry
 
 
 @dataclass(frozen=True, slots=True)
@@ -54,13 +61,21 @@ class FeatureExtractor:
         kind: ``akaze``, ``orb`` or ``sift``.
         max_features: Keep at most this many keypoints (strongest first); 0 keeps all.
         akaze_threshold: A-KAZE detector threshold (OpenCV default 0.001).
+        min_keypoints: A-KAZE only: describe an image again with a lower threshold while
+            it has fewer keypoints than this (0: a fixed threshold).
 
     Raises:
         FeatureError: On an unknown kind.
         DependencyNotInstalled: When this OpenCV build lacks the detector (OpenCV 5).
     """
 
-    def __init__(self, kind: str = "akaze", max_features: int = 0, akaze_threshold: float = 0.001):
+    def __init__(
+        self,
+        kind: str = "akaze",
+        max_features: int = 0,
+        akaze_threshold: float = 0.001,
+        min_keypoints: int = 0,
+    ):
         if kind not in FEATURE_KINDS:
             raise FeatureError(f"unknown feature kind {kind!r}; valid: {', '.join(FEATURE_KINDS)}")
         import cv2
@@ -68,6 +83,8 @@ class FeatureExtractor:
         self.kind = kind
         self.max_features = int(max_features)
         self.akaze_threshold = float(akaze_threshold)
+        self.min_keypoints = int(min_keypoints) if kind == "akaze" else 0
+        self._lower: list[Any] = []  # A-KAZE detectors of the lower thresholds, made once
         self.binary = kind != "sift"
         if kind == "akaze":
             if not hasattr(cv2, "AKAZE_create"):
@@ -87,7 +104,21 @@ class FeatureExtractor:
             "kind": self.kind,
             "max_features": self.max_features,
             "akaze_threshold": self.akaze_threshold,
+            "min_keypoints": self.min_keypoints,
         }
+
+    def _detectors(self) -> list[Any]:
+        """The detector, then (adaptive A-KAZE) those of ever lower thresholds."""
+        if not self.min_keypoints:
+            return [self._detector]
+        if not self._lower:
+            import cv2
+
+            t = self.akaze_threshold / AKAZE_STEP
+            while t >= AKAZE_FLOOR * 0.999:
+                self._lower.append(cv2.AKAZE_create(threshold=t))  # type: ignore[attr-defined]
+                t /= AKAZE_STEP
+        return [self._detector, *self._lower]
 
     def extract(self, gray: np.ndarray) -> Features:
         """Keypoints and descriptors of one grey image.
@@ -108,10 +139,15 @@ class FeatureExtractor:
             img = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
         if img.ndim != 2 or img.dtype != np.uint8 or min(img.shape) < 1:
             raise FeatureError(f"expected a 2-D uint8 image, got {img.dtype} {img.shape}")
-        try:
-            kps, desc = self._detector.detectAndCompute(img, None)
-        except cv2.error as err:
-            raise FeatureError(f"{self.kind} extraction failed: {str(err).strip()[:120]}") from None
+        for detector in self._detectors():
+            try:
+                kps, desc = detector.detectAndCompute(img, None)
+            except cv2.error as err:
+                raise FeatureError(
+                    f"{self.kind} extraction failed: {str(err).strip()[:120]}"
+                ) from None
+            if len(kps) >= self.min_keypoints:
+                break
         if desc is None or not kps:
             return empty_features(self.kind)
         xy = np.array([kp.pt for kp in kps], dtype=np.float32).reshape(-1, 2)

@@ -107,7 +107,10 @@ def map_extractor(vmap: MapData) -> FeatureExtractor:
     """A feature extractor with the parameters the map was built with."""
     p = vmap.feature_params
     return FeatureExtractor(
-        p["kind"], int(p.get("max_features", 0)), float(p.get("akaze_threshold", 0.001))
+        p["kind"],
+        int(p.get("max_features", 0)),
+        float(p.get("akaze_threshold", 0.001)),
+        int(p.get("min_keypoints", 0)),  # maps from before the adaptive threshold: 0
     )
 
 

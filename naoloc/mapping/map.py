@@ -100,7 +100,9 @@ def build_map(
     Raises:
         DatasetError: When there are no keyframes.
     """
-    extractor = FeatureExtractor(cfg.features, akaze_threshold=cfg.akaze_threshold)
+    extractor = FeatureExtractor(
+        cfg.features, akaze_threshold=cfg.akaze_threshold, min_keypoints=cfg.min_keypoints
+    )
     data = build_map_data(keyframes, cfg, meta=meta, progress=progress, extractor=extractor)
     return VisualMap.of(data, extractor)
 

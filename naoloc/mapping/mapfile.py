@@ -189,8 +189,11 @@ def read_map(source: str | Path | bytes) -> MapData:
     mapcheck.check_values(arrays, name)
     kind = mapcheck.check_features(arrays, meta, name)
     features = meta["features"]
-    if not isinstance(features.get("max_features", 0), int) or not isinstance(
-        features.get("akaze_threshold", 0.001), (int, float)
+    if (
+        not isinstance(features.get("max_features", 0), int)
+        or not isinstance(features.get("akaze_threshold", 0.001), (int, float))
+        or not isinstance(features.get("min_keypoints", 0), int)
+        or not 0 <= features.get("min_keypoints", 0) <= 100_000
     ):
         raise _fail(name, "bad feature parameters")
     try:

@@ -1,0 +1,298 @@
+"""Survey keyframe poses referenced to the walls, instead of the drifting odometry.
+
+A NAO's odometry errs about 10 % in distance and 6 % in turns and its heading wanders, so
+after two laps the keyframe poses it reports are metres off (measured: median 2.1 m, max
+4.4 m in the paper room). The survey, though, walks a known rectangle (``survey.side_m``,
+or the room size less twice ``survey.wall_offset_m``) whose corners the front wall's
+floor line places, and after every step it measures the side wall's floor line (bottom
+camera): how far the wall is and at what angle. That fixes, for every keyframe, its
+heading (the side's direction plus the measured angle to the wall), its distance from the
+side wall, and, with the odometry's distance walked scaled so that each side ends at its
+corner, its place along the side. The metric scale comes from the known rectangle (the
+room dimensions the user gives) and the camera height behind the floor-line distances.
+
+Frames: the wall frame W has its origin at the circuit's first corner (where the survey
+starts), x along the first side, y to the left; the result is in the map frame (the
+robot's pose at the survey start), as the odometry poses were. Distances in metres, angles
+in radians.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Final
+
+import numpy as np
+
+from naoloc.geometry import Pose2D, modulo2PI
+from naoloc.keyframe import Keyframe
+
+MAX_OFFSET_ERROR_M: Final = 0.5  # a side line farther than this from the offset is not used
+MAX_ANGLE_ERROR_RAD: Final = 0.35  # nor one at a larger angle to the expected wall
+MIN_CORNER_TURN_RAD: Final = math.pi / 4  # an odometry turn this large between frames: corner
+SCALE_RANGE: Final = (0.7, 1.4)  # a side's metres per odometry metre outside this: not used
+MAX_FRONT_M: Final = 1.6  # farther front lines read long (the lens is not undone yet)
+LINE_STD_M: Final = 0.03  # a floor line's distance, one sigma (NAO's lens reads 2-4 cm long)
+LINE_STD_RAD: Final = 0.01  # and its angle
+MIN_ANGLE_GATE_RAD: Final = 0.12  # an angle this close to the prediction is always used
+
+
+@dataclass(frozen=True)
+class WallPoses:
+    """The wall-referenced keyframe poses and how they were found.
+
+    Attributes:
+        keyframes: The keyframes with ``pose`` replaced (map frame).
+        side_scales: Metres per odometry metre of each side walked (None: no corner seen).
+        lines_used: Keyframes whose pose used their side wall's line.
+    """
+
+    keyframes: list[Keyframe]
+    side_scales: list[float | None]
+    lines_used: int
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-able facts for the map's meta."""
+        known = [s for s in self.side_scales if s is not None]
+        return {
+            "sides": len(self.side_scales),
+            "sides_with_corner": len(known),
+            "median_scale": None if not known else round(float(np.median(known)), 4),
+            "lines_used": self.lines_used,
+            "frames": len(self.keyframes),
+        }
+
+
+def _sides_of_frames(
+    meta_vision: Sequence[dict[str, Any]], keyframes: Sequence[Keyframe]
+) -> list[int]:
+    """Side index (0, 1, 2, ... over all laps) of every keyframe.
+
+    New surveys record it per frame; for older ones a turn of more than 45 degrees in the
+    odometry between two frames starts a new side.
+    """
+    if all(isinstance(v.get("side_index"), int) for v in meta_vision):
+        return [int(v["side_index"]) for v in meta_vision]
+    sides, side = [], 0
+    for i, kf in enumerate(keyframes):
+        if i and abs(modulo2PI(kf.pose.theta - keyframes[i - 1].pose.theta)) > MIN_CORNER_TURN_RAD:
+            side += 1
+        sides.append(side)
+    return sides
+
+
+def _line(
+    entry: dict[str, Any] | None, offset: float, side_normal: float
+) -> tuple[float, float] | None:
+    """(distance m, robot heading to the wall direction rad) from a trusted side line."""
+    if not isinstance(entry, dict):
+        return None
+    distance, normal = entry.get("distance_m"), entry.get("normal_rad")
+    if not isinstance(distance, (int, float)) or not isinstance(normal, (int, float)):
+        return None
+    if not (math.isfinite(distance) and math.isfinite(normal)):
+        return None
+    delta = modulo2PI(side_normal - normal)
+    if abs(distance - offset) > MAX_OFFSET_ERROR_M or abs(delta) > MAX_ANGLE_ERROR_RAD:
+        return None
+    return float(distance), float(delta)
+
+
+def wall_poses(
+    keyframes: Sequence[Keyframe],
+    meta: dict[str, Any],
+    *,
+    offset: float,
+) -> WallPoses | None:
+    """Keyframe poses from the survey's rectangle, its floor lines and the odometry.
+
+    Args:
+        keyframes: The survey's keyframes, in the order taken (odometry poses, map frame).
+        meta: The survey meta: ``sides_m``, ``direction``, ``vision`` (per-frame side and
+            front lines), ``wall_follow.side_normal`` and optionally ``start_side``.
+        offset: ``survey.wall_offset_m``, m.
+
+    Returns:
+        The poses, or None when the meta lacks what this needs (no vision, a survey that
+        did not follow walls): the odometry poses are then kept.
+    """
+    vision = meta.get("vision")
+    sides_m = meta.get("sides_m")
+    follow = meta.get("wall_follow")
+    if (
+        not isinstance(vision, list)
+        or len(vision) != len(keyframes)
+        or not isinstance(sides_m, list)
+        or len(sides_m) != 2
+        or not isinstance(follow, dict)
+        or not isinstance(follow.get("side_normal"), (int, float))
+        or not keyframes
+    ):
+        return None
+    side_normal = float(follow["side_normal"])
+    turn = -math.copysign(1.0, side_normal)  # wall on the right: the corners turn left
+    side_of = _sides_of_frames(vision, keyframes)
+    n_sides = side_of[-1] + 1
+    lengths = [float(sides_m[k % 2]) for k in range(n_sides)]
+
+    # Distance walked (odometry) from each side's corner to each frame.
+    along = np.zeros(len(keyframes))
+    prev = Pose2D()
+    for i, kf in enumerate(keyframes):
+        step = math.hypot(kf.pose.x - prev.x, kf.pose.y - prev.y)
+        first = i == 0 or side_of[i] != side_of[i - 1]
+        along[i] = step if first else along[i - 1] + step
+        prev = kf.pose
+    true_along, scales = _along_sides(along, side_of, vision, lengths, offset)
+
+    corners = [np.zeros(2)]
+    for k in range(n_sides):
+        d = k * turn * math.pi / 2
+        corners.append(corners[-1] + lengths[k] * np.array([math.cos(d), math.sin(d)]))
+
+    poses: list[Pose2D] = []
+    used = 0
+    track = _SideTrack()
+    for i, kf in enumerate(keyframes):
+        k = side_of[i]
+        if i and k == side_of[i - 1]:
+            track.predict(keyframes[i - 1].pose, kf.pose, turn)
+        else:
+            track.reset()
+        if track.update(_line(vision[i].get("side"), offset, side_normal), offset):
+            used += 1
+        d = k * turn * math.pi / 2
+        u = np.array([math.cos(d), math.sin(d)])
+        inward = np.array([-math.sin(d), math.cos(d)]) * turn  # away from the wall
+        position = corners[k] + true_along[i] * u + track.lateral * inward
+        poses.append(Pose2D(float(position[0]), float(position[1]), modulo2PI(d + track.delta)))
+
+    start = _start_pose(meta.get("start_side"), offset, side_normal)
+    out = [
+        dataclasses.replace(kf, pose=start.inverse() * p, command_pose=None)
+        for kf, p in zip(keyframes, poses, strict=True)
+    ]
+    return WallPoses(out, scales, used)
+
+
+class _SideTrack:
+    """Heading to the side wall and distance inward of the circuit, along one side.
+
+    The odometry's relative motion between frames predicts both; a side line that
+    disagrees with the prediction by more than its gate (a chair's foot, a rug's edge) is
+    not used, unless the prediction has grown too uncertain to judge.
+    """
+
+    def __init__(self) -> None:
+        self.reset()
+
+    def reset(self) -> None:
+        """A new side: the survey's steering put the robot back on the circuit."""
+        self.lateral, self.delta = 0.0, 0.0
+        self.var_lateral, self.var_delta = 0.15**2, 0.1**2
+
+    def predict(self, before: Pose2D, after: Pose2D, turn: float) -> None:
+        """Move by the odometry's step from ``before`` to ``after`` (map frame)."""
+        step = before.inverse() * after
+        self.lateral += turn * (step.x * math.sin(self.delta) + step.y * math.cos(self.delta))
+        self.delta = modulo2PI(self.delta + step.theta)
+        dist = math.hypot(step.x, step.y)
+        self.var_lateral += (0.02 + 0.15 * abs(step.y)) ** 2 + (dist * 0.05) ** 2
+        self.var_delta += (0.03 + 0.1 * abs(step.theta)) ** 2  # NAO's heading wanders
+
+    def update(self, line: tuple[float, float] | None, offset: float) -> bool:
+        """Use a measured side line (distance m, heading rad) where it passes the gates.
+
+        The line's angle (measured to about 0.01 rad) and its distance are gated on their
+        own: a line parallel to the wall but off in distance (a skirting's top edge, a
+        sofa's foot) still gives the heading.
+
+        Returns:
+            True when the distance was used.
+        """
+        if line is None:
+            return False
+        lateral, delta = line[0] - offset, line[1]
+        gate = 3 * math.sqrt(self.var_delta + LINE_STD_RAD**2)
+        if abs(modulo2PI(delta - self.delta)) <= max(gate, MIN_ANGLE_GATE_RAD):
+            g = self.var_delta / (self.var_delta + LINE_STD_RAD**2)
+            self.delta = modulo2PI(self.delta + g * modulo2PI(delta - self.delta))
+            self.var_delta *= 1 - g
+        if abs(lateral - self.lateral) > 3 * math.sqrt(self.var_lateral + LINE_STD_M**2):
+            return False
+        g = self.var_lateral / (self.var_lateral + LINE_STD_M**2)
+        self.lateral += g * (lateral - self.lateral)
+        self.var_lateral *= 1 - g
+        return True
+
+
+def _along_sides(
+    along: np.ndarray,
+    side_of: Sequence[int],
+    vision: Sequence[dict[str, Any]],
+    lengths: Sequence[float],
+    offset: float,
+) -> tuple[np.ndarray, list[float | None]]:
+    """Each frame's distance from its side's corner (m), from the odometry's distance walked
+    mapped through anchors: the corner (0 at 0) and every front-wall line, which puts the
+    frame it was measured at ``length - (distance - offset)`` along the side.
+
+    Returns:
+        The distances and each side's overall metres per odometry metre (None: no anchor).
+    """
+    out = np.zeros_like(along)
+    scales: list[float | None] = []
+    for k, length in enumerate(lengths):
+        idx = [i for i in range(len(along)) if side_of[i] == k]
+        anchors = [(0.0, 0.0)]
+        for j, i in enumerate(idx):
+            front = vision[i].get("front")
+            if j == 0 or not isinstance(front, dict):
+                continue
+            distance = front.get("distance_m")
+            if (
+                isinstance(distance, (int, float))
+                and math.isfinite(distance)
+                and distance <= MAX_FRONT_M
+            ):
+                where = length - (float(distance) - offset)
+                anchors.append((float(along[idx[j - 1]]), where))  # measured before the step
+        anchors.sort()
+        kept = [anchors[0]]
+        for o, t in anchors[1:]:
+            if o > kept[-1][0] + 1e-6 and t > kept[-1][1]:
+                s = (t - kept[-1][1]) / (o - kept[-1][0])
+                if SCALE_RANGE[0] <= s <= SCALE_RANGE[1] or len(kept) > 1:
+                    kept.append((o, t))
+        scale = kept[-1][1] / kept[-1][0] if len(kept) > 1 else None
+        scales.append(scale if scale is None or SCALE_RANGE[0] <= scale <= SCALE_RANGE[1] else None)
+        for i in idx:
+            out[i] = along[i]  # scaled below, once every side's scale is known
+        if len(kept) > 1:
+            xs, ys = np.array([a[0] for a in kept]), np.array([a[1] for a in kept])
+            last = (ys[-1] - ys[-2]) / (xs[-1] - xs[-2])
+            for i in idx:
+                o = along[i]
+                out[i] = np.interp(o, xs, ys) if o <= xs[-1] else ys[-1] + (o - xs[-1]) * last
+        else:
+            out[idx] = np.nan
+    known = [s for s in scales if s is not None]
+    fallback = float(np.median(known)) if known else 1.0
+    missing = np.isnan(out)
+    out[missing] = along[missing] * fallback
+    for k, length in enumerate(lengths):
+        idx = [i for i in range(len(along)) if side_of[i] == k]
+        out[idx] = np.clip(out[idx], 0.0, length + 0.5)
+    return out, scales
+
+
+def _start_pose(entry: Any, offset: float, side_normal: float) -> Pose2D:
+    """The survey start (the map frame's origin) in the wall frame."""
+    line = _line(entry, offset, side_normal)
+    if line is None:
+        return Pose2D()
+    turn = -math.copysign(1.0, side_normal)
+    return Pose2D(0.0, (line[0] - offset) * turn, line[1])

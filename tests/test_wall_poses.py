@@ -1,0 +1,116 @@
+"""Keyframe poses from the survey's walls: a drifting, mis-scaled odometry leaves no trace.
+
+A synthetic survey of a 3 x 2 m circuit (two laps, counter-clockwise, the wall on the
+right): the odometry reads 3 % long and its heading drifts 0.01 rad per step; the side
+wall's floor line is measured after every step and the front wall's line near each
+corner, as the survey records them. The wall-referenced poses must match the truth.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+
+from naoloc.geometry import Pose2D
+from naoloc.keyframe import Keyframe
+from naoloc.wall_poses import wall_poses
+
+OFFSET = 1.0
+SIDES = (3.0, 2.0)
+STEP = 0.2
+SIDE_NORMAL = -math.pi / 2
+
+
+def _survey(
+    scale: float = 1.03, drift: float = 0.01, laps: int = 2, outlier_at: int | None = None
+) -> tuple[list[Keyframe], list[Pose2D], dict[str, Any]]:
+    """(keyframes with odometry poses, true poses in the map frame, survey meta)."""
+    truth: list[Pose2D] = []
+    vision: list[dict[str, Any]] = []
+    corner = np.zeros(2)
+    for k in range(4 * laps):
+        length = SIDES[k % 2]
+        d = k * math.pi / 2
+        u = np.array([math.cos(d), math.sin(d)])
+        steps = round(length / STEP)
+        for j in range(1, steps + 1):
+            p = corner + j * STEP * u
+            truth.append(Pose2D(float(p[0]), float(p[1]), math.remainder(d, 2 * math.pi)))
+            remaining_before = length - (j - 1) * STEP
+            front = None
+            if remaining_before <= 1.2 and j > 1:  # measured at the frame before the step
+                front = {"distance_m": remaining_before + OFFSET, "normal_rad": 0.0}
+            side = {"distance_m": OFFSET, "normal_rad": SIDE_NORMAL}
+            if outlier_at is not None and len(vision) == outlier_at:
+                side = {"distance_m": OFFSET + 0.25, "normal_rad": SIDE_NORMAL}  # a sofa's foot
+            vision.append({"side_index": k, "side": side, "front": front})
+        corner = corner + length * u
+    odometry = [Pose2D()]
+    previous = Pose2D()
+    for t in truth:
+        step = previous.inverse() * t
+        noisy = Pose2D(step.x * scale, step.y * scale, step.theta + drift)
+        odometry.append(odometry[-1] * noisy)
+        previous = t
+    image = np.zeros((8, 8), np.uint8)
+    keyframes = [Keyframe(image=image, pose=p) for p in odometry[1:]]
+    meta = {
+        "sides_m": list(SIDES),
+        "vision": vision,
+        "wall_follow": {"side_normal": SIDE_NORMAL},
+        "start_side": {"distance_m": OFFSET, "normal_rad": SIDE_NORMAL},
+    }
+    return keyframes, truth, meta
+
+
+def _errors(keyframes: list[Keyframe], truth: list[Pose2D]) -> tuple[np.ndarray, np.ndarray]:
+    pos = np.array(
+        [math.dist((k.pose.x, k.pose.y), (t.x, t.y)) for k, t in zip(keyframes, truth, strict=True)]
+    )
+    head = np.array([abs(math.remainder(k.pose.theta - t.theta, 2 * math.pi))
+                     for k, t in zip(keyframes, truth, strict=True)])  # fmt: skip
+    return pos, head
+
+
+def test_odometry_drift_and_scale_do_not_reach_the_map() -> None:
+    keyframes, truth, meta = _survey()
+    raw, _ = _errors(keyframes, truth)
+    assert raw.max() > 1.0  # the odometry alone is metres off after two laps
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None
+    pos, head = _errors(walled.keyframes, truth)
+    assert pos.max() < 0.03
+    assert head.max() < 0.01
+    summary = walled.summary()
+    assert summary["sides_with_corner"] == 8
+    assert summary["median_scale"] == pytest.approx(1 / 1.03, rel=0.01)
+
+
+def test_a_line_off_the_wall_is_not_believed() -> None:
+    keyframes, truth, meta = _survey(outlier_at=5)
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None
+    pos, _ = _errors(walled.keyframes, truth)
+    assert pos[5] < 0.05  # 0.25 m off had it been used
+    assert walled.lines_used == len(keyframes) - 1
+
+
+def test_side_index_is_inferred_for_older_surveys() -> None:
+    keyframes, truth, meta = _survey()
+    for entry in meta["vision"]:
+        del entry["side_index"]
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None
+    pos, _ = _errors(walled.keyframes, truth)
+    assert pos.max() < 0.03
+
+
+def test_a_survey_without_floor_lines_keeps_its_odometry() -> None:
+    keyframes, _, meta = _survey()
+    assert wall_poses(keyframes, {**meta, "vision": None}, offset=OFFSET) is None
+    assert wall_poses(keyframes, {**meta, "vision": meta["vision"][:-1]}, offset=OFFSET) is None
+    assert wall_poses(keyframes, {k: v for k, v in meta.items() if k != "sides_m"},
+                      offset=OFFSET) is None  # fmt: skip
