@@ -93,6 +93,8 @@ def test_survey_walks_the_rectangle_and_records_each_step() -> None:
     assert result.frames == len(got) == frames_per_lap((1.5, 1.5), 0.5) == 12
     assert result.laps == 1 and result.meta["direction"] == "ccw"
     assert result.meta["origin_room_pose"] == pytest.approx(start.to_list())
+    assert result.meta["head_yaw"] == pytest.approx(-math.pi / 2, abs=0.02)  # the wall's side
+    assert result.meta["picture_yaw"] == pytest.approx(-math.pi / 2 + 0.77, abs=1e-6)
     assert result.path_m == pytest.approx(6.0, rel=0.05)
     # Map-frame odometry poses follow the square; the truth follows it in the room frame.
     xy = np.array([[kf.pose.x, kf.pose.y] for kf, _ in got])
@@ -102,7 +104,8 @@ def test_survey_walks_the_rectangle_and_records_each_step() -> None:
         assert kf.true_pose is not None
         truth_map = relative_pose(start, kf.true_pose)
         assert truth_map.distance(kf.pose) < 0.15  # odometry drift stays small
-        assert kf.head_yaw == pytest.approx(-math.pi / 2, abs=0.02)
+        # pictures look ahead of the wall on the right (survey.look_ahead_rad 0.77)
+        assert kf.head_yaw == pytest.approx(-math.pi / 2 + 0.77, abs=0.02)
         assert kf.image.shape == (240, 320, 3)
     # The walls never get closer than the offset allows: the robot stayed inside.
     assert all(0.5 < kf.true_pose.x < 2.5 and 0.5 < kf.true_pose.y < 2.5 for kf, _ in got)  # type: ignore[union-attr]
