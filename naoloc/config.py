@@ -210,6 +210,12 @@ class CameraConfig(_Model):
     resolution: int = Field(1, description="NAOqi resolution id (1 = kQVGA 320x240)")
     colorspace: int = Field(11, description="NAOqi colorspace id (11 = kRGB)")
     fps: int = Field(30, description="5, 10, 15 or 30")
+    lens: Literal["auto", "nao", "pinhole"] = Field(
+        "auto",
+        description="the lens naoloc undoes (floor lines, keypoints): nao = NAO's calibrated "
+        "top camera (fx 557 px at VGA, principal point (309, 231), k1 -0.055), pinhole = none; "
+        "auto = nao unless world.camera_realism turns lens distortion off",
+    )
 
     @field_validator("resolution")
     @classmethod

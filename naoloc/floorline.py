@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from naoloc.errors import FeatureError
+from naoloc.lens import Lens
 
 MIN_INLIERS = 12
 MIN_INLIER_FRACTION = 0.5
@@ -70,7 +71,12 @@ class WallLine:
 
 
 def pixel_rays(
-    width: int, height: int, hfov: float, vfov: float, camera_pose: np.ndarray
+    width: int,
+    height: int,
+    hfov: float,
+    vfov: float,
+    camera_pose: np.ndarray,
+    lens: Lens | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Rays of every pixel centre in FRAME_ROBOT.
 
@@ -81,16 +87,23 @@ def pixel_rays(
         vfov: Vertical field of view, rad.
         camera_pose: 4x4 pose of the camera (NAOqi frame: x optical axis, y left, z up) in
             FRAME_ROBOT, or its 16 floats row-major.
+        lens: The camera's lens (None: a pinhole of ``hfov x vfov``).
 
     Returns:
         ``(origin (3,), directions (height, width, 3))``, directions not normalised.
     """
     t = np.asarray(camera_pose, dtype=np.float64).reshape(4, 4)
-    fx = (width / 2.0) / math.tan(hfov / 2.0)
-    fy = (height / 2.0) / math.tan(vfov / 2.0)
-    u = (np.arange(width) + 0.5 - width / 2.0) / fx
-    v = (np.arange(height) + 0.5 - height / 2.0) / fy
-    uu, vv = np.meshgrid(u, v)
+    if lens is None:
+        fx = (width / 2.0) / math.tan(hfov / 2.0)
+        fy = (height / 2.0) / math.tan(vfov / 2.0)
+        u = (np.arange(width) + 0.5 - width / 2.0) / fx
+        v = (np.arange(height) + 0.5 - height / 2.0) / fy
+        uu, vv = np.meshgrid(u, v)
+    else:
+        cols, rows = np.meshgrid(
+            np.arange(width, dtype=np.float64), np.arange(height, dtype=np.float64)
+        )
+        uu, vv = lens.normalized(cols, rows, width, height)
     # optical (x right, y down, z forward) -> NAOqi camera (x forward, y left, z up)
     cam = np.stack([np.ones_like(uu), -uu, -vv], axis=-1)
     return t[:3, 3].copy(), cam @ t[:3, :3].T
@@ -230,6 +243,7 @@ def rays_at(
     hfov: float,
     vfov: float,
     pose: np.ndarray,
+    lens: Lens | None = None,
 ) -> np.ndarray:
     """FRAME_ROBOT rays ``(n, 3)`` through continuous rows ``v`` of columns ``cols`` (centres).
 
@@ -240,12 +254,16 @@ def rays_at(
         hfov: Horizontal field of view, rad.
         vfov: Vertical field of view, rad.
         pose: The camera's 4x4 pose in FRAME_ROBOT.
+        lens: The camera's lens (None: a pinhole of ``hfov x vfov``).
     """
     w, h = size
-    fx = (w / 2.0) / math.tan(hfov / 2.0)
-    fy = (h / 2.0) / math.tan(vfov / 2.0)
-    u = (cols + 0.5 - w / 2.0) / fx
-    vv = (np.asarray(v, np.float64) - h / 2.0) / fy
+    if lens is None:
+        fx = (w / 2.0) / math.tan(hfov / 2.0)
+        fy = (h / 2.0) / math.tan(vfov / 2.0)
+        u = (cols + 0.5 - w / 2.0) / fx
+        vv = (np.asarray(v, np.float64) - h / 2.0) / fy
+    else:  # continuous rows have 0 at the top edge; pixel centres sit at index + 0.5
+        u, vv = lens.normalized(np.asarray(cols, np.float64), np.asarray(v, np.float64) - 0.5, w, h)
     cam = np.stack([np.ones_like(u), -u, -vv], axis=-1)
     return cam @ pose[:3, :3].T
 
@@ -325,6 +343,7 @@ def detect_wall_lines(
     near_m: float = 0.6,
     max_lines: int = 2,
     seed: int = 0,
+    lens: Lens | None = None,
 ) -> list[WallLine]:
     """The floor-wall lines in one image (up to ``max_lines``, most inliers first), FRAME_ROBOT.
 
@@ -337,6 +356,7 @@ def detect_wall_lines(
             the rows looking there must be mostly floor.
         max_lines: Most lines to fit (a corner shows two walls).
         seed: Seed of RANSAC.
+        lens: The camera's lens, undone before pixels become rays (None: a pinhole).
 
     Returns:
         The lines seen well enough (possibly none).
@@ -355,7 +375,7 @@ def detect_wall_lines(
     if pose.size != 16 or not np.all(np.isfinite(pose)):
         raise FeatureError("floor line: the camera pose must be 16 finite floats (4x4)")
     h, w = img.shape[:2]
-    origin, rays = pixel_rays(w, h, hfov, vfov, pose)
+    origin, rays = pixel_rays(w, h, hfov, vfov, pose, lens)
     # the rows whose centre column looks at the floor between 0.25 m and near_m
     centre = floor_points(np.arange(h), np.full(h, w // 2), origin, rays)
     reach = np.hypot(centre[:, 0], centre[:, 1])
@@ -371,7 +391,7 @@ def detect_wall_lines(
     # the foot of the wall, to a fraction of a pixel: a line nearly parallel to the image
     # rows would otherwise be quantised to whole rows (3 cm at 2 m in QVGA)
     edge = rays_at(subpixel_edges(lab, floor, rows, cols), cols, (w, h), hfov, vfov,
-                   pose.reshape(4, 4))  # fmt: skip
+                   pose.reshape(4, 4), lens)  # fmt: skip
     pts = floor_points(np.arange(rows.size), np.zeros(rows.size, np.int64), origin, edge[:, None])
     pts = pts[np.all(np.isfinite(pts), axis=1)]
     lines: list[WallLine] = []
@@ -415,6 +435,7 @@ def detect_wall_line(
     expect_normal: float | None = None,
     tolerance: float = 0.5,
     seed: int = 0,
+    lens: Lens | None = None,
 ) -> WallLine | None:
     """The floor-wall line nearest in direction to ``expect_normal`` (or the best one).
 
@@ -427,11 +448,12 @@ def detect_wall_line(
             ``-pi/2`` for a wall on the right); None takes the line with most inliers.
         tolerance: Largest accepted difference from ``expect_normal``, rad.
         seed: Seed of RANSAC.
+        lens: The camera's lens (None: a pinhole).
 
     Returns:
         The line with at least half of the boundary pixels it was fitted among, or None.
     """
-    lines = detect_wall_lines(image, hfov, vfov, camera_pose, seed=seed)
+    lines = detect_wall_lines(image, hfov, vfov, camera_pose, seed=seed, lens=lens)
     if expect_normal is not None:
         lines = [ln for ln in lines if abs(_wrap(ln.normal - expect_normal)) <= tolerance]
     lines = [ln for ln in lines if ln.fraction >= MIN_INLIER_FRACTION or ln is lines[0]]

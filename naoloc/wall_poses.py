@@ -34,6 +34,7 @@ MAX_OFFSET_ERROR_M: Final = 0.5  # a side line farther than this from the offset
 MAX_ANGLE_ERROR_RAD: Final = 0.35  # nor one at a larger angle to the expected wall
 MIN_CORNER_TURN_RAD: Final = math.pi / 4  # an odometry turn this large between frames: corner
 SCALE_RANGE: Final = (0.7, 1.4)  # a side's metres per odometry metre outside this: not used
+MIN_CORNER_FRACTION: Final = 0.5  # sides whose corner a front line must have placed
 MAX_FRONT_M: Final = 1.6  # farther front lines read long (the lens is not undone yet)
 LINE_STD_M: Final = 0.03  # a floor line's distance, one sigma (NAO's lens reads 2-4 cm long)
 LINE_STD_RAD: Final = 0.01  # and its angle
@@ -117,7 +118,8 @@ def wall_poses(
 
     Returns:
         The poses, or None when the meta lacks what this needs (no vision, a survey that
-        did not follow walls): the odometry poses are then kept.
+        did not follow walls) or when front lines placed fewer than half of the corners
+        (the robot did not walk the known rectangle): the odometry poses are then kept.
     """
     vision = meta.get("vision")
     sides_m = meta.get("sides_m")
@@ -147,6 +149,10 @@ def wall_poses(
         along[i] = step if first else along[i - 1] + step
         prev = kf.pose
     true_along, scales = _along_sides(along, side_of, vision, lengths, offset)
+    if sum(1 for x in scales if x is not None) < MIN_CORNER_FRACTION * n_sides:
+        # The front wall's line put too few corners: the robot did not walk the known
+        # rectangle (sides ended by odometry), which these poses assume.
+        return None
 
     corners = [np.zeros(2)]
     for k in range(n_sides):
@@ -280,7 +286,7 @@ def _along_sides(
         else:
             out[idx] = np.nan
     known = [s for s in scales if s is not None]
-    fallback = float(np.median(known)) if known else 1.0
+    fallback = float(np.median(known)) if len(known) >= 2 else 1.0
     missing = np.isnan(out)
     out[missing] = along[missing] * fallback
     for k, length in enumerate(lengths):

@@ -14,25 +14,34 @@ from naoloc.behaviours.camera import look, stand
 from naoloc.behaviours.nearest_wall import detect_wall_by_floorline
 from naoloc.behaviours.wall_follow import FRONT_PITCH, FloorEye
 from naoloc.config import CameraConfig
+from naoloc.lens import NAO_LENS
 
 
-@pytest.mark.parametrize("posters", [5, 0])  # walls with posters, and blank walls
-def test_side_and_front_walls_match_the_room(posters: int) -> None:
+@pytest.mark.parametrize(
+    ("posters", "distortion"),
+    [(5, False), (0, False), (5, True)],  # posters and blank walls; NAO's lens, undone
+)
+def test_side_and_front_walls_match_the_room(posters: int, distortion: bool) -> None:
     cfg = {
         "robot": {"backend": "mujoco"},
         "world": {
             "room": {"size_m": [6.0, 5.0], "seed": 3, "posters_per_wall": posters},
             "start_pose": [4.4, 1.1, 0.12],
             "odometry": {"profile": "ideal"},
-            # The detector back-projects through a pinhole; NAO's lens distortion (the
-            # camera model's k1) is not undone yet and reads the lines 2-4 cm long.
-            "camera_realism": {"distortion": False},
+            # NAO's lens (the camera model's k1, focal and principal point) is undone by
+            # the detector when it is given the lens; a pinhole camera needs none. The
+            # lens alone here: with AE, AWB and vignetting together the front wall's line
+            # at 1.6 m reads about 20 % long after the head turned from the side wall (the
+            # skirting passes for floor; docs/RESULTS.md).
+            "camera_realism": {"profile": "ideal", "distortion": True}
+            if distortion
+            else {"distortion": False},
         },
     }
     with naoloc.connect(cfg) as robot:
         assert robot.sim is not None
         stand(robot)
-        eye = FloorEye(robot, CameraConfig())
+        eye = FloorEye(robot, CameraConfig(), lens=NAO_LENS if distortion else None)
         try:
             look(robot, -math.pi / 2, -0.2)
             side = eye.measure(-math.pi / 2)

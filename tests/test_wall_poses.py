@@ -114,3 +114,11 @@ def test_a_survey_without_floor_lines_keeps_its_odometry() -> None:
     assert wall_poses(keyframes, {**meta, "vision": meta["vision"][:-1]}, offset=OFFSET) is None
     assert wall_poses(keyframes, {k: v for k, v in meta.items() if k != "sides_m"},
                       offset=OFFSET) is None  # fmt: skip
+
+
+def test_too_few_corners_keep_the_odometry() -> None:
+    """Sides that ended by odometry (no front line) mean the known rectangle was not walked."""
+    keyframes, _, meta = _survey()
+    for entry in meta["vision"][: int(0.7 * len(meta["vision"]))]:
+        entry["front"] = None  # the first five sides found no front wall
+    assert wall_poses(keyframes, meta, offset=OFFSET) is None

@@ -21,6 +21,7 @@ import sys
 import numpy as np
 
 from naoloc.dataset import read_dataset
+from naoloc.errors import NaolocError
 from naoloc.geometry import Pose2D
 from naoloc.wall_poses import wall_poses
 
@@ -41,7 +42,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("datasets", nargs="+")
     args = parser.parse_args(argv)
     for path in args.datasets:
-        data = read_dataset(path)
+        try:
+            data = read_dataset(path)
+        except NaolocError as err:
+            print(f"wall_pose_accuracy: {err}", file=sys.stderr)
+            return 2
         origin = data.meta.get("origin_room_pose")
         if origin is None or any(kf.true_pose is None for kf in data.keyframes):
             print(f"{path}: no ground truth (not a simulator's survey)", file=sys.stderr)

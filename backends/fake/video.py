@@ -27,7 +27,7 @@ from naoloc.errors import HandleError, RobotError
 from naoloc.image import Frame, frame_to_naoqi, from_rgb
 from naoloc.kinematics import optical_from_camera
 from naoloc.naoqi import rules
-from naoloc.simulated.camera_model import CameraModel, Motion
+from naoloc.simulated.camera_model import CameraModel, Motion, render_fov_for
 
 MAX_SUBSCRIBERS = rules.MAX_SUBSCRIBERS
 
@@ -67,6 +67,7 @@ class FakeVideo:
         realism, seed = world.cfg.world.camera_realism, world.cfg.world.sim.seed
         self._cameras = {c: CameraModel(realism, seed, c) for c in (kTopCamera, kBottomCamera)}
         self._fov = FOV_V6 if world.cfg.world.model == "v6" else FOV_V5
+        self._render_fov = render_fov_for(self._fov, realism)  # wider through NAO's lens
         self._subs: dict[str, Subscription] = {}
         self._active = kTopCamera
 
@@ -129,7 +130,7 @@ class FakeVideo:
         w = self._world
         width, height = RESOLUTIONS[resolution]
         cam = optical_from_camera(w.camera_in_room(camera))  # joints' kinematics, with sway
-        hfov, vfov = self._fov
+        hfov, vfov = self._render_fov
         rgb = self._renderer.render(cam, width, height, hfov, vfov)
         light = w.cfg.world.sim.light
         if light != 1.0:  # the room's light scale, as the MuJoCo lights take it
@@ -138,7 +139,8 @@ class FakeVideo:
             rgb, time_s=w.time_s, fps=fps, hfov=hfov, vfov=vfov, motion=self._motion(cam)
         )
         pixels = from_rgb(rgb, colorspace)
-        angles = (hfov / 2, vfov / 2, -hfov / 2, -vfov / 2)
+        nominal_h, nominal_v = self._fov
+        angles = (nominal_h / 2, nominal_v / 2, -nominal_h / 2, -nominal_v / 2)
         return Frame(pixels, colorspace, w.time_s, camera, angles)
 
     def _motion(self, cam_in_room: np.ndarray) -> Motion:

@@ -43,6 +43,7 @@ from naoloc.config import Config
 from naoloc.constants import FOV_V5, FOV_V6, JOINT_NAMES, MOTION_CYCLE_S
 from naoloc.errors import BackendError, RobotError
 from naoloc.geometry import Pose2D, modulo2PI, pose2DInverse
+from naoloc.simulated.camera_model import render_fov_for
 from naoloc.simulated.odometry import OdometryModel
 from naoloc.simulated.sway import WalkSway
 
@@ -106,10 +107,13 @@ class Simulation:
             raise BackendError(f"the simulated room does not compile: {first}") from None
         fill_textures(self.model, self.layout)
         fov = FOV_V6 if cfg.world.model == "v6" else FOV_V5
-        self.fov = (float(fov[0]), float(fov[1]))
+        self.fov = (float(fov[0]), float(fov[1]))  # what ALVideoDevice reports
+        # what is rendered: wider when the camera images through NAO's lens
+        self.render_fov = render_fov_for(self.fov, cfg.world.camera_realism)
+        wide = self.render_fov
         for name in CAMERA_NAMES:
             cam = _obj_id(self.model, mujoco.mjtObj.mjOBJ_CAMERA, name)
-            self.model.cam_sensorsize[cam] = [2 * math.tan(fov[0] / 2), 2 * math.tan(fov[1] / 2)]
+            self.model.cam_sensorsize[cam] = [2 * math.tan(wide[0] / 2), 2 * math.tan(wide[1] / 2)]
         self.data = mujoco.MjData(self.model)
         self.substeps = max(1, round(MOTION_CYCLE_S / self.model.opt.timestep))
         self.cycle_s = self.substeps * float(self.model.opt.timestep)

@@ -216,7 +216,7 @@ class MujocoVideo:
         self._sim.cycle()
         width, height = RESOLUTIONS[sub.resolution]
         stamp = self._sim.sim_time()
-        hfov, vfov = self._sim.fov
+        hfov, vfov = self._sim.render_fov
         rgb = self._cameras[sub.camera].process(
             self.render_rgb(sub.camera, width, height),
             time_s=stamp, fps=sub.fps, hfov=hfov, vfov=vfov, motion=self._camera_motion(sub.camera),
@@ -227,8 +227,13 @@ class MujocoVideo:
         return [
             width, height, int(pixels.shape[2]) if pixels.ndim == 3 else 1, sub.colorspace,
             sec, usec, pixels.tobytes(), sub.camera,
-            hfov / 2, vfov / 2, -hfov / 2, -vfov / 2,
+            *self._angles(),
         ]  # fmt: skip
+
+    def _angles(self) -> tuple[float, float, float, float]:
+        """(left, top, right, bottom) of the nominal field of view, rad."""
+        hfov, vfov = self._sim.fov
+        return (hfov / 2, vfov / 2, -hfov / 2, -vfov / 2)
 
     def close(self) -> None:
         """Free every renderer (GL contexts); safe to call twice."""

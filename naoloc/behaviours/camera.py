@@ -12,12 +12,13 @@ import contextlib
 import math
 from types import TracebackType
 
-from naoloc.config import CameraConfig
-from naoloc.constants import FRAME_ROBOT, JOINT_LIMITS
+from naoloc.config import CameraConfig, Config
+from naoloc.constants import FOV_V5, FOV_V6, FRAME_ROBOT, JOINT_LIMITS
 from naoloc.errors import RobotError
 from naoloc.geometry import Pose2D, relative_pose
 from naoloc.image import Frame, frame_from_naoqi
 from naoloc.keyframe import CameraInfo, Keyframe
+from naoloc.lens import Lens, lens_for
 from naoloc.robot import Robot, pose_of
 
 # Head pitch while taking pictures, rad (negative looks up): as far up as the head goes.
@@ -69,6 +70,19 @@ def clamp_head(yaw: float, pitch: float) -> tuple[float, float]:
     yaw = min(max(yaw, _YAW_MIN + 1e-3), _YAW_MAX - 1e-3)
     lo, hi = head_pitch_limits(yaw)
     return yaw, min(max(pitch, lo + 1e-3), hi - 1e-3)
+
+
+def lens_of(cfg: Config) -> Lens:
+    """The lens of the configured robot's cameras (``camera.lens``; ``auto``: NAO's unless
+    ``world.camera_realism`` turns the simulated lens distortion off)."""
+    from naoloc.simulated.camera_model import resolve
+
+    fov = FOV_V6 if cfg.world.model == "v6" else FOV_V5
+    choice = cfg.camera.lens
+    distortion = (
+        resolve(cfg.world.camera_realism).distortion if choice == "auto" else choice == "nao"
+    )
+    return lens_for(distortion, *fov)
 
 
 def look(robot: Robot, yaw: float, pitch: float = DEFAULT_HEAD_PITCH) -> tuple[float, float]:

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from naoloc.behaviours.camera import Camera, look, stand
+from naoloc.behaviours.camera import Camera, lens_of, look, stand
 from naoloc.behaviours.nearest_wall import (
     FloorLineWall,
     ParallaxWall,
@@ -229,6 +229,7 @@ def survey(
                 robot, cfg, origin, probe, yaw, pitch, turn, result.wall, result.parallax
             )
             result.meta["head_yaw_source"] = result.yaw_source
+            result.meta["lens"] = lens_of(cfg).to_dict()  # undone by build-map and localize
             if result.floorline is not None:
                 result.meta["floorline_wall"] = {
                     "side": result.floorline.side,
@@ -237,7 +238,7 @@ def survey(
                 }
             if on_start is not None:
                 on_start(result.meta)
-            eye = FloorEye(robot, cfg.camera)
+            eye = FloorEye(robot, cfg.camera, lens=lens_of(cfg))
             try:
                 _walk_laps(robot, cfg, camera, eye, origin, command_origin, yaw, pitch, turn,
                            result, on_frame, progress)  # fmt: skip
@@ -253,7 +254,7 @@ def _detect_side(
     robot: Robot, cfg: Config, camera: Camera, head_pitch: float, result: SurveyResult
 ) -> float:
     """Head yaw toward the nearer side wall: floor-wall lines first, parallax if unseen."""
-    eye = FloorEye(robot, cfg.camera, "naoloc_side")
+    eye = FloorEye(robot, cfg.camera, "naoloc_side", lens=lens_of(cfg))
     try:
         result.floorline = detect_wall_by_floorline(robot, eye, head_pitch)
     finally:

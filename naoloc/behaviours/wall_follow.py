@@ -23,6 +23,7 @@ from naoloc.config import CameraConfig
 from naoloc.constants import FRAME_ROBOT
 from naoloc.floorline import WallLine, detect_wall_line
 from naoloc.geometry import Pose2D, modulo2PI
+from naoloc.lens import Lens
 from naoloc.robot import Robot
 
 BOTTOM_CAMERA = 1
@@ -43,10 +44,18 @@ class FloorEye:
         robot: The robot.
         like: The survey's camera config (resolution and colorspace are reused).
         name: Subscriber name.
+        lens: The camera's lens, undone by the floor-line detector (None: a pinhole).
     """
 
-    def __init__(self, robot: Robot, like: CameraConfig, name: str = "naoloc_floor") -> None:
+    def __init__(
+        self,
+        robot: Robot,
+        like: CameraConfig,
+        name: str = "naoloc_floor",
+        lens: Lens | None = None,
+    ) -> None:
         self.robot = robot
+        self.lens = lens
         cfg = CameraConfig(
             index=BOTTOM_CAMERA,
             resolution=like.resolution,
@@ -71,7 +80,7 @@ class FloorEye:
             return None
         return detect_wall_line(
             frame.bgr(), info.hfov, info.vfov, pose, expect_normal=expect_normal,
-            tolerance=tolerance,
+            tolerance=tolerance, lens=self.lens,
         )  # fmt: skip
 
     def close(self) -> None:

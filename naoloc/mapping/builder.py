@@ -23,9 +23,10 @@ from naoloc.config import MapConfig
 from naoloc.errors import DatasetError
 from naoloc.geometry import circular_mean
 from naoloc.keyframe import Keyframe
+from naoloc.lens import Lens
 from naoloc.mapping.bundle import BundleProblem, bundle_adjust, tracks_from_links
 from naoloc.mapping.data import MapData
-from naoloc.mapping.features import FeatureExtractor, Features
+from naoloc.mapping.features import FeatureExtractor, Features, to_pinhole
 from naoloc.mapping.gcs import train_gcs
 from naoloc.mapping.landmarks import camera_poses, query_camera, triangulate
 from naoloc.mapping.posegraph import refine_poses
@@ -81,9 +82,12 @@ def build_map_data(
         cfg.features, akaze_threshold=cfg.akaze_threshold, min_keypoints=cfg.min_keypoints
     )
     tune = cfg.tuning
+    lens = Lens.from_dict((meta or {}).get("lens"))  # the survey camera's, when recorded
     feats: list[Features] = []
     for i, kf in enumerate(keyframes):
-        feats.append(extractor.extract(kf.gray()))
+        cam = query_camera(kf)
+        found = extractor.extract(kf.gray())
+        feats.append(to_pinhole(found, lens, cam.width, cam.height, cam.hfov, cam.vfov))
         report("features", i + 1, n)
     t1 = time.perf_counter()
     vocab = train_vocabulary(

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from naoloc.errors import DependencyNotInstalled, FeatureError
+from naoloc.lens import Lens
 
 FEATURE_KINDS = ("akaze", "orb", "sift")
 # Descriptor width in bytes (binary) or values (SIFT) per kind, OpenCV defaults.
@@ -52,6 +53,28 @@ def empty_features(kind: str) -> Features:
         np.zeros((0, DESCRIPTOR_WIDTH[kind]), dtype),
         np.zeros((0,), np.float32),
     )
+
+
+def to_pinhole(
+    feats: Features, lens: Lens | None, width: int, height: int, hfov: float, vfov: float
+) -> Features:
+    """The features with their keypoints where an ideal pinhole of ``hfov x vfov`` sees them.
+
+    The map and the localizer model cameras as pinholes (:class:`naoloc.keyframe.CameraInfo`);
+    keypoints found in a distorted image (NAO's lens) are moved there first.
+
+    Args:
+        feats: Features of a ``width x height`` image taken through ``lens``.
+        lens: The camera's lens (None: the image is a pinhole's already).
+        width: Image width, px.
+        height: Image height, px.
+        hfov: The pinhole's horizontal field of view, rad.
+        vfov: Its vertical field of view, rad.
+    """
+    if lens is None or len(feats) == 0:
+        return feats
+    xy = lens.to_pinhole(feats.xy, width, height, hfov, vfov)
+    return Features(xy, feats.descriptors, feats.response)
 
 
 class FeatureExtractor:

@@ -20,9 +20,11 @@ from typing import Any
 
 from naoloc.config import MapConfig
 from naoloc.keyframe import Keyframe
+from naoloc.lens import Lens
 from naoloc.mapping.builder import ProgressFn, build_map_data
 from naoloc.mapping.data import MapData
-from naoloc.mapping.features import FeatureExtractor, Features
+from naoloc.mapping.features import FeatureExtractor, Features, to_pinhole
+from naoloc.mapping.landmarks import query_camera
 from naoloc.mapping.localizer import Estimate, LocalizeMode, localize_features, map_extractor
 from naoloc.mapping.mapfile import read_map, save_map
 
@@ -52,9 +54,16 @@ class VisualMap(MapData):
         return self._extractor
 
     def extract(self, queries: Sequence[Keyframe]) -> list[Features]:
-        """Features of query images with the map's extractor."""
+        """Features of query images with the map's extractor, moved to the pinhole the map
+        models when the survey recorded a distorting lens (``meta["lens"]``)."""
         ex = self.extractor()
-        return [ex.extract(q.gray()) for q in queries]
+        lens = Lens.from_dict(self.meta.get("lens"))  # the same robot's camera as the survey's
+        out = []
+        for q in queries:
+            cam = query_camera(q)
+            found = ex.extract(q.gray())
+            out.append(to_pinhole(found, lens, cam.width, cam.height, cam.hfov, cam.vfov))
+        return out
 
     def localize(
         self, queries: Sequence[Keyframe], mode: LocalizeMode | str = LocalizeMode.VERIFIED

@@ -1,12 +1,14 @@
 """Image formation of a simulated NAO camera, shared by the fake and the MuJoCo backends.
 
-A renderer gives a clean pinhole RGB frame (principal point at the image centre, the field
-of view of ``world.model``). :class:`CameraModel` turns it into what a NAO's camera
-delivers, in the order light takes through a camera:
+A renderer gives a clean pinhole RGB frame (principal point at the image centre, the field of
+view of ``world.model``, widened by :func:`render_fov_for` when the lens distorts).
+:class:`CameraModel` turns it into what a NAO's camera delivers, in the order light takes
+through a camera:
 
-1. lens: NAO's calibrated top camera (at VGA fx about 557 px, principal point about
-   (309, 231), radial k1 about -0.055; scaled to the resolution) and, optionally, a rolling
-   shutter (rows exposed one after another, 0.9 frame times from first to last row);
+1. lens: NAO's calibrated top camera (:data:`naoloc.lens.NAO_LENS`: at VGA fx 557 px,
+   principal point (309, 231), radial k1 -0.055; scaled to the resolution) and, optionally,
+   a rolling shutter (rows exposed one after another, 0.9 frame times from first to last
+   row);
 2. motion blur: the image motion of the camera during the exposure time, from the camera's
    angular and linear velocity (optical frame) at the time of the frame;
 3. exposure: auto exposure (AE) drives exposure time and then analog gain so that the mean
@@ -38,11 +40,8 @@ import cv2
 import numpy as np
 
 from naoloc.config import CameraRealismConfig
+from naoloc.lens import NAO_LENS, render_fov
 
-# NAO's top camera at VGA (a naoqi_driver calibration file): focal, principal point, k1.
-CALIB_VGA_FX = 557.0  # px
-CALIB_VGA_CENTRE = (309.0, 231.0)  # px (column, row), pixel-index convention
-CALIB_K1 = -0.055
 FULL_WELL_E = 5000.0  # electrons at 255: SNR = sqrt(5000) = 37 dB at saturation
 READ_NOISE_E = 6.0  # electrons
 CHROMA_NOISE = 0.7  # chroma noise std relative to luma noise std
@@ -164,33 +163,31 @@ class _Geometry:
 def _lens_maps(
     width: int, height: int, hfov: float, vfov: float, distortion: bool
 ) -> tuple[np.ndarray, np.ndarray, float]:
-    """Where each output pixel samples the rendered pinhole frame, and the output focal."""
+    """Where each output pixel samples the rendered pinhole frame, and the output focal.
+
+    With ``distortion`` the output images through :data:`naoloc.lens.NAO_LENS` exactly
+    (focal, principal point, k1), so naoloc's own undistortion inverts it; the render must
+    cover the lens's view (:func:`naoloc.lens.render_fov`), else its edge pixels repeat.
+    """
     fr_x = (width / 2.0) / math.tan(hfov / 2.0)
     fr_y = (height / 2.0) / math.tan(vfov / 2.0)
     u, v = np.meshgrid(np.arange(width, dtype=np.float64), np.arange(height, dtype=np.float64))
     if not distortion:
         return u.astype(np.float32), v.astype(np.float32), 0.5 * (fr_x + fr_y)
-    s = width / 640.0
-    cx, cy = CALIB_VGA_CENTRE[0] * s + (s - 1) / 2, CALIB_VGA_CENTRE[1] * s + (s - 1) / 2
-    fc = CALIB_VGA_FX * s
-    for _ in range(4):  # grow the focal until the calibrated view fits inside the render
-        xd, yd = (u - cx) / fc, (v - cy) / fc
-        xu, yu = xd.copy(), yd.copy()
-        for _ in range(6):  # invert x_d = x_u (1 + k1 r_u^2) by fixed-point iteration
-            f = 1.0 + CALIB_K1 * (xu * xu + yu * yu)
-            xu, yu = xd / f, yd / f
-        mx = fr_x * xu + width / 2.0 - 0.5
-        my = fr_y * yu + height / 2.0 - 0.5
-        over = max(
-            float(np.max(mx)) / (width - 1),
-            (width - 1 - float(np.min(mx))) / (width - 1),
-            float(np.max(my)) / (height - 1),
-            (height - 1 - float(np.min(my))) / (height - 1),
-        )
-        if over <= 1.0 + 1e-6:
-            break
-        fc *= 1.0 + 2.0 * (over - 1.0) + 1e-4
-    return mx.astype(np.float32), my.astype(np.float32), fc
+    xu, yu = NAO_LENS.normalized(u, v, width, height)
+    mx = fr_x * xu + width / 2.0 - 0.5
+    my = fr_y * yu + height / 2.0 - 0.5
+    fx, fy, _, _ = NAO_LENS.at(width, height)
+    return mx.astype(np.float32), my.astype(np.float32), 0.5 * (fx + fy)
+
+
+def render_fov_for(fov: tuple[float, float], cfg: CameraRealismConfig) -> tuple[float, float]:
+    """The field of view (rad) a simulator renders at for a camera of nominal ``fov``: wider
+    than nominal when the camera images through NAO's lens (so the lens's view fits)."""
+    if not resolve(cfg).distortion:
+        return fov
+    wide = render_fov(NAO_LENS)
+    return (max(fov[0], wide[0]), max(fov[1], wide[1]))
 
 
 def motion_blur(img: np.ndarray, du: float, dv: float) -> np.ndarray:
