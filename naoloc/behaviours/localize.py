@@ -18,6 +18,7 @@ taken, which is where the robot still stands.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -206,6 +207,23 @@ def paper_queries(
     return out
 
 
+def _heading_from_last_sweep(
+    vmap: VisualMap, last: Sequence[Keyframe], combined: Estimate, mode: str
+) -> Estimate:
+    """The combined estimate's position with the heading the last sweep alone verifies.
+
+    Turning in place moves the robot little but its heading by the turn's odometry, which
+    errs about 6 % of the angle on a NAO: combining sweeps across turns carries that error
+    into the heading (measured: 14-25 deg after three quarter turns). The head's own angles
+    are exact, so the last sweep's PnP heading is kept when it has one.
+    """
+    tail = vmap.localize(last, mode=mode)  # type: ignore[arg-type]
+    if not tail.found or tail.method != "pnp":
+        return combined
+    details = {**combined.details, "heading_from": "last sweep"}
+    return dataclasses.replace(combined, theta=tail.theta, details=details)
+
+
 def localize(
     robot: Robot,
     vmap: VisualMap,
@@ -262,6 +280,7 @@ def localize(
             on_step(f"{len(queries)} pictures")
         estimate = vmap.localize(queries, mode=mode)  # type: ignore[arg-type]
         order = list(yaws) if turns % 2 == 0 else list(reversed(yaws))
+        last_sweep = len(queries)
         while strategy == "scan" and estimate.confidence < CONFIDENT and added < extra_turns:
             try:
                 if not robot.motion.moveTo(0.0, 0.0, EXTRA_TURN_RAD):
@@ -274,6 +293,9 @@ def localize(
             if on_step is not None:
                 on_step(f"turned in place, {len(queries)} pictures")
             estimate = vmap.localize(queries, mode=mode)  # type: ignore[arg-type]
+            last_sweep = len(order)
+        if added and estimate.found:
+            estimate = _heading_from_last_sweep(vmap, queries[-last_sweep:], estimate, mode)
     finally:
         if own:
             cam.close()
