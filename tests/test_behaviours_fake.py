@@ -284,7 +284,8 @@ def test_localize_turns_in_place_until_confident(
         loc = localize(robot, vmap, cfg)  # type: ignore[arg-type]
         after = Pose2D.from_list(sim.true_pose())
         assert not robot.motion.moveIsActive()
-    assert vmap.calls == [len(SCAN_YAWS) * k for k in calls]  # sweeps so far
+    # sweeps so far, then (after turns) the last sweep alone for the heading
+    assert vmap.calls == [len(SCAN_YAWS) * k for k in calls] + ([len(SCAN_YAWS)] if turned else [])
     assert loc.extra_turns == turned and loc.summary()["extra_turns"] == turned
     assert math.hypot(after.x - 1.5, after.y - 1.4) < 0.05  # turned, never translated
     assert abs(naoloc_modulo(after.theta - 0.3 - turned * math.pi / 2)) < 0.1
@@ -292,6 +293,23 @@ def test_localize_turns_in_place_until_confident(
     assert loc.truth is not None and loc.truth.distance(relative_pose(origin, after)) < 1e-9
     bodies = {round(q.pose.theta, 1) for q in loc.queries}
     assert len(bodies) == turned + 1
+
+
+def test_heading_after_turns_comes_from_the_last_sweep() -> None:
+    from naoloc.behaviours.localize import _heading_from_last_sweep
+
+    class Tail:
+        def __init__(self, method: str) -> None:
+            self.method = method
+
+        def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> Estimate:
+            return Estimate(9.0, 9.0, 0.5, 0.9, mode, {"method": self.method})
+
+    combined = Estimate(1.0, 2.0, 0.2, 0.8, "verified", {"method": "pnp"})
+    got = _heading_from_last_sweep(Tail("pnp"), [], combined, "verified")  # type: ignore[arg-type]
+    assert (got.x, got.y, got.theta) == (1.0, 2.0, 0.5)  # position kept, heading replaced
+    kept = _heading_from_last_sweep(Tail("keyframes"), [], combined, "verified")  # type: ignore[arg-type]
+    assert kept == combined  # only a verified PnP heading replaces it
 
 
 def naoloc_modulo(angle: float) -> float:
