@@ -8,8 +8,10 @@ Usage::
 For each dataset it prints, in the map frame (the survey start), the position error of
 the keyframes' odometry poses and of the wall-referenced poses build-map uses
 (``map.wall_poses``, :mod:`naoloc.wall_poses`): median, p90 and max (m), the median heading
-error (rad), and the ratio of the medians. Needs a simulator's dataset (true poses and
-``origin_room_pose``).
+error (rad), and the ratio of the medians; then the survey's floor-wall lines against the
+truth (the wall the measured normal points at, the room's size): side lines, and front lines
+by distance band. Needs a simulator's dataset (true poses, ``origin_room_pose``,
+``room_size_m``) of a rectangular room.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from typing import Any
 
 import numpy as np
 
@@ -35,6 +38,46 @@ def _errors(poses: list[Pose2D], truth: list[Pose2D]) -> tuple[np.ndarray, np.nd
         ]
     )
     return pos, head
+
+
+def _wall_distance(pose: Pose2D, normal: float, size: tuple[float, float]) -> float:
+    """True distance from ``pose`` (room frame) to the room wall in direction ``normal``
+    (FRAME_ROBOT, rad)."""
+    a = pose.theta + normal
+    c, s = math.cos(a), math.sin(a)
+    if abs(c) >= abs(s):
+        return size[0] - pose.x if c > 0 else pose.x
+    return size[1] - pose.y if s > 0 else pose.y
+
+
+def line_errors(data: Any) -> None:
+    """Print the floor lines' errors (measured minus true distance) of one dataset."""
+    size = data.meta.get("room_size_m")
+    vision = data.meta.get("vision")
+    if not isinstance(size, list) or not isinstance(vision, list):
+        return
+    sides: list[float] = []
+    fronts: list[tuple[float, float]] = []
+    for i, (kf, entry) in enumerate(zip(data.keyframes, vision, strict=False)):
+        side = entry.get("side")
+        if side and kf.true_pose is not None:
+            true = _wall_distance(kf.true_pose, side["normal_rad"], (size[0], size[1]))
+            sides.append(side["distance_m"] - true)
+        front = entry.get("front")
+        before = data.keyframes[i - 1].true_pose if i else None
+        if front and before is not None:  # measured at the frame before the step
+            true = _wall_distance(before, front["normal_rad"], (size[0], size[1]))
+            fronts.append((true, front["distance_m"] - true))
+    if sides:
+        err = np.abs(sides)
+        print(f"  side lines: n {len(sides)}, median error {np.median(sides):+.3f} m, |error| "
+              f"median {np.median(err):.3f} m, p90 {np.percentile(err, 90):.3f} m")  # fmt: skip
+    for lo, hi in ((0.9, 1.3), (1.3, 1.7), (1.7, 2.2)):
+        band = [(t, e) for t, e in fronts if lo <= t < hi]
+        if band:
+            rel = np.median([e / t for t, e in band]) * 100
+            print(f"  front lines {lo:.1f}-{hi:.1f} m: n {len(band)}, median error "
+                  f"{np.median([e for _, e in band]):+.3f} m ({rel:+.1f} %)")  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -73,7 +116,11 @@ def main(argv: list[str] | None = None) -> int:
                 f"odometry/walls median ratio {medians[0] / medians[1]:.1f}x"
             )
         else:
-            print(f"{path}: no floor-line records: build-map keeps the odometry poses")
+            print(
+                f"{path}: build-map keeps the odometry poses "
+                "(no floor-line records, or too few corners)"
+            )
+        line_errors(data)
     return 0
 
 
