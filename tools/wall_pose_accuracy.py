@@ -3,7 +3,7 @@
 Usage::
 
     naoloc survey -c paper_room -o /tmp/s.mcap
-    python tools/wall_pose_accuracy.py /tmp/s.mcap [more.mcap ...]
+    python tools/wall_pose_accuracy.py /tmp/s.mcap [more.mcap ...] [--map MAP.npz]
 
 For each dataset it prints, in the map frame (the survey start), the position error of
 the keyframes' odometry poses and of the wall-referenced poses build-map uses
@@ -83,6 +83,9 @@ def line_errors(data: Any) -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("datasets", nargs="+")
+    parser.add_argument(
+        "--map", help="a map built from the (one) dataset: also its bundle-adjusted poses"
+    )
     args = parser.parse_args(argv)
     for path in args.datasets:
         try:
@@ -120,6 +123,16 @@ def main(argv: list[str] | None = None) -> int:
                 f"{path}: build-map keeps the odometry poses "
                 "(no floor-line records, or too few corners)"
             )
+        if args.map:
+            from naoloc.mapping import load_map
+
+            vmap = load_map(args.map)
+            refined = [Pose2D(*p) for p in vmap.refined_poses]
+            if len(refined) == len(truth):
+                pos, head = _errors(refined, truth)
+                print(f"{path}: map      median {np.median(pos):.3f} m"
+                      f"  p90 {np.percentile(pos, 90):.3f} m  max {pos.max():.3f} m"
+                      f"  heading median {np.median(head):.4f} rad (bundle-adjusted)")  # fmt: skip
         line_errors(data)
     return 0
 
