@@ -309,7 +309,10 @@ def test_heading_after_turns_comes_from_the_last_sweep() -> None:
     got = _heading_from_last_sweep(Tail("pnp"), [], combined, "verified")  # type: ignore[arg-type]
     assert (got.x, got.y, got.theta) == (1.0, 2.0, 0.5)  # position kept, heading replaced
     kept = _heading_from_last_sweep(Tail("keyframes"), [], combined, "verified")  # type: ignore[arg-type]
-    assert kept == combined  # only a verified PnP heading replaces it
+    assert kept == combined  # keyframe bearings do not replace a PnP heading
+    rough = Estimate(1.0, 2.0, 0.2, 0.3, "verified", {"method": "keyframes"})
+    got = _heading_from_last_sweep(Tail("keyframes"), [], rough, "verified")  # type: ignore[arg-type]
+    assert (got.x, got.y, got.theta) == (1.0, 2.0, 0.5)  # but they replace the same, combined
 
 
 def naoloc_modulo(angle: float) -> float:

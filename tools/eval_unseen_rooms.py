@@ -45,16 +45,17 @@ def room_config(
     Args:
         seed: Room seed (also the world's room.seed).
         backend: "mujoco" or "fake".
-        small: A lab-sized room with the survey 0.5 m from the walls and 3 laps.
+        small: A lab-sized room with the survey 0.7 m from the walls and 3 laps (nearer, the
+            robot's arm hides the floor beside it from the bottom camera).
         overrides: Nested config keys applied to every room.
 
     Returns:
-        A config with the survey 1 m from the walls, 2 laps, 0.2 m steps (small: 0.5 m, 3).
+        A config with the survey 1 m from the walls, 2 laps, 0.2 m steps (small: 0.7 m, 3).
     """
     rng = np.random.default_rng(seed)
     if small:
         sx, sy = round(float(rng.uniform(3.5, 4.5)), 1), round(float(rng.uniform(2.8, 3.5)), 1)
-        survey = {"laps": 3, "step_m": 0.2, "wall_offset_m": 0.5}
+        survey = {"laps": 3, "step_m": 0.2, "wall_offset_m": 0.7}
     else:
         sx, sy = (round(float(v), 1) for v in rng.uniform(5.0, 8.0, size=2))
         survey = {"laps": 2, "step_m": 0.2, "wall_offset_m": 1.0}

@@ -215,10 +215,15 @@ def _heading_from_last_sweep(
     Turning in place moves the robot little but its heading by the turn's odometry, which
     errs about 6 % of the angle on a NAO: combining sweeps across turns carries that error
     into the heading (measured: 14-25 deg after three quarter turns). The head's own angles
-    are exact, so the last sweep's PnP heading is kept when it has one.
+    are exact, so the last sweep's own heading is kept: its PnP heading always, its
+    keyframe-bearing heading when the combined estimate has only that too.
     """
     tail = vmap.localize(last, mode=mode)  # type: ignore[arg-type]
-    if not tail.found or tail.method != "pnp":
+    if not tail.found:
+        return combined
+    # A PnP heading beats any; the keyframes' bearings (one sweep: exact head angles) beat
+    # the same bearings combined across turns.
+    if not (tail.method == "pnp" or (tail.method == combined.method == "keyframes")):
         return combined
     details = {**combined.details, "heading_from": "last sweep"}
     return dataclasses.replace(combined, theta=tail.theta, details=details)
