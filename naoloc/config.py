@@ -244,7 +244,12 @@ class SurveyConfig(_Model):
 
     laps: int = Field(2, ge=1, le=20, description="closed laps")
     step_m: float = Field(0.2, gt=0.01, le=2.0, description="distance between pictures (m)")
-    wall_offset_m: float = Field(1.0, gt=0.2, description="circuit's distance from the walls (m)")
+    wall_offset_m: float = Field(
+        1.0,
+        gt=0.2,
+        description="circuit's distance from the walls (m); keep it 0.65 or more: nearer, "
+        "the robot's arm hides the floor beside it from the bottom camera (no floor line)",
+    )
     side_m: tuple[float, float] | None = Field(
         None,
         description="[along x, along y] sides of the circuit (m); null = room size - 2 * offset",
