@@ -65,7 +65,8 @@ sys.exit(0 if f.isFinished() and not f.hasError() else 1)
     reason="libqi 3.1.5 keeps the socket of every client that authenticates then hangs up "
     "(a plain qi.Session server does too): ~500 such clients and it accepts no more; "
     "server-side limits are issue 15 item 4",
-    raises=AssertionError,
+    # it shows as a failed probe, or already as a connect that times out during the churn
+    raises=(AssertionError, TimeoutError),
     strict=False,
 )
 def test_libqi_server_still_answers_after_many_clients_hang_up() -> None:
