@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from naoloc.errors import FeatureError
-from naoloc.lens import Lens
+from naoloc.lens import Lens, pinhole_lens
 
 MIN_INLIERS = 12
 MIN_INLIER_FRACTION = 0.5
@@ -93,17 +93,11 @@ def pixel_rays(
         ``(origin (3,), directions (height, width, 3))``, directions not normalised.
     """
     t = np.asarray(camera_pose, dtype=np.float64).reshape(4, 4)
-    if lens is None:
-        fx = (width / 2.0) / math.tan(hfov / 2.0)
-        fy = (height / 2.0) / math.tan(vfov / 2.0)
-        u = (np.arange(width) + 0.5 - width / 2.0) / fx
-        v = (np.arange(height) + 0.5 - height / 2.0) / fy
-        uu, vv = np.meshgrid(u, v)
-    else:
-        cols, rows = np.meshgrid(
-            np.arange(width, dtype=np.float64), np.arange(height, dtype=np.float64)
-        )
-        uu, vv = lens.normalized(cols, rows, width, height)
+    lens = lens or pinhole_lens(hfov, vfov)
+    cols, rows = np.meshgrid(
+        np.arange(width, dtype=np.float64), np.arange(height, dtype=np.float64)
+    )
+    uu, vv = lens.normalized(cols, rows, width, height)
     # optical (x right, y down, z forward) -> NAOqi camera (x forward, y left, z up)
     cam = np.stack([np.ones_like(uu), -uu, -vv], axis=-1)
     return t[:3, 3].copy(), cam @ t[:3, :3].T
@@ -257,13 +251,9 @@ def rays_at(
         lens: The camera's lens (None: a pinhole of ``hfov x vfov``).
     """
     w, h = size
-    if lens is None:
-        fx = (w / 2.0) / math.tan(hfov / 2.0)
-        fy = (h / 2.0) / math.tan(vfov / 2.0)
-        u = (cols + 0.5 - w / 2.0) / fx
-        vv = (np.asarray(v, np.float64) - h / 2.0) / fy
-    else:  # continuous rows have 0 at the top edge; pixel centres sit at index + 0.5
-        u, vv = lens.normalized(np.asarray(cols, np.float64), np.asarray(v, np.float64) - 0.5, w, h)
+    lens = lens or pinhole_lens(hfov, vfov)
+    # continuous rows have 0 at the top edge; pixel centres sit at index + 0.5
+    u, vv = lens.normalized(np.asarray(cols, np.float64), np.asarray(v, np.float64) - 0.5, w, h)
     cam = np.stack([np.ones_like(u), -u, -vv], axis=-1)
     return cam @ pose[:3, :3].T
 

@@ -112,8 +112,8 @@ def wall_poses(
 
     Args:
         keyframes: The survey's keyframes, in the order taken (odometry poses, map frame).
-        meta: The survey meta: ``sides_m``, ``direction``, ``vision`` (per-frame side and
-            front lines), ``wall_follow.side_normal`` and optionally ``start_side``.
+        meta: The survey meta: ``sides_m``, ``vision`` (per-frame side and front lines),
+            ``wall_follow.side_normal`` and optionally ``start_side``.
         offset: ``survey.wall_offset_m``, m.
 
     Returns:
@@ -249,10 +249,12 @@ def _along_sides(
     Returns:
         The distances and each side's overall metres per odometry metre (None: no anchor).
     """
-    out = np.zeros_like(along)
+    out = np.full_like(along, np.nan)
     scales: list[float | None] = []
-    for k, length in enumerate(lengths):
-        idx = [i for i in range(len(along)) if side_of[i] == k]
+    frames_of: list[list[int]] = [[] for _ in lengths]
+    for i, k in enumerate(side_of):
+        frames_of[k].append(i)
+    for idx, length in zip(frames_of, lengths, strict=True):
         anchors = [(0.0, 0.0)]
         for j, i in enumerate(idx):
             front = vision[i].get("front")
@@ -275,22 +277,17 @@ def _along_sides(
                     kept.append((o, t))
         scale = kept[-1][1] / kept[-1][0] if len(kept) > 1 else None
         scales.append(scale if scale is None or SCALE_RANGE[0] <= scale <= SCALE_RANGE[1] else None)
-        for i in idx:
-            out[i] = along[i]  # scaled below, once every side's scale is known
-        if len(kept) > 1:
+        if len(kept) > 1:  # sides without an anchor stay NaN: scaled below
             xs, ys = np.array([a[0] for a in kept]), np.array([a[1] for a in kept])
             last = (ys[-1] - ys[-2]) / (xs[-1] - xs[-2])
             for i in idx:
                 o = along[i]
                 out[i] = np.interp(o, xs, ys) if o <= xs[-1] else ys[-1] + (o - xs[-1]) * last
-        else:
-            out[idx] = np.nan
     known = [s for s in scales if s is not None]
     fallback = float(np.median(known)) if len(known) >= 2 else 1.0
     missing = np.isnan(out)
     out[missing] = along[missing] * fallback
-    for k, length in enumerate(lengths):
-        idx = [i for i in range(len(along)) if side_of[i] == k]
+    for idx, length in zip(frames_of, lengths, strict=True):
         out[idx] = np.clip(out[idx], 0.0, length + 0.5)
     return out, scales
 

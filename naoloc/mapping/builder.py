@@ -83,9 +83,9 @@ def build_map_data(
     )
     tune = cfg.tuning
     lens = Lens.from_dict((meta or {}).get("lens"))  # the survey camera's, when recorded
+    cams_info = [query_camera(kf) for kf in keyframes]
     feats: list[Features] = []
-    for i, kf in enumerate(keyframes):
-        cam = query_camera(kf)
+    for i, (kf, cam) in enumerate(zip(keyframes, cams_info, strict=True)):
         found = extractor.extract(kf.gray())
         feats.append(to_pinhole(found, lens, cam.width, cam.height, cam.hfov, cam.vfov))
         report("features", i + 1, n)
@@ -101,7 +101,6 @@ def build_map_data(
     t3 = time.perf_counter()
     poses = np.array([[kf.pose.x, kf.pose.y, kf.pose.theta] for kf in keyframes], np.float64)
     heads = np.array([[kf.head_yaw, kf.head_pitch] for kf in keyframes], np.float64)
-    cams_info = [query_camera(kf) for kf in keyframes]
     cameras = np.array(
         [[c.width, c.height, c.hfov, c.vfov, c.index] for c in cams_info], np.float64
     )

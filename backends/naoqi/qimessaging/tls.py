@@ -98,11 +98,14 @@ class TlsSocket:
             OSError: The socket failed or the TLS session broke.
         """
         size = nbytes or len(buffer)
+        eof = False
         while True:
             with self._state:
                 try:
                     return cast(int, self._tls.read(size, buffer))  # type: ignore[arg-type]
                 except ssl.SSLWantReadError:
+                    if eof:
+                        return 0
                     pending = self._out.pending
                 except (ssl.SSLZeroReturnError, ssl.SSLEOFError):
                     return 0
@@ -110,14 +113,7 @@ class TlsSocket:
                     raise OSError(f"TLS receive failed: {err}") from None
             if pending:
                 self._flush()
-            if not self._fill():
-                with self._state:
-                    try:
-                        return cast(int, self._tls.read(size, buffer))  # type: ignore[arg-type]
-                    except (ssl.SSLWantReadError, ssl.SSLZeroReturnError, ssl.SSLEOFError):
-                        return 0
-                    except ssl.SSLError as err:
-                        raise OSError(f"TLS receive failed: {err}") from None
+            eof = not self._fill()
 
     def recv(self, nbytes: int) -> bytes:
         """Decrypt up to ``nbytes``; b"" at end of stream."""
