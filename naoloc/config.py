@@ -399,6 +399,12 @@ class LocalizerTuning(_Model):
     min_pnp_inliers: int = Field(10, ge=4, description="least inliers of a PnP pose")
     pnp_reprojection_px: float = Field(4.0, gt=0, description="inlier threshold of PnP (px)")
     pnp_iterations: int = Field(100, ge=1, description="RANSAC iterations of PnP per query")
+    planar_samples: int = Field(
+        2000,
+        ge=0,
+        description="random match pairs of the two-point planar RANSAC over all of a scan's "
+        "pictures at once (naoloc.mapping.planar_ransac); 0 = per-picture PnP only",
+    )
     camera_height_tolerance_m: float = Field(
         0.3, gt=0, description="largest difference of a PnP camera from the head's height (m)"
     )

@@ -39,6 +39,7 @@ from naoloc.mapping.landmarks import (
     robot_matrix,
 )
 from naoloc.mapping.planar import solve_planar
+from naoloc.mapping.planar_ransac import planar_hypotheses
 from naoloc.mapping.vocabulary import dbow_scores
 
 __all__ = [
@@ -59,6 +60,8 @@ VisualMap = MapData
 
 #: Defaults of ``MapConfig.tuning.localizer`` (the map's own config is what is used).
 DEFAULTS = LocalizerTuning()
+# Planar RANSAC hypotheses verified by reprojection, best first.
+PLANAR_KEEP = 5
 #: A PnP estimate with at least this confidence (40 inliers) is "confident": behaviours may
 #: stop looking. Unverified fallbacks never reach it (capped at FALLBACK_MAX_CONFIDENCE).
 CONFIDENT = 1.0 - math.exp(-DEFAULTS.confident_inliers / DEFAULTS.confidence_scale)
@@ -410,6 +413,18 @@ def localize_verified(
         t_map_robot_last = t_map_cam @ np.linalg.inv(c_q) @ to_last[qi]
         hypotheses.append(np.array(planar_pose(t_map_robot_last)))
     details: dict[str, Any] = {"candidates": cand_all}
+    if corr.points and tun.planar_samples > 0:
+        planar = planar_hypotheses(
+            np.concatenate(mats),
+            np.concatenate(corr.points),
+            np.concatenate(corr.pixels),
+            bearing_tol_rad=tun.pnp_reprojection_px / query_camera(queries[usable[0]]).fx,
+            samples=tun.planar_samples,
+            keep=PLANAR_KEEP,
+            seed=int(vmap.config.seed),
+        )
+        details["planar_best"] = planar[0][0] if planar else 0
+        hypotheses.extend(pose for _n, pose in planar)
     if hypotheses:
         pts = np.concatenate(corr.points)
         px = np.concatenate(corr.pixels)
