@@ -1,0 +1,120 @@
+"""Compute of one localization on one core: feature extraction and the verified localizer.
+
+Usage::
+
+    naoloc survey -o /tmp/s.mcap && naoloc build-map /tmp/s.mcap -o /tmp/m.npz
+    python tools/bench_localize.py /tmp/s.mcap /tmp/m.npz [--pictures 7 28] [--repeats 5]
+
+Queries are survey pictures of the dataset taken 4 apart (the timing does not depend on
+where they were taken; their answers are not scored here, tools/eval_unseen_rooms.py does
+that). In the same process, best of ``--repeats`` CPU times:
+
+1. A-KAZE extraction per picture: the adaptive threshold in one pass (the current
+   :class:`naoloc.mapping.features.FeatureExtractor`) against a pass per threshold (the
+   code before it, kept here as the baseline), with the ratio and how many pictures give
+   the same keypoints.
+2. One localization of ``--pictures`` pictures (a 7-yaw sweep, and four of them after
+   turns in place): extraction plus the verified localizer, with the two-point planar
+   RANSAC (``map.tuning.localizer.planar_samples``) and without it.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import dataclasses  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
+from typing import Any  # noqa: E402
+
+import cv2  # noqa: E402
+import numpy as np  # noqa: E402
+
+from naoloc.dataset import read_dataset  # noqa: E402
+from naoloc.errors import NaolocError  # noqa: E402
+from naoloc.mapping import load_map  # noqa: E402
+from naoloc.mapping.features import FeatureExtractor  # noqa: E402
+
+
+def _best_cpu(fn: Callable[[], Any], repeats: int) -> float:
+    best = float("inf")
+    for _ in range(repeats):
+        t0 = time.process_time()
+        fn()
+        best = min(best, time.process_time() - t0)
+    return best
+
+
+def _per_threshold(ex: FeatureExtractor, gray: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The baseline: describe again at each lower threshold until enough keypoints."""
+    kps: Any = ()
+    desc: Any = None
+    for t in ex._ladder():
+        kps, desc = cv2.AKAZE_create(threshold=t).detectAndCompute(gray, None)  # type: ignore[attr-defined]
+        if len(kps) >= ex.min_keypoints:
+            break
+    return np.array([k.pt for k in kps], np.float32).reshape(-1, 2), desc
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("dataset")
+    parser.add_argument("map")
+    parser.add_argument("--pictures", type=int, nargs="+", default=[7, 28])
+    parser.add_argument("--repeats", type=int, default=5)
+    args = parser.parse_args(argv)
+    cv2.setNumThreads(1)
+    try:
+        data = read_dataset(args.dataset)
+        vmap = load_map(args.map)
+    except NaolocError as err:
+        print(f"bench_localize: {err}", file=sys.stderr)
+        return 2
+    ex = vmap.extractor()
+    grays = [kf.gray() for kf in data.keyframes[::4]]
+    same = 0
+    for g in grays:
+        a_xy, a_desc = _per_threshold(ex, g)
+        b = ex.extract(g)
+        same += int(a_xy.shape == b.xy.shape and np.array_equal(a_desc, b.descriptors))
+    old = _best_cpu(lambda: [_per_threshold(ex, g) for g in grays], args.repeats)
+    new = _best_cpu(lambda: [ex.extract(g) for g in grays], args.repeats)
+    n = len(grays)
+    print(
+        f"A-KAZE (min_keypoints {ex.min_keypoints}), {n} QVGA pictures: one pass "
+        f"{new / n * 1e3:.1f} ms/picture, a pass per threshold {old / n * 1e3:.1f} ms/picture "
+        f"= {old / new:.2f}x; same keypoints in {same} of {n}"
+    )
+    tuning = vmap.config.tuning
+    off = dataclasses.replace(
+        vmap,
+        config=vmap.config.model_copy(
+            update={
+                "tuning": tuning.model_copy(
+                    update={"localizer": tuning.localizer.model_copy(update={"planar_samples": 0})}
+                )
+            }
+        ),
+    )
+    for k in args.pictures:
+        queries = data.keyframes[1::4][:k]
+        if len(queries) < k:
+            print(f"  {k} pictures: the dataset has too few", file=sys.stderr)
+            continue
+        t_on = _best_cpu(lambda q=queries: vmap.localize(q), args.repeats)
+        t_off = _best_cpu(lambda q=queries: off.localize(q), args.repeats)
+        t_ex = _best_cpu(lambda q=queries: vmap.extract(q), args.repeats)
+        print(
+            f"  localize {k:2d} pictures: {t_on * 1e3:.0f} ms CPU (extraction {t_ex * 1e3:.0f} "
+            f"ms); without the planar RANSAC {t_off * 1e3:.0f} ms = {t_on / t_off:.2f}x"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
