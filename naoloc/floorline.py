@@ -35,6 +35,12 @@ MIN_INLIER_FRACTION = 0.5
 MIN_SPAN_M = 0.3
 RANSAC_TOLERANCE_M = 0.03
 MAX_RANGE_M = 4.0
+# Lightness of a board of the same floor against the floor's (ratio): planks' tones vary.
+TONE_RATIO = (0.75, 1.45)
+# A pixel at the wall's foot darker than this share of the floor's lightness is not floor.
+DARKEST_FOOT = 0.7
+# Chromaticity distance of the same floor's boards (bounds of the sample's own spread).
+CHROMA_TOL = (0.008, 0.02)
 
 
 @dataclass(frozen=True, slots=True)
@@ -135,7 +141,8 @@ def floor_mask(
     """
     import cv2
 
-    lab = cv2.cvtColor(cv2.GaussianBlur(bgr, (5, 5), 0), cv2.COLOR_BGR2LAB).astype(np.float32)
+    blurred = cv2.GaussianBlur(bgr, (5, 5), 0)
+    lab = cv2.cvtColor(blurred, cv2.COLOR_BGR2LAB).astype(np.float32)
     lab[..., 0] *= 0.3  # shading and plank tones change lightness more than colour
     sample = lab[sample_rows].reshape(-1, 3)
     centre = np.median(sample, axis=0)
@@ -143,13 +150,28 @@ def floor_mask(
     sdist = dist[sample_rows].ravel()
     # the near floor is mostly floor: its 75th percentile bounds the floor's own spread
     threshold = max(8.0, 2.5 * float(np.percentile(sdist, 75)))
-    mask = (dist < threshold).astype(np.uint8)
+    mask = dist < threshold
+    # Planks of another tone (a lighter or darker board, the same wood): the floor's own
+    # chroma at a lightness the floor's boards span. A skirting of the floor's wood is
+    # darker than that (about half), a painted wall or skirting has another chroma.
+    # Chromaticity (each channel's share of the sum) does not change when a colour is
+    # only lighter or darker, as a board of another tone is.
+    total = blurred.astype(np.float32).sum(axis=-1) + 1.0
+    rg = blurred[..., 1:].astype(np.float32) / total[..., None]  # (g, r) shares
+    chroma = np.linalg.norm(rg - np.median(rg[sample_rows].reshape(-1, 2), axis=0), axis=-1)
+    chroma_tol = float(np.clip(2.5 * np.percentile(chroma[sample_rows], 75), *CHROMA_TOL))
+    ratio = total / max(1.0, float(np.median(total[sample_rows])))
+    mask |= (chroma < chroma_tol) & (ratio > TONE_RATIO[0]) & (ratio < TONE_RATIO[1])
+    mask = mask.astype(np.uint8)
     # bands of another tone across the floor (plank rows, seams, shadows) are shorter in
     # the image than what stands on the floor: close them
     kernel = np.ones((max(7, bgr.shape[0] // 18) | 1, 3), np.uint8)
     mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, kernel)
-    mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((5, 5), np.uint8))
-    return mask.astype(bool), lab, centre, threshold
+    mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((5, 5), np.uint8)).astype(bool)
+    # Much darker than the floor is never floor, whatever closing did: a skirting of the
+    # floor's wood (its blur into a lighter wall above can look like floor).
+    mask &= ratio > DARKEST_FOOT
+    return mask, lab, centre, threshold
 
 
 def refine_boundary(
@@ -188,7 +210,8 @@ def refine_boundary(
         while k > r - reach:
             px = lab[k - 1, c]
             to_floor = np.linalg.norm(px - floor)
-            if to_floor < 3.0 * threshold and to_floor < np.linalg.norm(px - wall):
+            lighter = px[0] > DARKEST_FOOT * floor[0]  # much darker: a skirting, not floor
+            if lighter and to_floor < 3.0 * threshold and to_floor < np.linalg.norm(px - wall):
                 k -= 1
             else:
                 break

@@ -142,3 +142,43 @@ def test_front_wall_must_agree_with_the_odometry() -> None:
     assert trusted_front(_line(0.61, 0.0), 1.0, 1.3, 4.0) is None  # a rug's edge, not a wall
     assert trusted_front(_line(3.5, 0.0), 1.0, 2.5, 4.0) is None  # beyond the camera's range
     assert trusted_front(None, 1.0, 0.7, 4.0) is None
+
+
+def render_boards(
+    pose: np.ndarray, wall_distance: float, *, band: float, skirting: float | None, seed: int = 0
+) -> np.ndarray:
+    """A wall straight ahead of ``pose``'s yaw on a wooden floor whose last 0.3 m before
+    the wall is a board ``band`` times as light, with an 8 cm skirting of the floor's
+    wood ``skirting`` times as light (band 1.0: no board; skirting None: no skirting)."""
+    rng = np.random.default_rng(seed)
+    origin, rays = pixel_rays(320, 240, HFOV, VFOV, pose)
+    yaw = math.atan2(pose[1, 0], pose[0, 0])
+    n = np.array([math.cos(yaw), math.sin(yaw)])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s_floor = np.where(rays[..., 2] < 0, -origin[2] / rays[..., 2], np.inf)
+        toward = rays[..., :2] @ n
+        s_wall = np.where(toward > 0, (wall_distance - origin[:2] @ n) / toward, np.inf)
+    floor = s_floor < s_wall
+    depth = (origin[None, None, :2] + np.where(floor, s_floor, 0)[..., None] * rays[..., :2]) @ n
+    z_wall = origin[2] + np.where(floor, 0.0, s_wall) * rays[..., 2]
+    wood = np.array([70, 110, 150], float)  # BGR light oak
+    tone = np.where(depth > wall_distance - 0.3, band, 1.0)
+    floor_bgr = wood * tone[..., None]
+    skirt = (z_wall < 0.08) if skirting is not None else np.zeros_like(floor)
+    wall_bgr = np.where(skirt[..., None], wood * (skirting or 1.0), [200, 215, 230])
+    img = np.where(floor[..., None], floor_bgr, wall_bgr)
+    return np.clip(img + rng.normal(0, 3, img.shape), 0, 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize(("band", "skirting"), [(1.3, None), (1.0, 0.55), (1.25, 0.55)])
+@pytest.mark.parametrize(("yaw", "down", "distance"), [(-math.pi / 2, 0.5, 1.0), (0.0, 0.35, 1.8)])
+def test_a_lighter_board_and_a_wooden_skirting_are_not_the_wall(
+    band: float, skirting: float | None, yaw: float, down: float, distance: float
+) -> None:
+    # The room-913 failures: a lighter board 0.3 m before the wall read as the wall (0.3 m
+    # short), and a skirting of the floor's wood read as floor (its top, 20 % long).
+    pose = camera_pose(yaw, down)
+    image = render_boards(pose, distance, band=band, skirting=skirting)
+    line = detect_wall_line(image, HFOV, VFOV, pose, expect_normal=yaw)
+    assert line is not None
+    assert abs(line.distance - distance) < 0.03 * distance
