@@ -11,6 +11,14 @@ side wall, and, with the odometry's distance walked scaled so that each side end
 corner, its place along the side. The metric scale comes from the known rectangle (the
 room dimensions the user gives) and the camera height behind the floor-line distances.
 
+Furniture stands in front of walls: a side's line reads nearer where a bookcase or a
+sideboard is. So the side's wall is the *farthest* line that a quarter of the side's frames
+(and at least three) agree with once the odometry's walk inward is taken off, and every
+frame's distance from the wall is that line's carried by the odometry (the survey's own
+start included, whose line may see only the furniture it was put beside). The next side's
+wall is the front wall this side turned at: it says where the side ended, better than the
+front lines near a corner (furniture stands there too), which only the last side needs.
+
 Frames: the wall frame W has its origin at the circuit's first corner (where the survey
 starts), x along the first side, y to the left; the result is in the map frame (the
 robot's pose at the survey start), as the odometry poses were. Distances in metres, angles
@@ -35,10 +43,13 @@ MAX_ANGLE_ERROR_RAD: Final = 0.35  # nor one at a larger angle to the expected w
 MIN_CORNER_TURN_RAD: Final = math.pi / 4  # an odometry turn this large between frames: corner
 SCALE_RANGE: Final = (0.7, 1.4)  # a side's metres per odometry metre outside this: not used
 MIN_CORNER_FRACTION: Final = 0.5  # sides whose corner a front line must have placed
-MAX_FRONT_M: Final = 1.6  # farther front lines read long (the lens is not undone yet)
+MAX_FRONT_M: Final = 2.2  # front lines are checked to 2.2 m (tools/floorline_accuracy.py)
 LINE_STD_M: Final = 0.03  # a floor line's distance, one sigma (NAO's lens reads 2-4 cm long)
 LINE_STD_RAD: Final = 0.01  # and its angle
 MIN_ANGLE_GATE_RAD: Final = 0.12  # an angle this close to the prediction is always used
+WALL_CLUSTER_M: Final = 0.05  # side lines this close (after the walk inward) see one thing
+MIN_WALL_FRAMES: Final = 3  # frames that must see a side's wall
+WALL_SUPPORT: Final = 0.25  # and the share of the side's lines that must
 
 
 @dataclass(frozen=True)
@@ -148,35 +159,87 @@ def wall_poses(
         first = i == 0 or side_of[i] != side_of[i - 1]
         along[i] = step if first else along[i - 1] + step
         prev = kf.pose
-    true_along, scales = _along_sides(along, side_of, vision, lengths, offset)
-    if sum(1 for x in scales if x is not None) < MIN_CORNER_FRACTION * n_sides:
-        # The front wall's line put too few corners: the robot did not walk the known
-        # rectangle (sides ended by odometry), which these poses assume.
-        return None
-
     corners = [np.zeros(2)]
     for k in range(n_sides):
         d = k * turn * math.pi / 2
         corners.append(corners[-1] + lengths[k] * np.array([math.cos(d), math.sin(d)]))
 
-    poses: list[Pose2D] = []
-    used = 0
+    # Pass 1, per frame: the heading to the side wall (the filtered line angles), the
+    # distance walked inward since the side began (odometry, turned by that heading) and
+    # the side line's distance.
     track = _SideTrack()
+    deltas: list[float] = []
+    inward_m: list[float] = []
+    measured: list[float | None] = []
+    fallback: list[float] = []
+    start_line = _line(meta.get("start_side"), offset, side_normal)
     for i, kf in enumerate(keyframes):
         k = side_of[i]
         if i and k == side_of[i - 1]:
-            track.predict(keyframes[i - 1].pose, kf.pose, turn)
+            inward_m.append(inward_m[-1] + track.predict(keyframes[i - 1].pose, kf.pose, turn))
         else:
             track.reset()
-        if track.update(_line(vision[i].get("side"), offset, side_normal), offset):
-            used += 1
+            inward_m.append(0.0)
+        line = _line(vision[i].get("side"), offset, side_normal)
+        track.update(line, offset)
+        deltas.append(track.delta)
+        measured.append(None if line is None else line[0])
+        fallback.append(track.lateral)
+    # The survey's origin stands before side 0's first frame: its line belongs to side 0.
+    start_inward = -_inward(Pose2D(), keyframes[0].pose, 0.0 if start_line is None
+                            else start_line[1], turn)  # fmt: skip
+
+    # Pass 2, per side: the wall is the farthest line (furniture only stands in front of
+    # it); every frame's distance from it is that line's, carried by the odometry's inward
+    # motion. A side with no such wall keeps the filtered distances.
+    wall_at: dict[int, float] = {}
+    used = 0
+    for k in range(n_sides):
+        idx = [i for i in range(len(keyframes)) if side_of[i] == k]
+        seen = [m - inward_m[i] for i in idx if (m := measured[i]) is not None]
+        extra = [start_line[0] - start_inward] if k == 0 and start_line is not None else []
+        wall = farthest_wall(seen + extra)
+        if wall is not None:
+            wall_at[k] = wall
+            used += sum(1 for c in seen if abs(c - wall) < WALL_CLUSTER_M)
+
+    # Where each side ended: the next side's wall (the farthest line along all of it) is
+    # the front wall this side turned at, so the last frame's distance to it is known.
+    # A side starts where the previous one ended: as far along it as that side's last
+    # frame stood inward of its circuit.
+    laterals = [
+        wall_at[k] + inward_m[i] - offset if (k := side_of[i]) in wall_at else fallback[i]
+        for i in range(len(keyframes))
+    ]
+    ends: dict[int, tuple[float, float]] = {}
+    starts: dict[int, float] = {}
+    for k in range(n_sides - 1):
+        last = max(i for i in range(len(keyframes)) if side_of[i] == k)
+        starts[k + 1] = laterals[last]
+        if k + 1 not in wall_at:
+            continue
+        ahead = deltas[last] - turn * math.pi / 2  # heading off side k+1's direction
+        behind = -_inward(keyframes[last].pose, keyframes[last + 1].pose, ahead, turn)
+        to_go = wall_at[k + 1] + behind  # from the last frame to side k+1's wall, m
+        ends[k] = (float(along[last]), lengths[k] - (to_go - offset))
+    true_along, scales = _along_sides(along, side_of, vision, lengths, offset, ends, starts)
+    if sum(1 for x in scales if x is not None) < MIN_CORNER_FRACTION * n_sides:
+        # The front wall's line put too few corners: the robot did not walk the known
+        # rectangle (sides ended by odometry), which these poses assume.
+        return None
+
+    poses: list[Pose2D] = []
+    for i, lateral in enumerate(laterals):
+        k = side_of[i]
         d = k * turn * math.pi / 2
         u = np.array([math.cos(d), math.sin(d)])
         inward = np.array([-math.sin(d), math.cos(d)]) * turn  # away from the wall
-        position = corners[k] + true_along[i] * u + track.lateral * inward
-        poses.append(Pose2D(float(position[0]), float(position[1]), modulo2PI(d + track.delta)))
+        position = corners[k] + true_along[i] * u + lateral * inward
+        poses.append(Pose2D(float(position[0]), float(position[1]), modulo2PI(d + deltas[i])))
 
     start = _start_pose(meta.get("start_side"), offset, side_normal)
+    if 0 in wall_at:  # the origin's distance from side 0's wall, not from what it saw
+        start = Pose2D(0.0, (wall_at[0] + start_inward - offset) * turn, start.theta)
     out = [
         dataclasses.replace(kf, pose=start.inverse() * p, command_pose=None)
         for kf, p in zip(keyframes, poses, strict=True)
@@ -200,14 +263,20 @@ class _SideTrack:
         self.lateral, self.delta = 0.0, 0.0
         self.var_lateral, self.var_delta = 0.15**2, 0.1**2
 
-    def predict(self, before: Pose2D, after: Pose2D, turn: float) -> None:
-        """Move by the odometry's step from ``before`` to ``after`` (map frame)."""
+    def predict(self, before: Pose2D, after: Pose2D, turn: float) -> float:
+        """Move by the odometry's step from ``before`` to ``after`` (map frame).
+
+        Returns:
+            The step's motion inward (away from the side wall), m.
+        """
         step = before.inverse() * after
-        self.lateral += turn * (step.x * math.sin(self.delta) + step.y * math.cos(self.delta))
+        moved = _inward(before, after, self.delta, turn)
+        self.lateral += moved
         self.delta = modulo2PI(self.delta + step.theta)
         dist = math.hypot(step.x, step.y)
         self.var_lateral += (0.02 + 0.15 * abs(step.y)) ** 2 + (dist * 0.05) ** 2
         self.var_delta += (0.03 + 0.1 * abs(step.theta)) ** 2  # NAO's heading wanders
+        return moved
 
     def update(self, line: tuple[float, float] | None, offset: float) -> bool:
         """Use a measured side line (distance m, heading rad) where it passes the gates.
@@ -241,10 +310,15 @@ def _along_sides(
     vision: Sequence[dict[str, Any]],
     lengths: Sequence[float],
     offset: float,
+    ends: dict[int, tuple[float, float]] | None = None,
+    starts: dict[int, float] | None = None,
 ) -> tuple[np.ndarray, list[float | None]]:
     """Each frame's distance from its side's corner (m), from the odometry's distance walked
-    mapped through anchors: the corner (0 at 0) and every front-wall line, which puts the
-    frame it was measured at ``length - (distance - offset)`` along the side.
+    mapped through anchors: the corner (0 at 0) and, where the next side's wall says where
+    this side ended (``ends``: side -> (odometry along, true along) of its last frame), that
+    alone; else every front-wall line, which puts the frame it was measured at
+    ``length - (distance - offset)`` along the side. A side's start (odometry 0) is at
+    ``starts[side]`` (m; default 0): where the previous side's last frame stood.
 
     Returns:
         The distances and each side's overall metres per odometry metre (None: no anchor).
@@ -254,9 +328,14 @@ def _along_sides(
     frames_of: list[list[int]] = [[] for _ in lengths]
     for i, k in enumerate(side_of):
         frames_of[k].append(i)
-    for idx, length in zip(frames_of, lengths, strict=True):
-        anchors = [(0.0, 0.0)]
-        for j, i in enumerate(idx):
+    for k, (idx, length) in enumerate(zip(frames_of, lengths, strict=True)):
+        anchors = [(0.0, (starts or {}).get(k, 0.0))]
+        if ends is not None and k in ends and ends[k][0] > 0:
+            anchors.append(ends[k])
+            idx_lines: list[int] = []
+        else:
+            idx_lines = idx
+        for j, i in enumerate(idx_lines):
             front = vision[i].get("front")
             if j == 0 or not isinstance(front, dict):
                 continue
@@ -290,6 +369,37 @@ def _along_sides(
     for idx, length in zip(frames_of, lengths, strict=True):
         out[idx] = np.clip(out[idx], 0.0, length + 0.5)
     return out, scales
+
+
+def _inward(before: Pose2D, after: Pose2D, delta: float, turn: float) -> float:
+    """The odometry step from ``before`` to ``after`` (map frame) inward, away from the side
+    wall, for a robot heading ``delta`` rad off the wall's direction, m."""
+    step = before.inverse() * after
+    return turn * (step.x * math.sin(delta) + step.y * math.cos(delta))
+
+
+def farthest_wall(seen: Sequence[float]) -> float | None:
+    """The side wall's distance from the side's start (m), from what every frame saw.
+
+    Args:
+        seen: Per frame with a side line: its distance less the inward walked since the
+            side began (the same value for every frame that saw the wall).
+
+    Returns:
+        The farthest value that at least ``max(3, 25 %)`` of the frames agree with (within
+        :data:`WALL_CLUSTER_M`), their median; None when no value has that support.
+        Furniture along the wall gives nearer values; a lone far reading (a doorway's
+        line, a reflection) lacks support.
+    """
+    if not seen:
+        return None
+    values = np.sort(np.asarray(seen, np.float64))[::-1]
+    need = max(MIN_WALL_FRAMES, math.ceil(WALL_SUPPORT * values.size))
+    for v in values:
+        near = values[np.abs(values - v) < WALL_CLUSTER_M]
+        if near.size >= need:
+            return float(np.median(near))
+    return None
 
 
 def _start_pose(entry: Any, offset: float, side_normal: float) -> Pose2D:

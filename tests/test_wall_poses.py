@@ -116,9 +116,35 @@ def test_a_survey_without_floor_lines_keeps_its_odometry() -> None:
                       offset=OFFSET) is None  # fmt: skip
 
 
-def test_too_few_corners_keep_the_odometry() -> None:
-    """Sides that ended by odometry (no front line) mean the known rectangle was not walked."""
-    keyframes, _, meta = _survey()
+def test_the_next_sides_wall_places_a_corner_no_front_line_saw() -> None:
+    """A side that saw no front wall still ends where the next side's wall says."""
+    keyframes, truth, meta = _survey()
     for entry in meta["vision"][: int(0.7 * len(meta["vision"]))]:
         entry["front"] = None  # the first five sides found no front wall
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None
+    pos, _ = _errors(walled.keyframes, truth)
+    assert pos.max() < 0.05
+
+
+def test_too_few_corners_keep_the_odometry() -> None:
+    """No front line and no side line places the corners: the known rectangle may not
+    have been walked."""
+    keyframes, _, meta = _survey()
+    for entry in meta["vision"][: int(0.8 * len(meta["vision"]))]:
+        entry["front"] = None  # the first six sides found no front wall
+        entry["side"] = None  # nor their side walls
     assert wall_poses(keyframes, meta, offset=OFFSET) is None
+
+
+def test_furniture_along_a_wall_is_not_the_wall() -> None:
+    """A sideboard 0.35 m deep in front of the first metre of side 0 (and of the start):
+    those lines are nearer; the wall is the farthest line most of the side agrees with."""
+    keyframes, truth, meta = _survey()
+    meta["start_side"] = {"distance_m": OFFSET - 0.35, "normal_rad": SIDE_NORMAL}
+    for entry in meta["vision"][:5]:
+        entry["side"] = {"distance_m": OFFSET - 0.35, "normal_rad": SIDE_NORMAL}
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None
+    pos, _ = _errors(walled.keyframes, truth)
+    assert pos.max() < 0.05  # 0.35 m off everywhere had the start's line been the wall
