@@ -453,20 +453,21 @@ class MapConfig(_Model):
         100,
         ge=0,
         le=5000,
-        description="A-KAZE: an image with fewer keypoints is described again with the "
-        "threshold / sqrt(10), down to 3e-5 (0 = a fixed threshold)",
+        description="A-KAZE: an image with fewer keypoints keeps those above the threshold / "
+        "sqrt(10), / 10, ... down to 3e-5 (one pass at the lowest; 0 = a fixed threshold)",
     )
     apply_metric_scale: bool = Field(
         False,
-        description="scale the keyframe poses by the survey's floor-line metric_scale; off by "
-        "default: NAO's lens distortion (not yet undone by the floor-line detector) biases it "
-        "by about 15 % in the default world (docs/RESULTS.md)",
+        description="scale the keyframe poses by the survey's floor-line metric_scale (for "
+        "surveys that keep their odometry poses); off by default: the wall poses fix the "
+        "scale, and the floor-line scale read 2-4 % off in unseen rooms (docs/RESULTS.md)",
     )
     wall_poses: bool = Field(
         True,
         description="take the keyframe poses from the survey's walls (the known circuit, the "
-        "side and front floor-wall lines, odometry only for the distance along a side) "
-        "instead of the odometry; surveys without floor-line records keep their odometry",
+        "side walls' floor lines, the farthest a side agrees with, where each side ended, "
+        "odometry only for the distance along a side) instead of the odometry; surveys "
+        "without floor-line records keep their odometry",
     )
 
 
