@@ -493,6 +493,12 @@ class LocalizeConfig(_Model):
         description="paper: GCS winners' mean pose; verified: RANSAC-checked retrieval",
     )
     images: int = Field(2, ge=1, le=8, description="images taken per estimate")
+    resolution: int | None = Field(
+        None,
+        description="NAOqi resolution id of the query pictures (localize, go-home); null = "
+        "camera.resolution (2 = kVGA: a far wall's features at the size the survey saw them "
+        "from 1 m, at four times the extraction time)",
+    )
     head_pitch_rad: float = Field(
         -0.672,
         ge=-0.672,
@@ -500,6 +506,19 @@ class LocalizeConfig(_Model):
         description="head pitch of the query pictures (rad, negative looks up; clamped to "
         "the head's limits at each yaw)",
     )
+
+    @field_validator("resolution")
+    @classmethod
+    def _res_ok(cls, v: int | None) -> int | None:
+        if v is not None and v not in RESOLUTIONS:
+            raise ValueError(f"unknown resolution id {v}; valid: {sorted(RESOLUTIONS)}")
+        return v
+
+    def camera(self, camera: CameraConfig) -> CameraConfig:
+        """The camera settings of the query pictures: ``camera`` at ``resolution``."""
+        if self.resolution is None:
+            return camera
+        return camera.model_copy(update={"resolution": self.resolution})
 
 
 class GoHomeConfig(_Model):

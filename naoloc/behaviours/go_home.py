@@ -167,7 +167,7 @@ def go_home(
     reason = ""
     walked = 0.0
     pf: ParticleFilter | None = None
-    with Camera(robot, cfg.camera, "naoloc_go_home") as camera:
+    with Camera(robot, cfg.localize.camera(cfg.camera), "naoloc_go_home") as camera:
         try:
             odo_prev = pose_of(robot.motion, True)
             while True:

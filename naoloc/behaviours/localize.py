@@ -272,7 +272,11 @@ def localize(
     mode = mode or cfg.localize.mode
     strategy = strategy or ("paper" if mode == "paper" else "scan")
     own = camera is None
-    cam = camera if camera is not None else Camera(robot, cfg.camera, "naoloc_localize")
+    cam = (
+        camera
+        if camera is not None
+        else Camera(robot, cfg.localize.camera(cfg.camera), "naoloc_localize")
+    )
     added = 0
     pitch = cfg.localize.head_pitch_rad  # up toward the art; clamped per yaw by look()
     try:
