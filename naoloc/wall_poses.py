@@ -12,10 +12,11 @@ corner, its place along the side. The metric scale comes from the known rectangl
 room dimensions the user gives) and the camera height behind the floor-line distances.
 
 Furniture stands in front of walls: a side's line reads nearer where a bookcase or a
-sideboard is. So the side's wall is the *farthest* line that a quarter of the side's frames
-(and at least three) agree with once the odometry's walk inward is taken off, and every
-frame's distance from the wall is that line's carried by the odometry (the survey's own
-start included, whose line may see only the furniture it was put beside). The next side's
+sideboard is. Where the line jumps between frames, another thing is seen; the side's wall
+is the *farthest* of those levels that a fifth of the side's lines (and at least three)
+see, and every frame's distance from the wall is its line plus how far its stretch stands
+in front of the wall (:func:`side_distances`; the survey's own start included, whose line
+may see only the furniture it was put beside). The next side's
 wall is the front wall this side turned at: it says where the side ended, better than the
 front lines near a corner (furniture stands there too), which only the last side needs.
 
@@ -28,6 +29,7 @@ in radians.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -47,9 +49,10 @@ MAX_FRONT_M: Final = 2.2  # front lines are checked to 2.2 m (tools/floorline_ac
 LINE_STD_M: Final = 0.03  # a floor line's distance, one sigma (NAO's lens reads 2-4 cm long)
 LINE_STD_RAD: Final = 0.01  # and its angle
 MIN_ANGLE_GATE_RAD: Final = 0.12  # an angle this close to the prediction is always used
-WALL_CLUSTER_M: Final = 0.05  # side lines this close (after the walk inward) see one thing
+EDGE_M: Final = 0.2  # a side line that jumps more between frames sees another thing
+WALL_LEVEL_M: Final = 0.1  # stretches whose levels are this close see the same thing
 MIN_WALL_FRAMES: Final = 3  # frames that must see a side's wall
-WALL_SUPPORT: Final = 0.25  # and the share of the side's lines that must
+WALL_SUPPORT: Final = 0.2  # and the share of the side's lines that must
 
 
 @dataclass(frozen=True)
@@ -189,38 +192,42 @@ def wall_poses(
     start_inward = -_inward(Pose2D(), keyframes[0].pose, 0.0 if start_line is None
                             else start_line[1], turn)  # fmt: skip
 
-    # Pass 2, per side: the wall is the farthest line (furniture only stands in front of
-    # it); every frame's distance from it is that line's, carried by the odometry's inward
-    # motion. A side with no such wall keeps the filtered distances.
-    wall_at: dict[int, float] = {}
+    # Pass 2, per side: what each line saw, the wall or furniture standing in front of it
+    # (:func:`side_distances`), and so every frame's distance from the side's wall.
+    dist: list[float | None] = [None] * len(keyframes)
+    start_dist: float | None = None
     used = 0
     for k in range(n_sides):
         idx = [i for i in range(len(keyframes)) if side_of[i] == k]
-        seen = [m - inward_m[i] for i in idx if (m := measured[i]) is not None]
-        extra = [start_line[0] - start_inward] if k == 0 and start_line is not None else []
-        wall = farthest_wall(seen + extra)
-        if wall is not None:
-            wall_at[k] = wall
-            used += sum(1 for c in seen if abs(c - wall) < WALL_CLUSTER_M)
+        m = [measured[i] for i in idx]
+        dy = [0.0] + [inward_m[i] - inward_m[j] for j, i in itertools.pairwise(idx)]
+        if k == 0:  # the survey's origin stands before side 0's first frame
+            m = [None if start_line is None else start_line[0], *m]
+            dy = [0.0, -start_inward, *dy[1:]]
+        found = side_distances(m, dy)
+        if found is None:
+            continue
+        dists, on_wall = found
+        if k == 0:
+            start_dist, dists, on_wall = dists[0], dists[1:], on_wall[1:]
+        used += sum(on_wall)
+        for i, v in zip(idx, dists, strict=True):
+            dist[i] = v
 
-    # Where each side ended: the next side's wall (the farthest line along all of it) is
-    # the front wall this side turned at, so the last frame's distance to it is known.
     # A side starts where the previous one ended: as far along it as that side's last
     # frame stood inward of its circuit.
-    laterals = [
-        wall_at[k] + inward_m[i] - offset if (k := side_of[i]) in wall_at else fallback[i]
-        for i in range(len(keyframes))
-    ]
+    laterals = [fallback[i] if (di := dist[i]) is None else di - offset for i in range(len(dist))]
     ends: dict[int, tuple[float, float]] = {}
     starts: dict[int, float] = {}
     for k in range(n_sides - 1):
         last = max(i for i in range(len(keyframes)) if side_of[i] == k)
         starts[k + 1] = laterals[last]
-        if k + 1 not in wall_at:
+        nxt = dist[last + 1]
+        if nxt is None:
             continue
         ahead = deltas[last] - turn * math.pi / 2  # heading off side k+1's direction
         behind = -_inward(keyframes[last].pose, keyframes[last + 1].pose, ahead, turn)
-        to_go = wall_at[k + 1] + behind  # from the last frame to side k+1's wall, m
+        to_go = nxt + behind  # from the last frame to side k+1's wall, m
         ends[k] = (float(along[last]), lengths[k] - (to_go - offset))
     true_along, scales = _along_sides(along, side_of, vision, lengths, offset, ends, starts)
     if sum(1 for x in scales if x is not None) < MIN_CORNER_FRACTION * n_sides:
@@ -238,8 +245,8 @@ def wall_poses(
         poses.append(Pose2D(float(position[0]), float(position[1]), modulo2PI(d + deltas[i])))
 
     start = _start_pose(meta.get("start_side"), offset, side_normal)
-    if 0 in wall_at:  # the origin's distance from side 0's wall, not from what it saw
-        start = Pose2D(0.0, (wall_at[0] + start_inward - offset) * turn, start.theta)
+    if start_dist is not None:  # the origin's distance from side 0's wall, not what it saw
+        start = Pose2D(0.0, (start_dist - offset) * turn, start.theta)
     out = [
         dataclasses.replace(kf, pose=start.inverse() * p, command_pose=None)
         for kf, p in zip(keyframes, poses, strict=True)
@@ -378,28 +385,69 @@ def _inward(before: Pose2D, after: Pose2D, delta: float, turn: float) -> float:
     return turn * (step.x * math.sin(delta) + step.y * math.cos(delta))
 
 
-def farthest_wall(seen: Sequence[float]) -> float | None:
-    """The side wall's distance from the side's start (m), from what every frame saw.
+def side_distances(
+    measured: Sequence[float | None], inward: Sequence[float]
+) -> tuple[list[float], list[bool]] | None:
+    """Every frame's distance from one side's wall, from its floor lines (m).
+
+    A line sees the wall or something standing in front of it (a bookcase, a sideboard):
+    where the line jumps by more than :data:`EDGE_M` between frames, beyond what the
+    robot's own walk inward explains, a new stretch begins, one level nearer or farther.
+    The wall is the farthest level that at least ``max(3, 20 %)`` of the lines see (a lone
+    far line, a doorway's or a reflection's, lacks that support); a frame's distance is
+    its line plus how far its stretch stands in front of the wall. Frames without a line
+    take the nearest frame's distance moved by the odometry's walk inward (only the
+    odometry's short-range motion is used: a NAO's sideways odometry drifts 0.3 m along a
+    5 m side).
 
     Args:
-        seen: Per frame with a side line: its distance less the inward walked since the
-            side began (the same value for every frame that saw the wall).
+        measured: Per frame in walking order: the side line's distance (m) or None.
+        inward: Per frame: the odometry's walk inward (away from the wall) since the
+            previous frame (m; the first is not used).
 
     Returns:
-        The farthest value that at least ``max(3, 25 %)`` of the frames agree with (within
-        :data:`WALL_CLUSTER_M`), their median; None when no value has that support.
-        Furniture along the wall gives nearer values; a lone far reading (a doorway's
-        line, a reflection) lacks support.
+        ``(distances, whether each frame's line saw the wall)``; None when no level has
+        that support.
     """
+    levels: list[float | None] = []
+    level, last, walked = 0.0, None, 0.0
+    for i, m in enumerate(measured):
+        walked += inward[i] if i else 0.0
+        if m is None:
+            levels.append(None)
+            continue
+        if last is not None:
+            jump = m - last - walked
+            if abs(jump) > EDGE_M:
+                level += jump
+        levels.append(level)
+        last, walked = m, 0.0
+    seen = [v for v in levels if v is not None]
     if not seen:
         return None
-    values = np.sort(np.asarray(seen, np.float64))[::-1]
-    need = max(MIN_WALL_FRAMES, math.ceil(WALL_SUPPORT * values.size))
-    for v in values:
-        near = values[np.abs(values - v) < WALL_CLUSTER_M]
-        if near.size >= need:
-            return float(np.median(near))
-    return None
+    need = max(MIN_WALL_FRAMES, math.ceil(WALL_SUPPORT * len(seen)))
+    wall = None
+    for v in sorted(set(seen), reverse=True):
+        near = [u for u in seen if abs(u - v) < WALL_LEVEL_M]
+        if len(near) >= need:
+            wall = max(set(near), key=near.count)  # the stretch most of its lines are on
+            break
+    if wall is None:
+        return None
+    out: list[float | None] = [
+        None if (m is None or v is None) else m + (wall - v)
+        for m, v in zip(measured, levels, strict=True)
+    ]
+    for i in range(1, len(out)):  # forward: carry the last distance by the walk inward
+        prev = out[i - 1]
+        if out[i] is None and prev is not None:
+            out[i] = prev + inward[i]
+    for i in range(len(out) - 2, -1, -1):  # the frames before the first line
+        nxt = out[i + 1]
+        if out[i] is None and nxt is not None:
+            out[i] = nxt - inward[i + 1]
+    on_wall = [v is not None and abs(v - wall) < WALL_LEVEL_M for v in levels]
+    return [float(v) for v in out if v is not None], on_wall
 
 
 def _start_pose(entry: Any, offset: float, side_normal: float) -> Pose2D:

@@ -16,7 +16,7 @@ import pytest
 
 from naoloc.geometry import Pose2D
 from naoloc.keyframe import Keyframe
-from naoloc.wall_poses import wall_poses
+from naoloc.wall_poses import side_distances, wall_poses
 
 OFFSET = 1.0
 SIDES = (3.0, 2.0)
@@ -148,3 +148,29 @@ def test_furniture_along_a_wall_is_not_the_wall() -> None:
     assert walled is not None
     pos, _ = _errors(walled.keyframes, truth)
     assert pos.max() < 0.05  # 0.35 m off everywhere had the start's line been the wall
+
+
+def test_side_distances_see_through_furniture_without_trusting_the_sideways_odometry() -> None:
+    """Room 327010903's first side: a sideboard and a bookcase (0.45 m deep) along the first
+    half, a sideboard at the end; the robot follows them out to 1.46 m and back. Its
+    odometry's walk inward drifts 0.3 m along the side (NAO's sideways slip)."""
+    rng = np.random.default_rng(0)
+    n = 23
+    truth = 1.0 + 0.46 * np.sin(np.pi * np.minimum(np.arange(n), 12) / 12) ** 2
+    depth = np.where((np.arange(n) >= 1) & (np.arange(n) <= 10), 0.45, 0.0)
+    depth[21:] = 0.4
+    measured: list[float | None] = list(truth - depth + rng.normal(0, 0.01, n))
+    measured[15] = None  # no line in one frame
+    inward = np.diff(truth, prepend=truth[0]) + 0.015 + rng.normal(0, 0.03, n)
+    found = side_distances(measured, list(inward))
+    assert found is not None
+    dists, on_wall = found
+    assert np.abs(np.array(dists) - truth).max() < 0.1
+    assert np.median(np.abs(np.array(dists) - truth)) < 0.02
+    assert on_wall == [d == 0.0 and i != 15 for i, d in enumerate(depth)]
+
+
+def test_side_distances_need_a_wall_most_lines_agree_on() -> None:
+    assert side_distances([None, None], [0.0, 0.0]) is None
+    # Two levels of one frame each: no level has three lines
+    assert side_distances([1.0, 0.6], [0.0, 0.0]) is None
