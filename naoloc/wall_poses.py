@@ -132,8 +132,8 @@ def wall_poses(
 
     Returns:
         The poses, or None when the meta lacks what this needs (no vision, a survey that
-        did not follow walls) or when front lines placed fewer than half of the corners
-        (the robot did not walk the known rectangle): the odometry poses are then kept.
+        did not follow walls) or when fewer than half of the corners were placed (by the
+        next side's wall or a front line): the odometry poses are then kept.
     """
     vision = meta.get("vision")
     sides_m = meta.get("sides_m")
@@ -231,8 +231,8 @@ def wall_poses(
         ends[k] = (float(along[last]), lengths[k] - (to_go - offset))
     true_along, scales = _along_sides(along, side_of, vision, lengths, offset, ends, starts)
     if sum(1 for x in scales if x is not None) < MIN_CORNER_FRACTION * n_sides:
-        # The front wall's line put too few corners: the robot did not walk the known
-        # rectangle (sides ended by odometry), which these poses assume.
+        # Neither the next side's wall nor a front line placed enough corners: the robot
+        # may not have walked the known rectangle, which these poses assume.
         return None
 
     poses: list[Pose2D] = []
