@@ -203,6 +203,13 @@ class WorldConfig(_Model):
     sim: SimConfig = SimConfig()
 
 
+def _resolution_id(v: int) -> int:
+    """``v`` when it is a NAOqi resolution id, else ValueError naming the valid ones."""
+    if v not in RESOLUTIONS:
+        raise ValueError(f"unknown resolution id {v}; valid: {sorted(RESOLUTIONS)}")
+    return v
+
+
 class CameraConfig(_Model):
     """Which camera and image format behaviours subscribe to."""
 
@@ -220,9 +227,7 @@ class CameraConfig(_Model):
     @field_validator("resolution")
     @classmethod
     def _res_ok(cls, v: int) -> int:
-        if v not in RESOLUTIONS:
-            raise ValueError(f"unknown resolution id {v}; valid: {sorted(RESOLUTIONS)}")
-        return v
+        return _resolution_id(v)
 
     @field_validator("colorspace")
     @classmethod
@@ -517,9 +522,7 @@ class LocalizeConfig(_Model):
     @field_validator("resolution")
     @classmethod
     def _res_ok(cls, v: int | None) -> int | None:
-        if v is not None and v not in RESOLUTIONS:
-            raise ValueError(f"unknown resolution id {v}; valid: {sorted(RESOLUTIONS)}")
-        return v
+        return None if v is None else _resolution_id(v)
 
     def camera(self, camera: CameraConfig) -> CameraConfig:
         """The camera settings of the query pictures: ``camera`` at ``resolution``."""

@@ -152,6 +152,9 @@ def wall_poses(
     turn = -math.copysign(1.0, side_normal)  # wall on the right: the corners turn left
     side_of = _sides_of_frames(vision, keyframes)
     n_sides = side_of[-1] + 1
+    frames_of: list[list[int]] = [[] for _ in range(n_sides)]  # frame indices of each side
+    for i, k in enumerate(side_of):
+        frames_of[k].append(i)
     lengths = [float(sides_m[k % 2]) for k in range(n_sides)]
 
     # Distance walked (odometry) from each side's corner to each frame.
@@ -189,7 +192,7 @@ def wall_poses(
         measured.append(None if line is None else line[0])
         fallback.append(track.lateral)
     # The survey's origin stands before side 0's first frame: its line belongs to side 0.
-    start_inward = -_inward(Pose2D(), keyframes[0].pose, 0.0 if start_line is None
+    start_inward = -_inward(keyframes[0].pose, 0.0 if start_line is None
                             else start_line[1], turn)  # fmt: skip
 
     # Pass 2, per side: what each line saw, the wall or furniture standing in front of it
@@ -198,7 +201,7 @@ def wall_poses(
     start_dist: float | None = None
     used = 0
     for k in range(n_sides):
-        idx = [i for i in range(len(keyframes)) if side_of[i] == k]
+        idx = frames_of[k]
         m = [measured[i] for i in idx]
         dy = [0.0] + [inward_m[i] - inward_m[j] for j, i in itertools.pairwise(idx)]
         if k == 0:  # the survey's origin stands before side 0's first frame
@@ -220,16 +223,17 @@ def wall_poses(
     ends: dict[int, tuple[float, float]] = {}
     starts: dict[int, float] = {}
     for k in range(n_sides - 1):
-        last = max(i for i in range(len(keyframes)) if side_of[i] == k)
+        last = frames_of[k][-1]
         starts[k + 1] = laterals[last]
         nxt = dist[last + 1]
         if nxt is None:
             continue
         ahead = deltas[last] - turn * math.pi / 2  # heading off side k+1's direction
-        behind = -_inward(keyframes[last].pose, keyframes[last + 1].pose, ahead, turn)
+        corner = keyframes[last].pose.inverse() * keyframes[last + 1].pose  # the turn's step
+        behind = -_inward(corner, ahead, turn)
         to_go = nxt + behind  # from the last frame to side k+1's wall, m
         ends[k] = (float(along[last]), lengths[k] - (to_go - offset))
-    true_along, scales = _along_sides(along, side_of, vision, lengths, offset, ends, starts)
+    true_along, scales = _along_sides(along, frames_of, vision, lengths, offset, ends, starts)
     if sum(1 for x in scales if x is not None) < MIN_CORNER_FRACTION * n_sides:
         # Neither the next side's wall nor a front line placed enough corners: the robot
         # may not have walked the known rectangle, which these poses assume.
@@ -277,7 +281,7 @@ class _SideTrack:
             The step's motion inward (away from the side wall), m.
         """
         step = before.inverse() * after
-        moved = _inward(before, after, self.delta, turn)
+        moved = _inward(step, self.delta, turn)
         self.lateral += moved
         self.delta = modulo2PI(self.delta + step.theta)
         dist = math.hypot(step.x, step.y)
@@ -313,7 +317,7 @@ class _SideTrack:
 
 def _along_sides(
     along: np.ndarray,
-    side_of: Sequence[int],
+    frames_of: Sequence[Sequence[int]],
     vision: Sequence[dict[str, Any]],
     lengths: Sequence[float],
     offset: float,
@@ -321,25 +325,23 @@ def _along_sides(
     starts: dict[int, float] | None = None,
 ) -> tuple[np.ndarray, list[float | None]]:
     """Each frame's distance from its side's corner (m), from the odometry's distance walked
-    mapped through anchors: the corner (0 at 0) and, where the next side's wall says where
-    this side ended (``ends``: side -> (odometry along, true along) of its last frame), that
-    alone; else every front-wall line, which puts the frame it was measured at
-    ``length - (distance - offset)`` along the side. A side's start (odometry 0) is at
-    ``starts[side]`` (m; default 0): where the previous side's last frame stood.
+    mapped through anchors (``frames_of``: each side's frame indices, in walking order):
+    the corner (0 at 0) and, where the next side's wall says where this side ended
+    (``ends``: side -> (odometry along, true along) of its last frame), that alone; else
+    every front-wall line, which puts the frame it was measured at ``length - (distance -
+    offset)`` along the side. A side's start (odometry 0) is at ``starts[side]`` (m;
+    default 0): where the previous side's last frame stood.
 
     Returns:
         The distances and each side's overall metres per odometry metre (None: no anchor).
     """
     out = np.full_like(along, np.nan)
     scales: list[float | None] = []
-    frames_of: list[list[int]] = [[] for _ in lengths]
-    for i, k in enumerate(side_of):
-        frames_of[k].append(i)
     for k, (idx, length) in enumerate(zip(frames_of, lengths, strict=True)):
         anchors = [(0.0, (starts or {}).get(k, 0.0))]
         if ends is not None and k in ends and ends[k][0] > 0:
             anchors.append(ends[k])
-            idx_lines: list[int] = []
+            idx_lines: Sequence[int] = []
         else:
             idx_lines = idx
         for j, i in enumerate(idx_lines):
@@ -378,10 +380,9 @@ def _along_sides(
     return out, scales
 
 
-def _inward(before: Pose2D, after: Pose2D, delta: float, turn: float) -> float:
-    """The odometry step from ``before`` to ``after`` (map frame) inward, away from the side
-    wall, for a robot heading ``delta`` rad off the wall's direction, m."""
-    step = before.inverse() * after
+def _inward(step: Pose2D, delta: float, turn: float) -> float:
+    """An odometry step (in the robot's frame before it) inward, away from the side wall,
+    for a robot heading ``delta`` rad off the wall's direction, m."""
     return turn * (step.x * math.sin(delta) + step.y * math.cos(delta))
 
 

@@ -16,7 +16,7 @@ def _dim_image(contrast: float, seed: int = 0) -> np.ndarray:
     return np.clip(img, 0, 255).astype(np.uint8)
 
 
-def _per_threshold(gray: np.ndarray, ladder: list[float], least: int) -> tuple[int, float]:
+def _per_threshold(gray: np.ndarray, ladder: tuple[float, ...], least: int) -> tuple[int, float]:
     """Keypoints of the old way (a pass per threshold) and the threshold it stopped at."""
     n, t = 0, ladder[0]
     for t in ladder:
@@ -28,7 +28,7 @@ def _per_threshold(gray: np.ndarray, ladder: list[float], least: int) -> tuple[i
 
 def test_one_pass_keeps_what_a_pass_per_threshold_keeps() -> None:
     ex = FeatureExtractor("akaze", akaze_threshold=0.001, min_keypoints=100)
-    ladder = ex._ladder()
+    ladder = ex.thresholds
     assert ladder[0] == 0.001 and ladder[-1] >= AKAZE_FLOOR * 0.999 and len(ladder) == 4
     stopped = set()
     for contrast in (4.0, 8.0, 16.0, 40.0):

@@ -30,11 +30,13 @@ def camera_pose(yaw: float, down: float, height: float = 0.46) -> np.ndarray:
     return t
 
 
-def render(
-    pose: np.ndarray, wall_normal: float, wall_distance: float, *, seed: int = 0
-) -> np.ndarray:
-    """A 320x240 view of a floor with seams and a blank wall standing on the given line."""
-    rng = np.random.default_rng(seed)
+def trace(
+    pose: np.ndarray, wall_normal: float, wall_distance: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each pixel's ray of a 320x240 view through a floor and a wall standing on the line
+    ``wall_distance`` m along ``wall_normal`` (FRAME_ROBOT): whether it meets the floor
+    first, where on the floor (x, y, m; the camera's foot where it does not) and at what
+    height it meets the wall (m; the camera's height where it meets the floor)."""
     origin, rays = pixel_rays(320, 240, HFOV, VFOV, pose)
     n = np.array([math.cos(wall_normal), math.sin(wall_normal)])
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -43,6 +45,16 @@ def render(
         s_wall = np.where(toward > 0, (wall_distance - origin[:2] @ n) / toward, np.inf)
     floor = s_floor < s_wall
     hit = origin[None, None, :2] + np.where(floor, s_floor, 0)[..., None] * rays[..., :2]
+    z_wall = origin[2] + np.where(floor, 0.0, s_wall) * rays[..., 2]
+    return floor, hit, z_wall
+
+
+def render(
+    pose: np.ndarray, wall_normal: float, wall_distance: float, *, seed: int = 0
+) -> np.ndarray:
+    """A 320x240 view of a floor with seams and a blank wall standing on the given line."""
+    rng = np.random.default_rng(seed)
+    floor, hit, _z = trace(pose, wall_normal, wall_distance)
     img = np.empty((240, 320, 3), np.uint8)
     wood = np.array([40, 90, 150], float)  # BGR brown
     tone = 1.0 + 0.12 * np.sin(hit[..., 1] * 40.0)  # planks of varying tone
@@ -151,16 +163,9 @@ def render_boards(
     the wall is a board ``band`` times as light, with an 8 cm skirting of the floor's
     wood ``skirting`` times as light (band 1.0: no board; skirting None: no skirting)."""
     rng = np.random.default_rng(seed)
-    origin, rays = pixel_rays(320, 240, HFOV, VFOV, pose)
     yaw = math.atan2(pose[1, 0], pose[0, 0])
-    n = np.array([math.cos(yaw), math.sin(yaw)])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s_floor = np.where(rays[..., 2] < 0, -origin[2] / rays[..., 2], np.inf)
-        toward = rays[..., :2] @ n
-        s_wall = np.where(toward > 0, (wall_distance - origin[:2] @ n) / toward, np.inf)
-    floor = s_floor < s_wall
-    depth = (origin[None, None, :2] + np.where(floor, s_floor, 0)[..., None] * rays[..., :2]) @ n
-    z_wall = origin[2] + np.where(floor, 0.0, s_wall) * rays[..., 2]
+    floor, hit, z_wall = trace(pose, yaw, wall_distance)
+    depth = hit @ np.array([math.cos(yaw), math.sin(yaw)])
     wood = np.array([70, 110, 150], float)  # BGR light oak
     tone = np.where(depth > wall_distance - 0.3, band, 1.0)
     floor_bgr = wood * tone[..., None]

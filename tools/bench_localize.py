@@ -54,7 +54,7 @@ def _per_threshold(ex: FeatureExtractor, gray: np.ndarray) -> tuple[np.ndarray, 
     """The baseline: describe again at each lower threshold until enough keypoints."""
     kps: Any = ()
     desc: Any = None
-    for t in ex._ladder():
+    for t in ex.thresholds:
         kps, desc = cv2.AKAZE_create(threshold=t).detectAndCompute(gray, None)  # type: ignore[attr-defined]
         if len(kps) >= ex.min_keypoints:
             break

@@ -22,7 +22,7 @@ import numpy as np
 from naoloc.config import MapConfig
 from naoloc.errors import DatasetError
 from naoloc.geometry import circular_mean
-from naoloc.keyframe import Keyframe
+from naoloc.keyframe import CameraInfo, Keyframe
 from naoloc.lens import Lens
 from naoloc.mapping.bundle import BundleProblem, bundle_adjust, tracks_from_links
 from naoloc.mapping.data import MapData
@@ -47,6 +47,21 @@ def _neuron_poses(
         out[n, 2] = circular_mean(poses[sel, 2])
         view[n] = circular_mean(views[sel])
     return out, view
+
+
+def pinhole_features(
+    extractor: FeatureExtractor, kf: Keyframe, cam: CameraInfo, lens: Lens | None
+) -> Features:
+    """The features of one picture, moved to the pinhole ``cam`` the map models.
+
+    Args:
+        extractor: The map's feature extractor.
+        kf: The picture (survey keyframe or query).
+        cam: Its camera (:func:`naoloc.mapping.landmarks.query_camera`).
+        lens: The camera's lens (None: the picture is a pinhole's already).
+    """
+    found = extractor.extract(kf.gray())
+    return to_pinhole(found, lens, cam.width, cam.height, cam.hfov, cam.vfov)
 
 
 def build_map_data(
@@ -86,8 +101,7 @@ def build_map_data(
     cams_info = [query_camera(kf) for kf in keyframes]
     feats: list[Features] = []
     for i, (kf, cam) in enumerate(zip(keyframes, cams_info, strict=True)):
-        found = extractor.extract(kf.gray())
-        feats.append(to_pinhole(found, lens, cam.width, cam.height, cam.hfov, cam.vfov))
+        feats.append(pinhole_features(extractor, kf, cam, lens))
         report("features", i + 1, n)
     t1 = time.perf_counter()
     vocab = train_vocabulary(

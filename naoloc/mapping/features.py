@@ -113,6 +113,11 @@ class FeatureExtractor:
         self.akaze_threshold = float(akaze_threshold)
         self.min_keypoints = int(min_keypoints) if kind == "akaze" else 0
         self._floor: Any = None  # adaptive A-KAZE's detector at the floor, made once
+        ladder, t = [self.akaze_threshold], self.akaze_threshold / AKAZE_STEP
+        while t >= AKAZE_FLOOR * 0.999:
+            ladder.append(t)
+            t /= AKAZE_STEP
+        self._thresholds = tuple(ladder)  # adaptive A-KAZE's thresholds, highest first
         self.binary = kind != "sift"
         if kind == "akaze":
             if not hasattr(cv2, "AKAZE_create"):
@@ -135,13 +140,10 @@ class FeatureExtractor:
             "min_keypoints": self.min_keypoints,
         }
 
-    def _ladder(self) -> list[float]:
+    @property
+    def thresholds(self) -> tuple[float, ...]:
         """Adaptive A-KAZE's thresholds, the configured one first, down to the floor."""
-        out, t = [self.akaze_threshold], self.akaze_threshold / AKAZE_STEP
-        while t >= AKAZE_FLOOR * 0.999:
-            out.append(t)
-            t /= AKAZE_STEP
-        return out
+        return self._thresholds
 
     def _floor_detector(self) -> Any:
         """The detector that describes an image once: the ladder's lowest threshold."""
@@ -150,7 +152,7 @@ class FeatureExtractor:
         if self._floor is None:
             import cv2
 
-            self._floor = cv2.AKAZE_create(threshold=self._ladder()[-1])  # type: ignore[attr-defined]
+            self._floor = cv2.AKAZE_create(threshold=self._thresholds[-1])  # type: ignore[attr-defined]
         return self._floor
 
     def extract(self, gray: np.ndarray) -> Features:
@@ -181,7 +183,7 @@ class FeatureExtractor:
         xy = np.array([kp.pt for kp in kps], dtype=np.float32).reshape(-1, 2)
         response = np.array([kp.response for kp in kps], dtype=np.float32)
         if self.min_keypoints:
-            for t in self._ladder()[:-1]:  # the first threshold that keeps enough
+            for t in self._thresholds[:-1]:  # the first threshold that keeps enough
                 keep = np.flatnonzero(response > t)
                 if keep.size >= self.min_keypoints:
                     xy, desc, response = xy[keep], desc[keep], response[keep]

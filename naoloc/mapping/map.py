@@ -21,9 +21,9 @@ from typing import Any
 from naoloc.config import MapConfig
 from naoloc.keyframe import Keyframe
 from naoloc.lens import Lens
-from naoloc.mapping.builder import ProgressFn, build_map_data
+from naoloc.mapping.builder import ProgressFn, build_map_data, pinhole_features
 from naoloc.mapping.data import MapData
-from naoloc.mapping.features import FeatureExtractor, Features, to_pinhole
+from naoloc.mapping.features import FeatureExtractor, Features
 from naoloc.mapping.landmarks import query_camera
 from naoloc.mapping.localizer import Estimate, LocalizeMode, localize_features, map_extractor
 from naoloc.mapping.mapfile import read_map, save_map
@@ -58,12 +58,7 @@ class VisualMap(MapData):
         models when the survey recorded a distorting lens (``meta["lens"]``)."""
         ex = self.extractor()
         lens = Lens.from_dict(self.meta.get("lens"))  # the same robot's camera as the survey's
-        out = []
-        for q in queries:
-            cam = query_camera(q)
-            found = ex.extract(q.gray())
-            out.append(to_pinhole(found, lens, cam.width, cam.height, cam.hfov, cam.vfov))
-        return out
+        return [pinhole_features(ex, q, query_camera(q), lens) for q in queries]
 
     def localize(
         self, queries: Sequence[Keyframe], mode: LocalizeMode | str = LocalizeMode.VERIFIED
