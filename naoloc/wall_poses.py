@@ -223,9 +223,11 @@ def wall_poses(
     ends: dict[int, tuple[float, float]] = {}
     starts: dict[int, float] = {}
     for k in range(n_sides - 1):
+        if not frames_of[k]:
+            continue  # a side the survey found itself at the end of: no step, no picture
         last = frames_of[k][-1]
         starts[k + 1] = laterals[last]
-        nxt = dist[last + 1]
+        nxt = dist[last + 1] if side_of[last + 1] == k + 1 else None
         if nxt is None:
             continue
         ahead = deltas[last] - turn * math.pi / 2  # heading off side k+1's direction

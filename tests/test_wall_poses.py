@@ -174,3 +174,18 @@ def test_side_distances_need_a_wall_most_lines_agree_on() -> None:
     assert side_distances([None, None], [0.0, 0.0]) is None
     # Two levels of one frame each: no level has three lines
     assert side_distances([1.0, 0.6], [0.0, 0.0]) is None
+
+
+def test_a_side_without_pictures_does_not_break_the_others() -> None:
+    """The survey ends a side before its first step when the front wall says the corner
+    is already there: that side has no frame. The sides before it keep their poses."""
+    keyframes, truth, meta = _survey()
+    keep = [i for i, v in enumerate(meta["vision"]) if v["side_index"] != 2]
+    keyframes = [keyframes[i] for i in keep]
+    truth = [truth[i] for i in keep]
+    meta["vision"] = [meta["vision"][i] for i in keep]
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None
+    before = sum(1 for v in meta["vision"] if v["side_index"] < 2)
+    pos, _ = _errors(walled.keyframes[:before], truth[:before])
+    assert pos.max() < 0.05
