@@ -5,10 +5,11 @@ recognises. The filter keeps ``N`` weighted pose hypotheses in the map frame (me
 radians). Between pictures it moves every particle by the odometry step, with noise at a
 real NAO's magnitudes (see :class:`MotionNoise`); a visual fix (a pose from the map with its
 uncertainty) re-weights them with a Gaussian likelihood mixed with an outlier floor, so one
-wrong fix (a look-alike picture) does not destroy the belief. When fixes keep disagreeing
-with every particle (a kidnapped robot, or a wrong start), it injects particles drawn around
-the fix and over the whole floor, as augmented MCL does (Thrun, Burgard and Fox,
-*Probabilistic Robotics*, ch. 8.3.5), and recovers.
+wrong fix (a look-alike picture) does not destroy the belief. When two fixes in a row disagree
+with every particle but agree with each other over the odometry between them (a kidnapped
+robot, or a wrong start), it injects particles drawn around the fix and over the whole floor,
+as augmented MCL does (Thrun, Burgard and Fox, *Probabilistic Robotics*, ch. 8.3.5), and
+weighs them by that fix, so it recovers in that update.
 
 Everything random takes a seed; the same seed and inputs give the same belief.
 """
@@ -24,11 +25,20 @@ import numpy as np
 
 from naoloc.geometry import Pose2D, modulo2PI, wrap_angles
 
-# Fixes in a row that no particle explains before the belief is drawn afresh.
+# Fixes in a row that no particle explains (and that agree with each other) before the
+# belief is drawn afresh.
 MISSES_TO_RECOVER = 2
+# Gate of a fix, in standard deviations (position and heading together).
+GATE_SIGMAS = 4.0
 # The belief's pose is the mean of the particles within this radius (m) of the densest place,
-# so a few particles elsewhere (injected, or on a look-alike place) do not drag it.
+# so particles elsewhere (injected, or on a look-alike place) do not drag it between modes.
 MODE_RADIUS_M = 0.5
+MODE_CELL_M = 0.25  # grid cell of the density search, m
+# A fix without PnP inliers (the keyframe fallback) errs 0.7-4.5 m and 0.1-1.7 rad (median
+# 1.5 m, 0.7 rad: go-home rounds in rooms 913 and 2718, and the anywhere protocol); its
+# uncertainty says so, so it nudges a lost belief but cannot drag a tracked one.
+FALLBACK_SIGMA_M = 1.5
+FALLBACK_SIGMA_RAD = 1.0
 
 FreeTest = Callable[[np.ndarray, np.ndarray], np.ndarray]
 """``free(xs, ys) -> bool array``: which map-frame positions (m) are free floor."""
@@ -50,6 +60,11 @@ class MotionNoise:
         rot_per_m: Rotation noise per metre walked, rad/m.
         floor_m: Translation noise of any step, however short, m.
         floor_rad: Rotation noise of any step, rad.
+        stall_share: Share of particles that take a walk to have been blocked (a NAO pushing
+            against a chair keeps counting steps it never makes): they move only a random
+            part of the step, up to ``stall_progress``. Then fixes that show the robot stuck
+            are explained, and the belief follows them.
+        stall_progress: Largest share of a blocked step that is made.
     """
 
     trans_per_m: float = 0.12
@@ -58,6 +73,8 @@ class MotionNoise:
     rot_per_m: float = 0.1
     floor_m: float = 0.002
     floor_rad: float = 0.002
+    stall_share: float = 0.1
+    stall_progress: float = 0.3
 
 
 @dataclass(frozen=True)
@@ -102,8 +119,9 @@ class Belief:
 def fix_from_confidence(pose: Pose2D, confidence: float, inliers: int | None = None) -> Fix:
     """A visual fix's uncertainty from the map's confidence (and PnP inliers when known).
 
-    A PnP pose over many inliers is good to a few centimetres; a keyframe-only fallback to a
-    few decimetres. The standard deviation shrinks with the square root of the inliers.
+    A PnP pose over many inliers is good to a few centimetres, and its standard deviation
+    shrinks with the square root of the inliers. A keyframe-only fallback is good to a metre
+    or two (:data:`FALLBACK_SIGMA_M`, a little more at low confidence).
 
     Args:
         pose: The estimate, map frame.
@@ -114,7 +132,8 @@ def fix_from_confidence(pose: Pose2D, confidence: float, inliers: int | None = N
         sigma = max(0.02, 0.4 / math.sqrt(inliers))
         return Fix(pose, sigma, max(0.02, 0.5 / math.sqrt(inliers)))
     c = min(max(confidence, 1e-3), 1.0)
-    return Fix(pose, 0.1 + 0.4 * (1.0 - c), 0.1 + 0.4 * (1.0 - c))
+    unsure = 1.0 + 0.5 * (1.0 - c)
+    return Fix(pose, FALLBACK_SIGMA_M * unsure, FALLBACK_SIGMA_RAD * unsure)
 
 
 def fix_from_estimate(estimate: Any) -> Fix:
@@ -161,6 +180,8 @@ class ParticleFilter:
         self._noise = noise
         self._outlier = outlier
         self.misses = 0
+        # The last fix no particle explained, carried by odometry since, with its sigmas.
+        self._missed: tuple[Pose2D, float, float] | None = None
         self.states = self._uniform(particles)
         self.weights = np.full(particles, 1.0 / particles)
         self.fixes = 0
@@ -218,6 +239,13 @@ class ParticleFilter:
         dx += self._rng.normal(0.0, 0.5 * s_t, n) * (-step.y / d if d > 0 else 0.0)
         dy += self._rng.normal(0.0, 0.5 * s_t, n) * (step.x / d if d > 0 else 0.0)
         dth = step.theta + self._rng.normal(0.0, s_r, n)
+        if nz.stall_share > 0 and d > 0:
+            stalled = self._rng.random(n) < nz.stall_share
+            part = np.where(stalled, self._rng.uniform(0.0, nz.stall_progress, n), 1.0)
+            dx, dy = dx * part, dy * part
+        if self._missed is not None:
+            pose, sxy, sth = self._missed
+            self._missed = (pose * step, math.hypot(sxy, s_t), math.hypot(sth, s_r))
         th = self.states[:, 2]
         c, s = np.cos(th), np.sin(th)
         self.states[:, 0] += c * dx - s * dy
@@ -239,29 +267,52 @@ class ParticleFilter:
     def update(self, fix: Fix) -> None:
         """Weigh the particles by a visual fix, then resample (with recovery injection).
 
-        A fix that no particle explains (no weight within a 4-sigma gate of it) is counted as
-        a disagreement; one alone is taken for a look-alike place and only re-weights. After
-        :data:`MISSES_TO_RECOVER` disagreements in a row the belief is taken to be wrong (a
-        kidnapped robot, a wrong start) and half the particles are drawn afresh, around the
-        fix and over the whole floor.
+        A fix that no particle explains (no weight within a :data:`GATE_SIGMAS` gate of it)
+        is a disagreement; one alone is taken for a look-alike place and only re-weights.
+        When :data:`MISSES_TO_RECOVER` disagreements in a row agree with each other (the
+        earlier one carried by the odometry since, its uncertainty grown by the motion
+        noise), the belief is taken to be wrong (a kidnapped robot, a wrong start): half the
+        particles are drawn afresh, around the fix and over the whole floor, and all are
+        weighed by the fix, so the belief moves to it in this update.
 
         Args:
             fix: The map's pose and its uncertainty, map frame.
         """
-        like = self._likelihood(fix)
-        d2 = (self.states[:, 0] - fix.pose.x) ** 2 + (self.states[:, 1] - fix.pose.y) ** 2
-        dth = wrap_angles(self.states[:, 2] - fix.pose.theta)
-        gate = d2 / fix.sigma_xy_m**2 + dth**2 / fix.sigma_theta_rad**2 < 16.0
+        gate = self._gate(fix, self.states[:, 0], self.states[:, 1], self.states[:, 2])
         explained = float(np.sum(self.weights * gate))
-        self.misses = self.misses + 1 if explained < 1e-3 else 0
         self.fixes += 1
-        w = self.weights * like
+        recover = False
+        if explained >= 1e-3:
+            self.misses, self._missed = 0, None
+        else:
+            agrees = self._missed is None or self._agrees(fix, self._missed)
+            self.misses = self.misses + 1 if agrees else 1
+            self._missed = (fix.pose, fix.sigma_xy_m, fix.sigma_theta_rad)
+            if self.misses >= MISSES_TO_RECOVER:
+                recover = True
+                self.misses, self._missed = 0, None
+        like = self._likelihood(fix)
+        if not recover and float(np.sum(self.weights * like)) <= 0:
+            recover = True
+        if recover:  # the prior becomes the old belief and fresh draws, then weighed by the fix
+            self._resample(0.5, fix)
+        w = self.weights * (self._likelihood(fix) if recover else like)
         total = float(w.sum())
         self.weights = w / total if total > 0 else np.full(self._n, 1.0 / self._n)
-        inject = 0.5 if (self.misses >= MISSES_TO_RECOVER or total <= 0) else 0.0
-        if inject:
-            self.misses = 0
-        self._resample(inject, fix)
+        self._resample(0.0, fix)
+
+    @staticmethod
+    def _gate(fix: Fix, x: Any, y: Any, theta: Any) -> Any:
+        d2 = (x - fix.pose.x) ** 2 + (y - fix.pose.y) ** 2
+        dth = wrap_angles(np.asarray(theta) - fix.pose.theta)
+        return d2 / fix.sigma_xy_m**2 + dth**2 / fix.sigma_theta_rad**2 < GATE_SIGMAS**2
+
+    @staticmethod
+    def _agrees(fix: Fix, missed: tuple[Pose2D, float, float]) -> bool:
+        """Whether a fix agrees with an earlier one carried by odometry (their sigmas summed)."""
+        pose, sxy, sth = missed
+        both = Fix(pose, math.hypot(sxy, fix.sigma_xy_m), math.hypot(sth, fix.sigma_theta_rad))
+        return bool(ParticleFilter._gate(both, fix.pose.x, fix.pose.y, fix.pose.theta))
 
     def _resample(self, inject: float, fix: Fix) -> None:
         n = self._n
@@ -282,17 +333,34 @@ class ParticleFilter:
 
     # ------------------------------------------------------------------ output
     def belief(self) -> Belief:
-        """The weighted mean pose, its covariance and the particle spread."""
-        w = self.weights
-        x = float(np.sum(w * self.states[:, 0]))
-        y = float(np.sum(w * self.states[:, 1]))
-        th = math.atan2(
-            float(np.sum(w * np.sin(self.states[:, 2]))),
-            float(np.sum(w * np.cos(self.states[:, 2]))),
-        )
-        dev = np.column_stack(
-            [self.states[:, 0] - x, self.states[:, 1] - y, wrap_angles(self.states[:, 2] - th)]
-        )
+        """The pose of the densest place, the covariance about it and the particle spread.
+
+        The pose is the weighted mean (circular for the heading) of the particles within
+        :data:`MODE_RADIUS_M` of the densest :data:`MODE_CELL_M` cell, so a belief split
+        between two places reports one of them, not a point between them. The covariance
+        and the spread are taken about that pose over every particle, so such a split shows
+        as a large spread.
+        """
+        w, st = self.weights, self.states
+        x0, y0 = float(np.min(st[:, 0])), float(np.min(st[:, 1]))
+        ix = ((st[:, 0] - x0) / MODE_CELL_M).astype(np.int64)
+        iy = ((st[:, 1] - y0) / MODE_CELL_M).astype(np.int64)
+        cells = np.zeros((int(ix.max()) + 1, int(iy.max()) + 1))
+        np.add.at(cells, (ix, iy), w)
+        bx, by = np.unravel_index(int(np.argmax(cells)), cells.shape)
+        cx = x0 + (float(bx) + 0.5) * MODE_CELL_M
+        cy = y0 + (float(by) + 0.5) * MODE_CELL_M
+        for _ in range(2):  # two mean-shift steps from the densest cell's centre
+            near = np.hypot(st[:, 0] - cx, st[:, 1] - cy) <= MODE_RADIUS_M
+            wn = w * near
+            if float(wn.sum()) <= 0:
+                break
+            cx = float(np.sum(wn * st[:, 0]) / wn.sum())
+            cy = float(np.sum(wn * st[:, 1]) / wn.sum())
+        near = np.hypot(st[:, 0] - cx, st[:, 1] - cy) <= MODE_RADIUS_M
+        wn = w * near if float(np.sum(w * near)) > 0 else w
+        th = math.atan2(float(np.sum(wn * np.sin(st[:, 2]))), float(np.sum(wn * np.cos(st[:, 2]))))
+        dev = np.column_stack([st[:, 0] - cx, st[:, 1] - cy, wrap_angles(st[:, 2] - th)])
         cov = (dev * w[:, None]).T @ dev
         spread = math.sqrt(max(0.0, float(np.linalg.eigvalsh(cov[:2, :2]).max())))
-        return Belief(Pose2D(x, y, modulo2PI(th)), cov, 1.0 / float(np.sum(w**2)), spread)
+        return Belief(Pose2D(cx, cy, modulo2PI(th)), cov, 1.0 / float(np.sum(w**2)), spread)

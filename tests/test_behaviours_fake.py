@@ -80,7 +80,9 @@ class TruthMap:
             Pose2D.from_list(self.meta["origin_room_pose"]),
             Pose2D.from_list(self.robot.sim.true_pose()),
         )
-        return Estimate(truth.x + offset[0], truth.y + offset[1], truth.theta, 1.0, mode)
+        # A verified PnP estimate over many inliers: the filter trusts it to a few cm.
+        details = {"method": "pnp", "inliers": 200}
+        return Estimate(truth.x + offset[0], truth.y + offset[1], truth.theta, 1.0, mode, details)
 
 
 def test_survey_walks_the_rectangle_and_records_each_step() -> None:
@@ -264,7 +266,7 @@ class UnsureMap(TruthMap):
         conf = self.confidences[min(len(self.calls), len(self.confidences)) - 1]
         if conf <= 0.0:  # recognised nothing
             return no_estimate(mode, "test: nothing recognised")
-        return Estimate(est.x, est.y, est.theta, conf, mode)
+        return Estimate(est.x, est.y, est.theta, conf, mode, est.details)
 
 
 @pytest.mark.parametrize(
