@@ -13,6 +13,7 @@ within ``go_home.tolerance_m`` of the origin, or after ``go_home.max_tries`` wal
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -179,6 +180,9 @@ def go_home(
     walked = 0.0
     pf: ParticleFilter | None = None
     last_leg: tuple[Pose2D, float, float] | None = None  # start fix, odometry m, aim rad
+    # Odometry after each move since the last localization: the filter moves by each in
+    # turn, so its noise grows with every turn made, not with the net change of heading.
+    moves: list[Pose2D] = []
     with Camera(robot, cfg.localize.camera(cfg.camera), "naoloc_go_home") as camera:
         try:
             odo_prev = pose_of(robot.motion, True)
@@ -189,9 +193,12 @@ def go_home(
                     on_round(tries, loc)
                 est = loc.estimate
                 odo = pose_of(robot.motion, True)
-                if pf is not None:
-                    pf.predict(relative_pose(odo_prev, odo))
+                if pf is not None:  # move by each walk and turn since the last fix, in order
+                    chain = [odo_prev, *moves, *(q.pose for q in loc.queries), odo]
+                    for a, b in itertools.pairwise(chain):
+                        pf.predict(relative_pose(a, b))
                 odo_prev = odo
+                moves.clear()
                 if last_leg is not None and est.found and est.method == "pnp":
                     stalled = _stalled(last_leg, est.pose())
                     if stalled is not None:
@@ -215,7 +222,7 @@ def go_home(
                         break
                     # Nothing recognised all around and no fix yet: explore a little.
                     lost_steps += 1
-                    walked += _walk_straight(robot, LOST_STEP_M)
+                    walked += _walk_straight(robot, LOST_STEP_M, moves)
                     continue
                 here = belief.pose
                 trail.append(here)
@@ -223,7 +230,7 @@ def go_home(
                 if est.found and confident and math.hypot(here.x, here.y) <= tolerance:
                     reached = True
                     if math.hypot(here.x, here.y) > RESIDUAL_M:  # the last few centimetres
-                        dist, end = _settle(robot, here)
+                        dist, end = _settle(robot, here, moves)
                         walked += dist
                         trail.append(end)
                     break
@@ -239,7 +246,7 @@ def go_home(
                 leg = _densify(here, truncate_route(here, route, _leg_length(
                     here, route, leg_m if confident else UNSURE_LEG_M
                 )))  # fmt: skip
-                ok, dist, end = _follow(robot, here, leg, ends_home=leg[-1] == route[-1])
+                ok, dist, end = _follow(robot, here, leg, moves, ends_home=leg[-1] == route[-1])
                 walked += dist
                 trail.append(end)
                 if est.found and est.method == "pnp":
@@ -288,8 +295,10 @@ def _stalled(leg: tuple[Pose2D, float, float], fix: Pose2D) -> Pose2D | None:
     return Pose2D(fix.x, fix.y, aim) * Pose2D(BUMP_AHEAD_M, 0.0)
 
 
-def _settle(robot: Robot, here: Pose2D) -> tuple[float, Pose2D]:
+def _settle(robot: Robot, here: Pose2D, moves: list[Pose2D]) -> tuple[float, Pose2D]:
     """Side-step from ``here`` onto the origin without turning, then turn to face map +x.
+
+    The odometry pose after each move is appended to ``moves``.
 
     Returns:
         The odometry distance walked (m) and where odometry says it ended (map frame).
@@ -297,19 +306,25 @@ def _settle(robot: Robot, here: Pose2D) -> tuple[float, Pose2D]:
     odo0 = pose_of(robot.motion, True)
     step = relative_pose(here, Pose2D(0.0, 0.0, here.theta))
     if robot.motion.moveTo(step.x, step.y, 0.0):
-        now = here * relative_pose(odo0, pose_of(robot.motion, True))
+        moves.append(pose_of(robot.motion, True))
+        now = here * relative_pose(odo0, moves[-1])
         robot.motion.moveTo(0.0, 0.0, modulo2PI(-now.theta))
     robot.motion.stopMove()
+    moves.append(pose_of(robot.motion, True))
     odo = pose_of(robot.motion, True)
     return odo0.distance(odo), here * relative_pose(odo0, odo)
 
 
-def _walk_straight(robot: Robot, distance_m: float) -> float:
-    """Walk forward (False at an obstacle is fine); the odometry distance walked, m."""
+def _walk_straight(robot: Robot, distance_m: float, moves: list[Pose2D]) -> float:
+    """Walk forward (False at an obstacle is fine); the odometry distance walked, m.
+
+    The odometry pose after the walk is appended to ``moves``.
+    """
     before = pose_of(robot.motion, True)
     robot.motion.moveTo(distance_m, 0.0, 0.0)
     robot.motion.stopMove()
-    return before.distance(pose_of(robot.motion, True))
+    moves.append(pose_of(robot.motion, True))
+    return before.distance(moves[-1])
 
 
 def _densify(here: Pose2D, route: list[Pose2D], spacing: float = WAYPOINT_M) -> list[Pose2D]:
@@ -356,13 +371,19 @@ def truncate_route(here: Pose2D, route: list[Pose2D], length_m: float) -> list[P
 
 
 def _follow(
-    robot: Robot, start: Pose2D, route: list[Pose2D], *, ends_home: bool = True
+    robot: Robot,
+    start: Pose2D,
+    route: list[Pose2D],
+    moves: list[Pose2D],
+    *,
+    ends_home: bool = True,
 ) -> tuple[bool, float, Pose2D]:
     """Walk through map-frame waypoints by odometry from ``start``.
 
     Each waypoint is approached facing it; when ``ends_home``, the robot then turns in place
     to face map +x at the last one (the origin). Turning apart from walking keeps a NAO's
-    turn error (~6 % of the angle) out of where it arrives.
+    turn error (~6 % of the angle) out of where it arrives. The odometry pose after each
+    move is appended to ``moves``.
 
     Returns:
         Whether every move succeeded, the odometry distance walked (m), and where odometry
@@ -386,6 +407,7 @@ def _follow(
             move = relative_pose(here, Pose2D(point.x, point.y, heading))
         moved = robot.motion.moveTo(move.x, move.y, move.theta)
         now = pose_of(robot.motion, True)
+        moves.append(now)
         walked += prev.distance(now)
         prev = now
         if not moved:
