@@ -395,6 +395,11 @@ class BundleTuning(_Model):
         (1e-3, 1e-7, 1e4),
         description="Levenberg-Marquardt damping: start, least, largest (gives up)",
     )
+    wall_prior_sigma: tuple[float, float] | None = Field(
+        (0.1, 0.01),
+        description="hold wall-referenced keyframe poses near where the walls put them: "
+        "position (m), heading (rad); null = no such prior",
+    )
 
 
 class LocalizerTuning(_Model):

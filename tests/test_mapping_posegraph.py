@@ -8,6 +8,7 @@ simulators' (scale, heading bias per metre, noise). Everything is seeded.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 from dataclasses import dataclass
@@ -390,3 +391,29 @@ def test_mapping_modules_import_no_circle() -> None:
 
     for mod in sorted(graph):
         visit(mod, ())
+
+
+def test_wall_pose_priors_hold_the_adjustment(scene: Scene) -> None:
+    """Edges that carry a bend (odometry bent 0.004 rad per keyframe) bend the adjusted
+    poses; priors at the wall-referenced (here: true) poses pull them back."""
+    n = 30
+    k = [CAM.matrix()] * n
+    heads = np.tile(np.array(HEAD), (n, 1))
+    bent = scene.truth[:n].copy()
+    for i in range(1, n):  # each step turned a little more than truly: the path bends
+        z = relative(scene.truth[i - 1], scene.truth[i])
+        c, s = math.cos(bent[i - 1, 2]), math.sin(bent[i - 1, 2])
+        bent[i] = [bent[i - 1, 0] + c * z[0] - s * z[1], bent[i - 1, 1] + s * z[0] + c * z[1],
+                   bent[i - 1, 2] + z[2] + 0.004]  # fmt: skip
+    cams = np.stack([camera_matrix_in_map(p, *HEAD, 0) for p in bent])
+    lm = triangulate(scene.xy[:n], scene.desc[:n], cams, k, True)
+    kp_xy = np.concatenate(scene.xy[:n])
+    frame = np.repeat(np.arange(n), [len(a) for a in scene.xy[:n]])
+    tracks = tracks_from_links(kp_xy.shape[0], lm.matches)
+    free = BundleProblem(bent, heads, [0] * n, k, kp_xy, frame, tracks, lm.points,
+                         odometry_edges(bent))  # fmt: skip
+    held = dataclasses.replace(free, priors=scene.truth[:n].copy(), prior_sigma=(0.05, 0.005))
+    err_free = _errors(bundle_adjust(free).poses, scene.truth[:n])
+    err_held = _errors(bundle_adjust(held).poses, scene.truth[:n])
+    assert err_held[1] < 0.5 * err_free[1]
+    assert err_held[0] < err_free[0]

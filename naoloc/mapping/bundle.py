@@ -45,6 +45,9 @@ class BundleProblem:
         points: ``(M, 3)`` initial 3-D point of each keypoint (map frame), NaN if none.
         edges: Pose-graph edges (odometry edges carry the heading bias).
         graph: Pose-graph tuning (the heading-bias prior of the edges' cost).
+        priors: ``(N, 3)`` absolute poses each keyframe is held near (map frame), e.g. the
+            wall-referenced poses; None for none.
+        prior_sigma: Standard deviations of those priors: position (m), heading (rad).
     """
 
     poses: np.ndarray
@@ -57,6 +60,19 @@ class BundleProblem:
     points: np.ndarray
     edges: Sequence[Edge]
     graph: PoseGraphTuning = field(default_factory=PoseGraphTuning)
+    priors: np.ndarray | None = None
+    prior_sigma: tuple[float, float] = (0.05, 0.01)
+
+
+def _prior_terms(problem: BundleProblem, x: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """Whitened residuals ``(N, 3)`` of the pose priors and their weights, or None."""
+    if problem.priors is None:
+        return None
+    r = x - problem.priors
+    r[:, 2] = np.remainder(r[:, 2] + np.pi, 2 * np.pi) - np.pi
+    sxy, sth = problem.prior_sigma
+    w = np.array([1.0 / sxy**2, 1.0 / sxy**2, 1.0 / sth**2])
+    return r, w
 
 
 @dataclass(frozen=True)
@@ -257,7 +273,11 @@ def _cost(
     e = np.where(z > tuning.min_depth_m, e, tuning.max_error_px)
     hub = tuning.huber_px
     rho = np.where(e <= hub, e**2, 2 * hub * e - hub**2)
-    return float(rho.sum()) + graph_cost(x, problem.edges, bias, problem.graph.sigma_bias_prior)
+    prior = _prior_terms(problem, x)
+    held = 0.0 if prior is None else float(np.sum(prior[0] ** 2 * prior[1]))
+    return (
+        float(rho.sum()) + held + graph_cost(x, problem.edges, bias, problem.graph.sigma_bias_prior)
+    )
 
 
 @dataclass(frozen=True)
@@ -302,6 +322,12 @@ def _normal_equations(
         st.x, problem.edges, st.bias, estimate_bias=True,
         sigma_bias_prior=problem.graph.sigma_bias_prior,
     )  # fmt: skip
+    prior = _prior_terms(problem, st.x)
+    if prior is not None:
+        r_p, w_p = prior
+        n3 = r_p.size
+        h_graph[np.arange(n3), np.arange(n3)] += np.tile(w_p, r_p.shape[0])
+        g_graph[:n3] += (r_p * w_p).ravel()
     return _Normal(k_, t_, hpp, hpl, hl, gp, gll, h_graph, g_graph)
 
 
