@@ -18,6 +18,7 @@ import pytest
 from naoloc import connect
 from naoloc.behaviours import SCAN_YAWS, frames_per_lap, go_home, localize, survey
 from naoloc.behaviours.camera import Camera, stand
+from naoloc.behaviours.localize import PAPER_SECOND_OFFSET
 from naoloc.behaviours.nearest_wall import detect_wall_by_parallax
 from naoloc.commands.survey import record_survey
 from naoloc.config import Config, load_config
@@ -202,7 +203,10 @@ def test_localize_never_translates_and_reports_error(strategy: str) -> None:
     assert loc.error_m == pytest.approx(0.5, abs=1e-6)
     assert loc.truth is not None and loc.truth.distance(relative_pose(origin, after)) < 1e-9
     yaws = [q.head_yaw for q in loc.queries]
-    assert max(yaws) - min(yaws) > (3.5 if strategy == "scan" else 0.4)
+    if strategy == "scan":
+        assert max(yaws) - min(yaws) > 3.5
+    else:  # two looks at the nearest wall, the second a little nearer its normal
+        assert abs(yaws[1]) - abs(yaws[0]) == pytest.approx(PAPER_SECOND_OFFSET, abs=0.02)
     summary = loc.summary()
     assert summary["error_m"] == pytest.approx(0.5, abs=1e-3) and "heading_error_deg" in summary
 
