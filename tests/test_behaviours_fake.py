@@ -367,3 +367,17 @@ def test_go_home_steps_when_nothing_is_recognised() -> None:
     n = len(SCAN_YAWS)  # pictures per sweep
     assert vmap.calls[:5] == [n, 2 * n, 3 * n, 4 * n, n]
     assert result.reached and result.error_m is not None and result.error_m < 0.15
+
+
+def test_go_home_legs_stop_short_and_stalls_are_seen() -> None:
+    from naoloc.behaviours.go_home import FINAL_LEG_M, _leg_length, _stalled
+
+    here = Pose2D(1.5, 0.0, math.pi)
+    home = [Pose2D(0.0, 0.0)]
+    assert _leg_length(here, home, 2.0) == pytest.approx(1.5 - FINAL_LEG_M / 2)
+    assert _leg_length(Pose2D(0.5, 0.0), home, 2.0) == 2.0  # near: the whole way
+    assert _leg_length(Pose2D(4.0, 0.0), home, 2.0) == 2.0  # far: a full leg
+    # 0.5 m of odometry, but the fixes before and after are 5 cm apart: blocked ahead.
+    bump = _stalled((Pose2D(2.0, 1.0), 0.5, 0.0), Pose2D(2.05, 1.0))
+    assert bump is not None and bump.x == pytest.approx(2.05 + 0.3) and bump.y == 1.0
+    assert _stalled((Pose2D(2.0, 1.0), 0.5, 0.0), Pose2D(2.45, 1.0)) is None

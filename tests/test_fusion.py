@@ -117,3 +117,33 @@ def test_fix_uncertainty_shrinks_with_inliers() -> None:
     with pytest.raises(ValueError, match="at least 10"):
         ParticleFilter(3)
     assert math.isfinite(many.sigma_theta_rad)
+
+
+def test_a_walk_that_went_nowhere_is_explained() -> None:
+    """A NAO pushing against a chair counts steps it never makes: fixes that show it stuck
+    move the belief back (stalled particles), where a plain motion model would ignore them."""
+    here = Pose2D(2.0, 2.0, 0.0)
+    pf = ParticleFilter(2000, seed=9, bounds=BOUNDS)
+    pf.reset_to(Fix(here, 0.05, 0.05))
+    for _ in range(2):
+        pf.predict(Pose2D(0.5, 0.0, 0.0))  # odometry: 0.5 m forward; truly: not a step
+        pf.update(Fix(here, 0.05, 0.05))
+    assert pf.belief().pose.distance(here) < 0.1
+
+
+def test_a_wrong_start_gives_way_to_two_fixes_that_agree() -> None:
+    """Started from a look-alike place, two consistent fixes elsewhere take over at once;
+    two unrelated wrong fixes do not hijack a belief."""
+    wrong, right = Pose2D(1.0, 3.5, 2.0), Pose2D(3.5, 1.0, -0.8)
+    pf = ParticleFilter(2000, seed=10, bounds=BOUNDS)
+    pf.reset_to(Fix(wrong, 0.09, 0.1))
+    step = Pose2D(0.4, 0.0, 0.3)
+    pf.update(Fix(right, 0.05, 0.06))
+    pf.predict(step)
+    pf.update(Fix(right * step, 0.05, 0.06))
+    assert pf.belief().pose.distance(right * step) < 0.1
+    held = ParticleFilter(2000, seed=11, bounds=BOUNDS)
+    held.reset_to(Fix(right, 0.05, 0.05))
+    held.update(Fix(wrong, 0.05, 0.05))
+    held.update(Fix(Pose2D(4.0, 4.0, 0.0), 0.05, 0.05))
+    assert held.belief().pose.distance(right) < 0.1

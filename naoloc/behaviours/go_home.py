@@ -5,10 +5,13 @@ until it is confident) and fuses the fix with the odometry walked since the last
 particle filter (:mod:`naoloc.fusion`). From the filter's pose it plans a path home over the
 floor grid the map implies (:mod:`naoloc.planning`: the floor the survey walked is free,
 walls and furniture seen as landmarks near the floor are blocked), walks the first leg of it
-(at most ``leg_m``) open-loop on odometry with ``moveTo``, and localizes again. A blocked walk
-(``moveTo`` returns False: an obstacle the map did not know) marks the place ahead of the
-robot blocked and the next plan goes around it. It stops when a fresh fix puts the robot
-within ``go_home.tolerance_m`` of the origin, or after ``go_home.max_tries`` walks.
+(at most ``leg_m``; a leg that would arrive from farther than ``FINAL_LEG_M`` stops short)
+open-loop on odometry with ``moveTo``, and localizes again. A blocked walk (``moveTo``
+returns False, or the fixes before and after a leg show the robot went nowhere while its
+odometry counted steps) marks the place ahead of the robot blocked and the next plan goes
+around it. When a fresh fix puts the robot within ``go_home.tolerance_m`` of the origin it
+side-steps the residual, turns to face map +x and localizes again (up to ``SETTLES``
+times); it stops there, or after ``go_home.max_tries`` walks.
 """
 
 from __future__ import annotations
@@ -106,8 +109,11 @@ UNSURE_LEG_M = 0.5
 # through the last FINAL_LEG_M and localizes again, so the last leg's odometry error (a NAO
 # drifts sideways ~0.1-0.3 m over 1.5 m) is that of a short walk.
 FINAL_LEG_M = 0.8
-# Once a fix puts it within the tolerance, a residual longer than this (m) is walked too.
+# Once a fix puts it within the tolerance, a residual longer than this (m) is walked too
+# (a side-step, then a turn to face map +x), and a fresh localization checks where it is:
+# at most SETTLES times, then it stops on the tolerance alone.
 RESIDUAL_M = 0.03
+SETTLES = 2
 # Waypoints at most this far apart (m): each moveTo is re-aimed from odometry.
 WAYPOINT_M = 0.75
 # A belief is confident when its particles lie within this radius (m).
@@ -174,7 +180,7 @@ def go_home(
     beliefs: list[Belief | None] = []
     trail: list[Pose2D] = []
     bumps: list[Pose2D] = []
-    tries = lost_steps = 0
+    tries = lost_steps = settles = 0
     reached = False
     reason = ""
     walked = 0.0
@@ -228,12 +234,14 @@ def go_home(
                 trail.append(here)
                 confident = belief.spread_m <= CONFIDENT_SPREAD_M
                 if est.found and confident and math.hypot(here.x, here.y) <= tolerance:
-                    reached = True
-                    if math.hypot(here.x, here.y) > RESIDUAL_M:  # the last few centimetres
-                        dist, end = _settle(robot, here, moves)
-                        walked += dist
-                        trail.append(end)
-                    break
+                    if math.hypot(here.x, here.y) <= RESIDUAL_M or settles >= SETTLES:
+                        reached = True
+                        break
+                    dist, end = _settle(robot, here, moves)  # the last few centimetres
+                    walked += dist
+                    trail.append(end)
+                    settles += 1
+                    continue  # localize again where it stopped
                 if tries >= cfg.go_home.max_tries:
                     reason = f"not home after {tries} walks"
                     break
