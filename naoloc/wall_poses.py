@@ -50,6 +50,13 @@ LINE_STD_M: Final = 0.03  # a floor line's distance, one sigma (NAO's lens reads
 LINE_STD_RAD: Final = 0.01  # and its angle
 MIN_ANGLE_GATE_RAD: Final = 0.12  # an angle this close to the prediction is always used
 EDGE_M: Final = 0.2  # a side line that jumps more between frames sees another thing
+# The survey start's heading to its wall is its own line's, unless side 0's frames within
+# this walk (m), each turned back by the odometry's turn since the start, agree on another
+# (their median more than START_GATE_RAD away): one line at the start, seen past a piece of
+# furniture, once turned a whole map 0.2 rad. The frames carry the odometry's turn error
+# (6 % of the survey's first steering), so the start's own line is preferred.
+START_HEADING_M: Final = 1.0
+START_GATE_RAD: Final = 0.06
 WALL_LEVEL_M: Final = 0.1  # stretches whose levels are this close see the same thing
 MIN_WALL_FRAMES: Final = 3  # frames that must see a side's wall
 WALL_SUPPORT: Final = 0.2  # and the share of the side's lines that must
@@ -251,6 +258,10 @@ def wall_poses(
         poses.append(Pose2D(float(position[0]), float(position[1]), modulo2PI(d + deltas[i])))
 
     start = _start_pose(meta.get("start_side"), offset, side_normal)
+    heading = _start_heading(start_line, keyframes, vision, frames_of[0], along, offset,
+                             side_normal)  # fmt: skip
+    if heading is not None:
+        start = Pose2D(start.x, start.y, heading)
     if start_dist is not None:  # the origin's distance from side 0's wall, not what it saw
         start = Pose2D(0.0, (start_dist - offset) * turn, start.theta)
     out = [
@@ -451,6 +462,35 @@ def side_distances(
             out[i] = nxt - inward[i + 1]
     on_wall = [v is not None and abs(v - wall) < WALL_LEVEL_M for v in levels]
     return [float(v) for v in out if v is not None], on_wall
+
+
+def _start_heading(
+    start_line: tuple[float, float] | None,
+    keyframes: Sequence[Keyframe],
+    vision: Sequence[dict[str, Any]],
+    side0: Sequence[int],
+    along: np.ndarray,
+    offset: float,
+    side_normal: float,
+) -> float | None:
+    """The survey start's heading to side 0's wall (rad), or None without any line.
+
+    The start's own line, unless side 0's frames' lines within :data:`START_HEADING_M` of
+    walk, each less the odometry's turn from the start to its frame (the map frame is the
+    start's odometry frame), have a median more than :data:`START_GATE_RAD` away from it:
+    then that median.
+    """
+    votes = []
+    for i in side0:
+        if along[i] > START_HEADING_M:
+            break
+        line = _line(vision[i].get("side"), offset, side_normal)
+        if line is not None:
+            votes.append(modulo2PI(line[1] - keyframes[i].pose.theta))
+    frames = float(np.median(votes)) if votes else None
+    if start_line is None or frames is None:
+        return frames if start_line is None else start_line[1]
+    return start_line[1] if abs(modulo2PI(frames - start_line[1])) <= START_GATE_RAD else frames
 
 
 def _start_pose(entry: Any, offset: float, side_normal: float) -> Pose2D:

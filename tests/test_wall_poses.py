@@ -189,3 +189,20 @@ def test_a_side_without_pictures_does_not_break_the_others() -> None:
     before = sum(1 for v in meta["vision"] if v["side_index"] < 2)
     pos, _ = _errors(walled.keyframes[:before], truth[:before])
     assert pos.max() < 0.05
+
+
+def test_a_start_line_at_a_wrong_angle_does_not_turn_the_map() -> None:
+    """The start's line, seen past furniture, reads the wall 0.2 rad off; side 0's first
+    frames (turned back by the odometry) agree on the true heading, so the map is not
+    turned by 0.2 rad (which put room 1039376744's poses 0.73 m off)."""
+    keyframes, truth, meta = _survey()
+    meta["start_side"] = {"distance_m": OFFSET, "normal_rad": SIDE_NORMAL + 0.2}
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None
+    pos, head = _errors(walled.keyframes, truth)
+    assert head.max() < 0.04 and pos.max() < 0.15  # 0.2 rad and ~0.6 m had it been used
+    # A start line within the gate is kept: the frames carry the odometry's turn error.
+    meta["start_side"] = {"distance_m": OFFSET, "normal_rad": SIDE_NORMAL + 0.03}
+    kept = wall_poses(keyframes, meta, offset=OFFSET)
+    assert kept is not None
+    assert np.median(_errors(kept.keyframes, truth)[1]) == pytest.approx(0.03, abs=0.005)
