@@ -44,6 +44,7 @@ MAX_OFFSET_ERROR_M: Final = 0.5  # a side line farther than this from the offset
 MAX_ANGLE_ERROR_RAD: Final = 0.35  # nor one at a larger angle to the expected wall
 MIN_CORNER_TURN_RAD: Final = math.pi / 4  # an odometry turn this large between frames: corner
 SCALE_RANGE: Final = (0.7, 1.4)  # a side's metres per odometry metre outside this: not used
+TURN_SCALE_RANGE: Final = (0.8, 1.25)  # odometry turn per true turn outside this: not used
 MIN_CORNER_FRACTION: Final = 0.5  # sides whose corner a front line must have placed
 MAX_FRONT_M: Final = 2.2  # front lines are checked to 2.2 m (tools/floorline_accuracy.py)
 LINE_STD_M: Final = 0.03  # a floor line's distance, one sigma (NAO's lens reads 2-4 cm long)
@@ -70,11 +71,15 @@ class WallPoses:
         keyframes: The keyframes with ``pose`` replaced (map frame).
         side_scales: Metres per odometry metre of each side walked (None: no corner seen).
         lines_used: Keyframes whose pose used their side wall's line.
+        turn_scale: The odometry's turn per true turn at the survey's corners (the walls
+            give the true headings), None when no corner was turned or it reads implausibly;
+            the localizer undoes it in the turns it makes in place.
     """
 
     keyframes: list[Keyframe]
     side_scales: list[float | None]
     lines_used: int
+    turn_scale: float | None = None
 
     def summary(self) -> dict[str, Any]:
         """JSON-able facts for the map's meta."""
@@ -85,6 +90,7 @@ class WallPoses:
             "median_scale": None if not known else round(float(np.median(known)), 4),
             "lines_used": self.lines_used,
             "frames": len(self.keyframes),
+            "turn_scale": None if self.turn_scale is None else round(self.turn_scale, 4),
         }
 
 
@@ -268,7 +274,38 @@ def wall_poses(
         dataclasses.replace(kf, pose=start.inverse() * p, command_pose=None)
         for kf, p in zip(keyframes, poses, strict=True)
     ]
-    return WallPoses(out, scales, used)
+    spin = _turn_scale(keyframes, side_of, vision, offset, side_normal, turn)
+    return WallPoses(out, scales, used, spin)
+
+
+def _turn_scale(
+    keyframes: Sequence[Keyframe],
+    side_of: Sequence[int],
+    vision: Sequence[dict[str, Any]],
+    offset: float,
+    side_normal: float,
+    turn: float,
+) -> float | None:
+    """Odometry turn per true turn at the corners.
+
+    At each corner with a side line on both frames around it, the true turn is the quarter
+    turn plus the change of the robot's heading to its wall, as the two lines read it (raw:
+    the filtered headings lag a turn); the odometry's is its own heading change.
+    """
+    odo = true = 0.0
+    for i in range(1, len(keyframes)):
+        if side_of[i] == side_of[i - 1]:
+            continue
+        before = _line(vision[i - 1].get("side"), offset, side_normal)
+        after = _line(vision[i].get("side"), offset, side_normal)
+        if before is None or after is None:
+            continue
+        quarter = turn * math.pi / 2 * (side_of[i] - side_of[i - 1])
+        true += abs(quarter + after[1] - before[1])
+        odo += abs(modulo2PI(keyframes[i].pose.theta - keyframes[i - 1].pose.theta))
+    if true == 0.0 or not TURN_SCALE_RANGE[0] <= odo / true <= TURN_SCALE_RANGE[1]:
+        return None
+    return odo / true
 
 
 class _SideTrack:

@@ -25,7 +25,11 @@ SIDE_NORMAL = -math.pi / 2
 
 
 def _survey(
-    scale: float = 1.03, drift: float = 0.01, laps: int = 2, outlier_at: int | None = None
+    scale: float = 1.03,
+    drift: float = 0.01,
+    laps: int = 2,
+    outlier_at: int | None = None,
+    turn_scale: float = 1.0,
 ) -> tuple[list[Keyframe], list[Pose2D], dict[str, Any]]:
     """(keyframes with odometry poses, true poses in the map frame, survey meta)."""
     truth: list[Pose2D] = []
@@ -52,7 +56,8 @@ def _survey(
     previous = Pose2D()
     for t in truth:
         step = previous.inverse() * t
-        noisy = Pose2D(step.x * scale, step.y * scale, step.theta + drift)
+        turned = math.remainder(step.theta, 2 * math.pi) * turn_scale  # the turn, scaled
+        noisy = Pose2D(step.x * scale, step.y * scale, turned + drift)
         odometry.append(odometry[-1] * noisy)
         previous = t
     image = np.zeros((8, 8), np.uint8)
@@ -206,3 +211,13 @@ def test_a_start_line_at_a_wrong_angle_does_not_turn_the_map() -> None:
     kept = wall_poses(keyframes, meta, offset=OFFSET)
     assert kept is not None
     assert np.median(_errors(kept.keyframes, truth)[1]) == pytest.approx(0.03, abs=0.005)
+
+
+def test_the_corners_measure_the_odometrys_turn_scale() -> None:
+    """Odometry that reads turns 5 % large: the walls' headings at the corners say so."""
+    keyframes, truth, meta = _survey(drift=0.0, turn_scale=1.05)
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None
+    assert walled.turn_scale == pytest.approx(1.05, abs=0.002)
+    assert walled.summary()["turn_scale"] == pytest.approx(1.05, abs=0.002)
+    assert _errors(walled.keyframes, truth)[1].max() < 0.01

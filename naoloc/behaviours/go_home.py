@@ -173,8 +173,11 @@ def go_home(
     Raises:
         MotionError: A turn in place while localizing failed (the robot is stopped).
     """
+    from naoloc.mapping.localizer import turn_scale_of
+
     tolerance = cfg.go_home.tolerance_m
     grid = floor_grid(vmap)
+    spin = turn_scale_of(vmap)
     home = Pose2D()
     rounds: list[Localization] = []
     beliefs: list[Belief | None] = []
@@ -202,7 +205,8 @@ def go_home(
                 if pf is not None:  # move by each walk and turn since the last fix, in order
                     chain = [odo_prev, *moves, *(q.pose for q in loc.queries), odo]
                     for a, b in itertools.pairwise(chain):
-                        pf.predict(relative_pose(a, b))
+                        step = relative_pose(a, b)  # its turn as the survey calibrated it
+                        pf.predict(Pose2D(step.x, step.y, step.theta / spin))
                 odo_prev = odo
                 moves.clear()
                 if last_leg is not None and est.found and est.method == "pnp":
