@@ -540,7 +540,13 @@ class GoHomeConfig(_Model):
     """Walk back to the map origin."""
 
     tolerance_m: float = Field(0.15, gt=0, description="stop when this close to the origin (m)")
-    max_tries: int = Field(5, ge=1, le=50, description="localize-and-walk rounds")
+    max_tries: int = Field(
+        8,
+        ge=1,
+        le=50,
+        description="walks toward the origin (each at most 2 m; the last stops short of "
+        "home and a side-step settles it)",
+    )
 
 
 class Config(_Model):
