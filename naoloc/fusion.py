@@ -26,8 +26,13 @@ import numpy as np
 from naoloc.geometry import Pose2D, modulo2PI, wrap_angles
 
 # Fixes in a row that no particle explains (and that agree with each other) before the
-# belief is drawn afresh.
+# belief is drawn afresh: MISSES_TO_RECOVER when the robot walked at least RECOVER_WALK_M
+# between the first and the last of them, else MISSES_STILL. From one spot a look-alike
+# (two copies of a print 0.5 m apart) answers the same wrong way every time; a wrong belief
+# shows over a walk.
 MISSES_TO_RECOVER = 2
+MISSES_STILL = 4
+RECOVER_WALK_M = 0.3
 # Gate of a fix, in standard deviations (position and heading together).
 GATE_SIGMAS = 4.0
 # The belief's pose is the mean of the particles within this radius (m) of the densest place,
@@ -182,6 +187,7 @@ class ParticleFilter:
         self.misses = 0
         # The last fix no particle explained, carried by odometry since, with its sigmas.
         self._missed: tuple[Pose2D, float, float] | None = None
+        self._walked_since_miss = 0.0  # odometry distance since the first of those fixes, m
         self.states = self._uniform(particles)
         self.weights = np.full(particles, 1.0 / particles)
         self.fixes = 0
@@ -246,6 +252,7 @@ class ParticleFilter:
         if self._missed is not None:
             pose, sxy, sth = self._missed
             self._missed = (pose * step, math.hypot(sxy, s_t), math.hypot(sth, s_r))
+            self._walked_since_miss += d
         th = self.states[:, 2]
         c, s = np.cos(th), np.sin(th)
         self.states[:, 0] += c * dx - s * dy
@@ -271,9 +278,11 @@ class ParticleFilter:
         is a disagreement; one alone is taken for a look-alike place and only re-weights.
         When :data:`MISSES_TO_RECOVER` disagreements in a row agree with each other (the
         earlier one carried by the odometry since, its uncertainty grown by the motion
-        noise), the belief is taken to be wrong (a kidnapped robot, a wrong start): half the
-        particles are drawn afresh, around the fix and over the whole floor, and all are
-        weighed by the fix, so the belief moves to it in this update.
+        noise) and the robot walked :data:`RECOVER_WALK_M` between them (else
+        :data:`MISSES_STILL` of them), the belief is taken to be wrong (a kidnapped robot,
+        a wrong start): half the particles are drawn afresh, around the fix and over the
+        whole floor, and all are weighed by the fix, so the belief moves to it in this
+        update.
 
         Args:
             fix: The map's pose and its uncertainty, map frame.
@@ -287,8 +296,11 @@ class ParticleFilter:
         else:
             agrees = self._missed is None or self._agrees(fix, self._missed)
             self.misses = self.misses + 1 if agrees else 1
+            if self.misses == 1:
+                self._walked_since_miss = 0.0
             self._missed = (fix.pose, fix.sigma_xy_m, fix.sigma_theta_rad)
-            if self.misses >= MISSES_TO_RECOVER:
+            walked = self._walked_since_miss >= RECOVER_WALK_M
+            if self.misses >= (MISSES_TO_RECOVER if walked else MISSES_STILL):
                 recover = True
                 self.misses, self._missed = 0, None
         like = self._likelihood(fix)

@@ -147,3 +147,19 @@ def test_a_wrong_start_gives_way_to_two_fixes_that_agree() -> None:
     held.update(Fix(wrong, 0.05, 0.05))
     held.update(Fix(Pose2D(4.0, 4.0, 0.0), 0.05, 0.05))
     assert held.belief().pose.distance(right) < 0.1
+
+
+def test_a_look_alike_seen_again_from_the_same_spot_does_not_take_over() -> None:
+    """Two copies of a print 0.5 m apart: standing still, the same wrong fix twice is not a
+    kidnapping; four in a row are (the robot may truly have been carried)."""
+    here, copy = Pose2D(0.0, 0.0, 0.0), Pose2D(0.5, 0.0, 0.0)
+    pf = ParticleFilter(2000, seed=12, bounds=BOUNDS)
+    pf.reset_to(Fix(here, 0.05, 0.05))
+    for _ in range(2):
+        pf.predict(Pose2D())
+        pf.update(Fix(copy, 0.05, 0.05))
+    assert pf.belief().pose.distance(here) < 0.1
+    for _ in range(2):
+        pf.predict(Pose2D())
+        pf.update(Fix(copy, 0.05, 0.05))
+    assert pf.belief().pose.distance(copy) < 0.1
