@@ -16,6 +16,7 @@ Everything random takes a seed; the same seed and inputs give the same belief.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -90,11 +91,18 @@ class Fix:
         pose: The pose the map gives (m, m, rad).
         sigma_xy_m: Standard deviation of the position, m.
         sigma_theta_rad: Standard deviation of the heading, rad.
+        alternatives: Other poses the same pictures support nearly as well (a repeated
+            print); the fix is then a mixture, and the odometry picks the mode.
     """
 
     pose: Pose2D
     sigma_xy_m: float
     sigma_theta_rad: float
+    alternatives: tuple[Pose2D, ...] = ()
+
+    def modes(self) -> tuple[Pose2D, ...]:
+        """The pose and its alternatives."""
+        return (self.pose, *self.alternatives)
 
 
 @dataclass(frozen=True)
@@ -148,7 +156,10 @@ def fix_from_estimate(estimate: Any) -> Fix:
         estimate: A found :class:`naoloc.mapping.Estimate` (map frame).
     """
     inliers = estimate.details.get("inliers") if estimate.method == "pnp" else None
-    return fix_from_confidence(estimate.pose(), estimate.confidence, inliers)
+    fix = fix_from_confidence(estimate.pose(), estimate.confidence, inliers)
+    others = (estimate.details.get("alternatives") or []) if inliers is not None else []
+    alternatives = tuple(Pose2D(float(a[0]), float(a[1]), float(a[2])) for a in others)
+    return dataclasses.replace(fix, alternatives=alternatives) if alternatives else fix
 
 
 class ParticleFilter:
@@ -266,9 +277,13 @@ class ParticleFilter:
 
     # ------------------------------------------------------------------ vision
     def _likelihood(self, fix: Fix) -> np.ndarray:
-        d2 = (self.states[:, 0] - fix.pose.x) ** 2 + (self.states[:, 1] - fix.pose.y) ** 2
-        dth = wrap_angles(self.states[:, 2] - fix.pose.theta)
-        g = np.exp(-0.5 * d2 / fix.sigma_xy_m**2 - 0.5 * dth**2 / fix.sigma_theta_rad**2)
+        g = np.zeros(self._n)
+        for mode in fix.modes():  # the nearest mode explains a particle
+            d2 = (self.states[:, 0] - mode.x) ** 2 + (self.states[:, 1] - mode.y) ** 2
+            dth = wrap_angles(self.states[:, 2] - mode.theta)
+            g = np.maximum(
+                g, np.exp(-0.5 * d2 / fix.sigma_xy_m**2 - 0.5 * dth**2 / fix.sigma_theta_rad**2)
+            )
         return np.asarray((1.0 - self._outlier) * g + self._outlier * 1e-3)
 
     def update(self, fix: Fix) -> None:
@@ -315,9 +330,12 @@ class ParticleFilter:
 
     @staticmethod
     def _gate(fix: Fix, x: Any, y: Any, theta: Any) -> Any:
-        d2 = (x - fix.pose.x) ** 2 + (y - fix.pose.y) ** 2
-        dth = wrap_angles(np.asarray(theta) - fix.pose.theta)
-        return d2 / fix.sigma_xy_m**2 + dth**2 / fix.sigma_theta_rad**2 < GATE_SIGMAS**2
+        inside = np.zeros(np.shape(x), bool)
+        for mode in fix.modes():
+            d2 = (x - mode.x) ** 2 + (y - mode.y) ** 2
+            dth = wrap_angles(np.asarray(theta) - mode.theta)
+            inside |= d2 / fix.sigma_xy_m**2 + dth**2 / fix.sigma_theta_rad**2 < GATE_SIGMAS**2
+        return inside
 
     @staticmethod
     def _agrees(fix: Fix, missed: tuple[Pose2D, float, float]) -> bool:

@@ -163,3 +163,22 @@ def test_a_look_alike_seen_again_from_the_same_spot_does_not_take_over() -> None
         pf.predict(Pose2D())
         pf.update(Fix(copy, 0.05, 0.05))
     assert pf.belief().pose.distance(copy) < 0.1
+
+
+def test_a_fix_with_an_alternative_keeps_the_mode_odometry_supports() -> None:
+    """The pictures fit two copies of a print 0.5 m apart about equally: the fix carries both
+    poses, and the belief stays on the one the odometry carried it to."""
+    from naoloc.fusion import fix_from_estimate
+    from naoloc.mapping import Estimate
+
+    here, copy = Pose2D(0.0, 0.0, 0.0), Pose2D(0.5, 0.0, 0.0)
+    details = {"method": "pnp", "inliers": 37, "alternatives": [[0.0, 0.0, 0.0, 37]]}
+    est = Estimate(copy.x, copy.y, copy.theta, 0.9, "verified", details)
+    fix = fix_from_estimate(est)
+    assert fix.modes() == (copy, here)
+    pf = ParticleFilter(2000, seed=13, bounds=BOUNDS)
+    pf.reset_to(Fix(here, 0.05, 0.05))
+    for _ in range(4):
+        pf.predict(Pose2D())
+        pf.update(fix)
+    assert pf.belief().pose.distance(here) < 0.05 and pf.misses == 0

@@ -208,3 +208,20 @@ def test_turns_between_queries_are_unwrapped_and_rescaled() -> None:
     assert math.atan2(plain[0][1, 0], plain[0][0, 0]) == pytest.approx(
         modulo2PI(1.05 * 1.5 * math.pi), abs=1e-9
     )
+
+
+def test_hypotheses_nearly_as_good_elsewhere_are_reported_as_alternatives() -> None:
+    from types import SimpleNamespace
+
+    from naoloc.mapping.localizer import _alternatives
+
+    vmap = SimpleNamespace(config=MapConfig(), kp_points=np.zeros((0, 3)))
+    scored = [
+        (37, np.array([0.52, -0.11, -0.09]), None),
+        (36, np.array([0.57, -0.02, -0.15]), None),  # the same place as the estimate
+        (35, np.array([0.01, -0.06, -0.10]), None),  # a copy of the print 0.5 m away
+        (33, np.array([0.03, -0.04, -0.12]), None),  # that copy again
+        (20, np.array([2.00, 1.00, 0.00]), None),  # too weak to count
+    ]
+    alts = _alternatives(vmap, scored, np.array([0.53, -0.10, -0.10]))  # type: ignore[arg-type]
+    assert alts == [[0.01, -0.06, -0.1, 35]]

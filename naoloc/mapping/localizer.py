@@ -63,6 +63,11 @@ VisualMap = MapData
 DEFAULTS = LocalizerTuning()
 # Planar RANSAC hypotheses verified by reprojection, best first.
 PLANAR_KEEP = 5
+#: Another hypothesis at least AMBIGUOUS_M from the estimate with at least AMBIGUOUS_SHARE
+#: of the best one's inliers is reported as an alternative (``details["alternatives"]``):
+#: two copies of a print 0.5 m apart give two poses with 26/25 and 37/37 inliers.
+AMBIGUOUS_M = 0.25
+AMBIGUOUS_SHARE = 0.8
 #: A PnP estimate with at least this confidence (40 inliers) is "confident": behaviours may
 #: stop looking. Unverified fallbacks never reach it (capped at FALLBACK_MAX_CONFIDENCE).
 CONFIDENT = 1.0 - math.exp(-DEFAULTS.confident_inliers / DEFAULTS.confidence_scale)
@@ -322,13 +327,15 @@ def _best_plausible(
     mm: np.ndarray,
     pts: np.ndarray,
     px: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, int] | None:
+) -> tuple[np.ndarray, np.ndarray, int, list[list[float]]] | None:
     """Refine hypotheses by inlier count, best first; the first plausible one wins.
 
     Returns:
-        The refined last-robot pose, its inlier mask over all correspondences and the number
-        of implausible hypotheses passed over; None when no hypothesis reaches
-        ``min_pnp_inliers`` at a plausible pose.
+        The refined last-robot pose, its inlier mask over all correspondences, the number
+        of implausible hypotheses passed over and the alternatives (other plausible poses,
+        each at least :data:`AMBIGUOUS_M` from it and from each other, with at least
+        :data:`AMBIGUOUS_SHARE` of the best hypothesis' inliers: ``[x, y, theta, inliers]``);
+        None when no hypothesis reaches ``min_pnp_inliers`` at a plausible pose.
     """
     tun = vmap.config.tuning.localizer
     scored = []
@@ -352,8 +359,28 @@ def _best_plausible(
         if crowded_landmarks(vmap, float(pose[0]), float(pose[1])) > tun.clearance_max_landmarks:
             rejected += 1
             continue
-        return pose, inl, rejected
+        return pose, inl, rejected, _alternatives(vmap, scored, pose)
     return None
+
+
+def _alternatives(
+    vmap: VisualMap, scored: list[tuple[int, np.ndarray, np.ndarray]], pose: np.ndarray
+) -> list[list[float]]:
+    """Other plausible hypotheses nearly as well supported as the best (see caller)."""
+    tun = vmap.config.tuning.localizer
+    floor = AMBIGUOUS_SHARE * scored[0][0]
+    kept: list[np.ndarray] = [pose]
+    out: list[list[float]] = []
+    for n, h, _inl in scored:
+        if n < max(floor, tun.min_pnp_inliers):
+            break
+        if any(np.hypot(*(h[:2] - k[:2])) < AMBIGUOUS_M for k in kept):
+            continue
+        if crowded_landmarks(vmap, float(h[0]), float(h[1])) > tun.clearance_max_landmarks:
+            continue
+        kept.append(h)
+        out.append([round(float(h[0]), 4), round(float(h[1]), 4), round(float(h[2]), 4), n])
+    return out
 
 
 def localize_verified(
@@ -453,7 +480,7 @@ def localize_verified(
         mm = np.concatenate(mats)
         found = _best_plausible(vmap, hypotheses, mm, pts, px)
         if found is not None:
-            pose, inl, rejected = found
+            pose, inl, rejected, alternatives = found
             n_inl = int(inl.sum())
             qs = np.concatenate(corr.query)
             details.update(
@@ -462,6 +489,7 @@ def localize_verified(
                 correspondences=int(pts.shape[0]),
                 inliers_per_query=[int((inl & (qs == qi)).sum()) for qi in usable],
                 implausible_rejected=rejected,
+                alternatives=alternatives,
             )
             conf = 1.0 - math.exp(-n_inl / tun.confidence_scale)
             return Estimate(
