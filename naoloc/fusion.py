@@ -16,10 +16,9 @@ Everything random takes a seed; the same seed and inputs give the same belief.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -159,7 +158,7 @@ def fix_from_estimate(estimate: Any) -> Fix:
     fix = fix_from_confidence(estimate.pose(), estimate.confidence, inliers)
     others = (estimate.details.get("alternatives") or []) if inliers is not None else []
     alternatives = tuple(Pose2D(float(a[0]), float(a[1]), float(a[2])) for a in others)
-    return dataclasses.replace(fix, alternatives=alternatives) if alternatives else fix
+    return replace(fix, alternatives=alternatives) if alternatives else fix
 
 
 class ParticleFilter:
@@ -223,8 +222,15 @@ class ParticleFilter:
         raise ValueError("the filter's bounds hold almost no free floor")
 
     def reset_to(self, fix: Fix) -> None:
-        """Forget the belief and draw every particle around a fix (a known start)."""
-        self.states = self._around(fix, self._n)
+        """Forget the belief and draw every particle around a fix (a known start).
+
+        A fix with alternatives shares the particles among its modes.
+        """
+        modes = fix.modes()
+        counts = [self._n // len(modes)] * len(modes)
+        counts[0] += self._n - sum(counts)
+        parts = zip(modes, counts, strict=True)
+        self.states = np.vstack([self._around(replace(fix, pose=m), k) for m, k in parts])
         self.weights = np.full(self._n, 1.0 / self._n)
 
     def _around(self, fix: Fix, n: int) -> np.ndarray:

@@ -71,6 +71,8 @@ AMBIGUOUS_SHARE = 0.8
 #: A PnP estimate with at least this confidence (40 inliers) is "confident": behaviours may
 #: stop looking. Unverified fallbacks never reach it (capped at FALLBACK_MAX_CONFIDENCE).
 CONFIDENT = 1.0 - math.exp(-DEFAULTS.confident_inliers / DEFAULTS.confidence_scale)
+#: An estimate with alternatives is capped below CONFIDENT, so a scan turns and looks more.
+AMBIGUOUS_CONFIDENCE = 0.9 * CONFIDENT
 FALLBACK_MAX_CONFIDENCE = DEFAULTS.fallback_max_confidence
 #: Plausibility of a pose: no more than CLEARANCE_MAX_LANDMARKS landmarks (between the floor
 #: and 3 m up) closer than the clearance radius to the robot's centre.
@@ -492,6 +494,8 @@ def localize_verified(
                 alternatives=alternatives,
             )
             conf = 1.0 - math.exp(-n_inl / tun.confidence_scale)
+            if alternatives:  # not confident while another place fits nearly as well
+                conf = min(conf, AMBIGUOUS_CONFIDENCE)
             return Estimate(
                 float(pose[0]), float(pose[1]), modulo2PI(float(pose[2])), conf, "verified", details
             )
