@@ -283,13 +283,9 @@ class ParticleFilter:
 
     # ------------------------------------------------------------------ vision
     def _likelihood(self, fix: Fix) -> np.ndarray:
-        g = np.zeros(self._n)
-        for mode in fix.modes():  # the nearest mode explains a particle
-            d2 = (self.states[:, 0] - mode.x) ** 2 + (self.states[:, 1] - mode.y) ** 2
-            dth = wrap_angles(self.states[:, 2] - mode.theta)
-            g = np.maximum(
-                g, np.exp(-0.5 * d2 / fix.sigma_xy_m**2 - 0.5 * dth**2 / fix.sigma_theta_rad**2)
-            )
+        g = np.exp(
+            -0.5 * self._sq_sigmas(fix, self.states[:, 0], self.states[:, 1], self.states[:, 2])
+        )
         return np.asarray((1.0 - self._outlier) * g + self._outlier * 1e-3)
 
     def update(self, fix: Fix) -> None:
@@ -335,13 +331,18 @@ class ParticleFilter:
         self._resample(0.0, fix)
 
     @staticmethod
-    def _gate(fix: Fix, x: Any, y: Any, theta: Any) -> Any:
-        inside = np.zeros(np.shape(x), bool)
+    def _sq_sigmas(fix: Fix, x: Any, y: Any, theta: Any) -> Any:
+        """Squared distance (in the fix's sigmas, position and heading) to its nearest mode."""
+        out = np.full(np.shape(x), np.inf)
         for mode in fix.modes():
             d2 = (x - mode.x) ** 2 + (y - mode.y) ** 2
             dth = wrap_angles(np.asarray(theta) - mode.theta)
-            inside |= d2 / fix.sigma_xy_m**2 + dth**2 / fix.sigma_theta_rad**2 < GATE_SIGMAS**2
-        return inside
+            out = np.minimum(out, d2 / fix.sigma_xy_m**2 + dth**2 / fix.sigma_theta_rad**2)
+        return out
+
+    @staticmethod
+    def _gate(fix: Fix, x: Any, y: Any, theta: Any) -> Any:
+        return ParticleFilter._sq_sigmas(fix, x, y, theta) < GATE_SIGMAS**2
 
     @staticmethod
     def _agrees(fix: Fix, missed: tuple[Pose2D, float, float]) -> bool:

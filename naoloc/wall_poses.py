@@ -189,7 +189,7 @@ def wall_poses(
     track = _SideTrack()
     deltas: list[float] = []
     inward_m: list[float] = []
-    measured: list[float | None] = []
+    lines: list[tuple[float, float] | None] = []  # each frame's trusted side line
     fallback: list[float] = []
     start_line = _line(meta.get("start_side"), offset, side_normal)
     for i, kf in enumerate(keyframes):
@@ -202,7 +202,7 @@ def wall_poses(
         line = _line(vision[i].get("side"), offset, side_normal)
         track.update(line, offset)
         deltas.append(track.delta)
-        measured.append(None if line is None else line[0])
+        lines.append(line)
         fallback.append(track.lateral)
     # The survey's origin stands before side 0's first frame: its line belongs to side 0.
     start_inward = -_inward(keyframes[0].pose, 0.0 if start_line is None
@@ -215,7 +215,7 @@ def wall_poses(
     used = 0
     for k in range(n_sides):
         idx = frames_of[k]
-        m = [measured[i] for i in idx]
+        m = [None if (line := lines[i]) is None else line[0] for i in idx]
         dy = [0.0] + [inward_m[i] - inward_m[j] for j, i in itertools.pairwise(idx)]
         if k == 0:  # the survey's origin stands before side 0's first frame
             m = [None if start_line is None else start_line[0], *m]
@@ -263,27 +263,24 @@ def wall_poses(
         position = corners[k] + true_along[i] * u + lateral * inward
         poses.append(Pose2D(float(position[0]), float(position[1]), modulo2PI(d + deltas[i])))
 
-    start = _start_pose(meta.get("start_side"), offset, side_normal)
-    heading = _start_heading(start_line, keyframes, vision, frames_of[0], along, offset,
-                             side_normal)  # fmt: skip
-    if heading is not None:
-        start = Pose2D(start.x, start.y, heading)
+    # The survey start (the map frame's origin) in the wall frame.
+    heading = _start_heading(start_line, keyframes, lines, frames_of[0], along)
+    start = Pose2D(0.0, 0.0, heading or 0.0)
     if start_dist is not None:  # the origin's distance from side 0's wall, not what it saw
         start = Pose2D(0.0, (start_dist - offset) * turn, start.theta)
+    elif start_line is not None:
+        start = Pose2D(0.0, (start_line[0] - offset) * turn, start.theta)
     out = [
         dataclasses.replace(kf, pose=start.inverse() * p, command_pose=None)
         for kf, p in zip(keyframes, poses, strict=True)
     ]
-    spin = _turn_scale(keyframes, side_of, vision, offset, side_normal, turn)
-    return WallPoses(out, scales, used, spin)
+    return WallPoses(out, scales, used, _turn_scale(keyframes, side_of, lines, turn))
 
 
 def _turn_scale(
     keyframes: Sequence[Keyframe],
     side_of: Sequence[int],
-    vision: Sequence[dict[str, Any]],
-    offset: float,
-    side_normal: float,
+    lines: Sequence[tuple[float, float] | None],
     turn: float,
 ) -> float | None:
     """Odometry turn per true turn at the corners.
@@ -296,8 +293,7 @@ def _turn_scale(
     for i in range(1, len(keyframes)):
         if side_of[i] == side_of[i - 1]:
             continue
-        before = _line(vision[i - 1].get("side"), offset, side_normal)
-        after = _line(vision[i].get("side"), offset, side_normal)
+        before, after = lines[i - 1], lines[i]
         if before is None or after is None:
             continue
         quarter = turn * math.pi / 2 * (side_of[i] - side_of[i - 1])
@@ -504,11 +500,9 @@ def side_distances(
 def _start_heading(
     start_line: tuple[float, float] | None,
     keyframes: Sequence[Keyframe],
-    vision: Sequence[dict[str, Any]],
+    lines: Sequence[tuple[float, float] | None],
     side0: Sequence[int],
     along: np.ndarray,
-    offset: float,
-    side_normal: float,
 ) -> float | None:
     """The survey start's heading to side 0's wall (rad), or None without any line.
 
@@ -521,19 +515,9 @@ def _start_heading(
     for i in side0:
         if along[i] > START_HEADING_M:
             break
-        line = _line(vision[i].get("side"), offset, side_normal)
-        if line is not None:
+        if (line := lines[i]) is not None:
             votes.append(modulo2PI(line[1] - keyframes[i].pose.theta))
     frames = float(np.median(votes)) if votes else None
     if start_line is None or frames is None:
         return frames if start_line is None else start_line[1]
     return start_line[1] if abs(modulo2PI(frames - start_line[1])) <= START_GATE_RAD else frames
-
-
-def _start_pose(entry: Any, offset: float, side_normal: float) -> Pose2D:
-    """The survey start (the map frame's origin) in the wall frame."""
-    line = _line(entry, offset, side_normal)
-    if line is None:
-        return Pose2D()
-    turn = -math.copysign(1.0, side_normal)
-    return Pose2D(0.0, (line[0] - offset) * turn, line[1])

@@ -322,8 +322,7 @@ def _settle(robot: Robot, here: Pose2D, moves: list[Pose2D]) -> tuple[float, Pos
         now = here * relative_pose(odo0, moves[-1])
         robot.motion.moveTo(0.0, 0.0, modulo2PI(-now.theta))
     robot.motion.stopMove()
-    moves.append(pose_of(robot.motion, True))
-    odo = pose_of(robot.motion, True)
+    moves.append(odo := pose_of(robot.motion, True))
     return odo0.distance(odo), here * relative_pose(odo0, odo)
 
 

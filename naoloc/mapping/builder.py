@@ -140,12 +140,13 @@ def build_map_data(
     # milliradians on their own: they hold the adjustment, which without them bent whole
     # sides (six surveys, tools/map_pose_accuracy.py: heading median 0.004-0.037 rad
     # without the prior, 0.002-0.011 rad with it).
-    walled = (meta or {}).get("wall_poses") is not None and tune.bundle.wall_prior_sigma
     problem = BundleProblem(
         refined.poses, heads, cam_index, kmats, kp_xy, kp_frame, tracks, lm.points, odometry,
-        tune.pose_graph, priors=poses.copy() if walled else None,
-        prior_sigma=tune.bundle.wall_prior_sigma or (0.1, 0.01),
+        tune.pose_graph,
     )  # fmt: skip
+    sigma = tune.bundle.wall_prior_sigma
+    if (meta or {}).get("wall_poses") is not None and sigma is not None:
+        problem = dataclasses.replace(problem, priors=poses.copy(), prior_sigma=sigma)
     # Odometry edges only: the loop closures' relative poses carry the errors of their
     # odometry-triangulated landmarks (measured: they make the result worse), and tracks
     # seen from both laps (spanning half the loop-closure gap) tie the laps. Without

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from naoloc.config import BundleTuning, PoseGraphTuning
-from naoloc.geometry import rotations_z
+from naoloc.geometry import rotations_z, wrap_angles
 from naoloc.keyframe import camera_in_robot
 from naoloc.mapping.posegraph import Edge, graph_cost, graph_system
 
@@ -69,7 +69,7 @@ def _prior_terms(problem: BundleProblem, x: np.ndarray) -> tuple[np.ndarray, np.
     if problem.priors is None:
         return None
     r = x - problem.priors
-    r[:, 2] = np.remainder(r[:, 2] + np.pi, 2 * np.pi) - np.pi
+    r[:, 2] = wrap_angles(r[:, 2])
     sxy, sth = problem.prior_sigma
     w = np.array([1.0 / sxy**2, 1.0 / sxy**2, 1.0 / sth**2])
     return r, w
