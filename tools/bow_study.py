@@ -32,8 +32,10 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from wall_pose_accuracy import sim_survey
+
 from naoloc.config import load_config
-from naoloc.dataset import read_dataset
 from naoloc.errors import NaolocError
 from naoloc.mapping.features import FeatureExtractor
 from naoloc.mapping.vocabulary import dbow_scores, l2_normalise, train_vocabulary
@@ -63,14 +65,12 @@ def _line(name: str, err: np.ndarray) -> str:
 
 def study(path: Path, sizes: list[int]) -> list[str]:
     """The study's lines for one dataset (see the module doc)."""
-    data = read_dataset(path)
+    data, truth = sim_survey(path)
     laps = np.asarray(data.laps or [0] * len(data.keyframes))
-    if any(kf.true_pose is None for kf in data.keyframes):
-        raise NaolocError(f"{path}: no true poses (not a simulator dataset)")
     if laps.max() < 1:
         raise NaolocError(f"{path}: one lap only; the study needs two")
     cfg = load_config(data.config if isinstance(data.config, dict) else None).map
-    xy = np.array([[kf.true_pose.x, kf.true_pose.y] for kf in data.keyframes if kf.true_pose])
+    xy = np.array([[t.x, t.y] for t in truth])  # map frame: distances as in the room's
     train, test = np.flatnonzero(laps == 0), np.flatnonzero(laps > 0)
     lines = [f"{path}: {len(train)} pictures in lap 1, {len(test)} in the later laps"]
     nearest = np.array([np.min(np.hypot(*(xy[train] - xy[i]).T)) for i in test])

@@ -29,7 +29,7 @@ import numpy as np
 import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from eval_unseen_rooms import parse_sets, room_config
+from eval_unseen_rooms import add_set_option, parse_sets, room_config
 
 from naoloc.evaluation.protocols import sample_protocol_poses
 
@@ -68,10 +68,7 @@ def main() -> int:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--small", action="store_true", help="lab-sized rooms (about 4 x 3 m)")
     parser.add_argument("--out", type=Path, default=None, help="output folder (not the repo)")
-    parser.add_argument(
-        "--set", action="append", default=[], metavar="KEY=VALUE",
-        help="config override for every room, e.g. world.sim.light=0.3",
-    )  # fmt: skip
+    add_set_option(parser, "config override for every room, e.g. world.sim.light=0.3")
     args = parser.parse_args()
     seeds = args.seeds or [int.from_bytes(os.urandom(4), "little") >> 1 for _ in range(2)]
     out = args.out or Path(tempfile.mkdtemp(prefix="naoloc_gohome_"))

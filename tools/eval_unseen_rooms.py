@@ -74,6 +74,11 @@ def room_config(
     return load_config(base).with_overrides(overrides or {})
 
 
+def add_set_option(parser: argparse.ArgumentParser, help_text: str) -> None:
+    """The tools' repeatable ``--set KEY=VALUE`` config override (read by :func:`parse_sets`)."""
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=help_text)
+
+
 def parse_sets(items: list[str]) -> dict[str, Any]:
     """``["a.b=1", "c=x"]`` -> ``{"a": {"b": 1}, "c": "x"}`` (values parsed as YAML)."""
     out: dict[str, Any] = {}
@@ -99,10 +104,7 @@ def main() -> int:
     parser.add_argument("--out", type=Path, default=None, help="output folder (not the repo)")
     parser.add_argument("--protocol", default="random", choices=("random", "anywhere"))
     parser.add_argument("--small", action="store_true", help="lab-sized rooms (about 4 x 3 m)")
-    parser.add_argument(
-        "--set", action="append", default=[], metavar="KEY=VALUE",
-        help="config override for every room, e.g. world.sim.light=0.3",
-    )  # fmt: skip
+    add_set_option(parser, "config override for every room, e.g. world.sim.light=0.3")
     args = parser.parse_args()
     overrides = parse_sets(args.set)
     seeds = args.seeds or [int.from_bytes(os.urandom(4), "little") >> 1 for _ in range(3)]

@@ -39,7 +39,7 @@ from naoloc.errors import RobotError
 ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "tools")]
 
-from eval_unseen_rooms import parse_sets, room_config  # noqa: E402
+from eval_unseen_rooms import add_set_option, parse_sets, room_config  # noqa: E402
 
 
 def _clear(rects: list[tuple[float, ...]], x: float, y: float, normal: float, d: float) -> bool:
@@ -139,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, nargs="+", default=[101, 202, 303, 404])
     parser.add_argument("--views", type=int, default=36, help="views per room")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    add_set_option(parser, "config override of the rendered rooms, e.g. world.sim.light=0.3")
     parser.add_argument("--compare", metavar="REV", help="also score this git revision's detector")
     args = parser.parse_args(argv)
     overrides = parse_sets(args.set)

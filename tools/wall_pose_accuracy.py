@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -29,7 +30,22 @@ from naoloc.geometry import Pose2D
 from naoloc.wall_poses import wall_poses
 
 
-def _errors(poses: list[Pose2D], truth: list[Pose2D]) -> tuple[np.ndarray, np.ndarray]:
+def sim_survey(path: str | Path) -> tuple[Any, list[Pose2D]]:
+    """A simulator's survey and its keyframes' true poses in the map frame.
+
+    Raises:
+        NaolocError: The file is not a readable dataset, or has no ground truth.
+    """
+    data = read_dataset(path)
+    origin = data.meta.get("origin_room_pose")
+    if origin is None or any(kf.true_pose is None for kf in data.keyframes):
+        raise NaolocError(f"{path}: no ground truth (not a simulator's survey)")
+    o = Pose2D(*origin)
+    return data, [o.inverse() * kf.true_pose for kf in data.keyframes if kf.true_pose]
+
+
+def pose_errors(poses: list[Pose2D], truth: list[Pose2D]) -> tuple[np.ndarray, np.ndarray]:
+    """Position (m) and wrapped heading (rad) errors of poses against the truth."""
     pos = np.array([math.dist((p.x, p.y), (t.x, t.y)) for p, t in zip(poses, truth, strict=True)])
     head = np.array(
         [
@@ -89,16 +105,10 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     for path in args.datasets:
         try:
-            data = read_dataset(path)
+            data, truth = sim_survey(path)
         except NaolocError as err:
             print(f"wall_pose_accuracy: {err}", file=sys.stderr)
             return 2
-        origin = data.meta.get("origin_room_pose")
-        if origin is None or any(kf.true_pose is None for kf in data.keyframes):
-            print(f"{path}: no ground truth (not a simulator's survey)", file=sys.stderr)
-            return 2
-        o = Pose2D(*origin)
-        truth = [o.inverse() * kf.true_pose for kf in data.keyframes if kf.true_pose is not None]
         offset = float(data.config.get("survey", {}).get("wall_offset_m", 1.0))
         walled = wall_poses(data.keyframes, data.meta, offset=offset)
         rows = [("odometry", [kf.pose for kf in data.keyframes])]
@@ -106,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
             rows.append(("walls", [kf.pose for kf in walled.keyframes]))
         medians = []
         for name, poses in rows:
-            pos, head = _errors(poses, truth)
+            pos, head = pose_errors(poses, truth)
             medians.append(float(np.median(pos)))
             print(
                 f"{path}: {name:8s} median {np.median(pos):.3f} m"
@@ -129,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
             vmap = load_map(args.map)
             refined = [Pose2D(*p) for p in vmap.refined_poses]
             if len(refined) == len(truth):
-                pos, head = _errors(refined, truth)
+                pos, head = pose_errors(refined, truth)
                 print(f"{path}: map      median {np.median(pos):.3f} m"
                       f"  p90 {np.percentile(pos, 90):.3f} m  max {pos.max():.3f} m"
                       f"  heading median {np.median(head):.4f} rad (bundle-adjusted)")  # fmt: skip
