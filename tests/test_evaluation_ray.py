@@ -2,11 +2,16 @@
 
 Skipped when Ray is not installed (it is the optional extra ``ray``). Everything but the
 measured wall times (``*_s``, ``*_ms*``, ``timings``) and the output folder is compared.
+The Ray run is a child process: ``ray.init`` replaces the process's fatal-signal handlers,
+and a test runner without faulthandler dies of a native crash without a word.
 """
 
 from __future__ import annotations
 
 import json
+import signal
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -45,25 +50,48 @@ def _timeless(value: Any, outdir: str) -> Any:
     return value
 
 
-def test_ray_gives_the_local_pools_summary(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_ray_gives_the_local_pools_summary(tmp_path: Path) -> None:
     pytest.importorskip("ray", reason="ray is not installed (pip install 'naoloc[ray]')")
     cfg = tmp_path / "tiny.yaml"
     cfg.write_text(yaml.safe_dump(TINY))
     common = ["evaluate", "-c", str(cfg), "--protocol", "random", "-n", "3", "--seed", "4"]
     common += ["--workers", "2"]
     assert main([*common, "-o", str(tmp_path / "local")]) == 0
-    assert main([*common, "--executor", "ray", "-o", str(tmp_path / "ray")]) == 0
-    line = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    child = subprocess.run(
+        [sys.executable, "-c", _RAY_RUN, *common, "--executor", "ray", "-o", str(tmp_path / "ray")],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    # The child ends by aborting itself: faulthandler must still report it.
+    assert child.returncode == -signal.SIGABRT, child.stderr[-2000:]
+    assert "Fatal Python error: Aborted" in child.stderr, child.stderr[-2000:]
+    line = json.loads(child.stdout.strip().splitlines()[-1])
     assert line["executor"] == "ray" and line["n"] == 3
     local = json.loads((tmp_path / "local" / "summary.json").read_text())
     ray = json.loads((tmp_path / "ray" / "summary.json").read_text())
     assert local["positions"] == ray["positions"]  # estimates, bit for bit
     assert _timeless(local, str(tmp_path / "local")) == _timeless(ray, str(tmp_path / "ray"))
-    import ray as ray_module
 
-    assert not ray_module.is_initialized()  # the local cluster was shut down
+
+# The CLI in a process that checks, after it, that the local cluster was shut down and that
+# the process's SIGTERM handler survived Ray, then aborts to show faulthandler still works.
+_RAY_RUN = """
+import faulthandler, signal, sys
+import ray
+from naoloc.cli import main
+
+faulthandler.enable()
+def mine(signum, frame):
+    raise SystemExit(99)
+signal.signal(signal.SIGTERM, mine)
+code = main(sys.argv[1:])
+assert code == 0, code
+assert not ray.is_initialized(), "the local cluster is still up"
+assert signal.getsignal(signal.SIGTERM) is mine, signal.getsignal(signal.SIGTERM)
+sys.stdout.flush()
+faulthandler._sigabrt()
+"""
 
 
 def test_executor_names_are_checked() -> None:

@@ -18,8 +18,13 @@ chunk's variants "skipped" (with the reason), never silently measured without it
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
+import faulthandler
 import math
 import multiprocessing
+import signal
+import sys
+import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -156,6 +161,11 @@ class RayExecutor:
     remote cluster every node needs naoloc installed (``pip install 'naoloc[sim,ray]'``) and
     the outputs folder on a shared filesystem.
 
+    ``ray.init`` installs its own SIGTERM handler and fatal-signal handlers, and
+    ``ray.shutdown`` leaves SIGTERM, SIGABRT and SIGSEGV at their default action: the
+    process's SIGINT/SIGTERM handlers (naoloc's clean interrupt) are put back after both, and
+    :mod:`faulthandler`, if it was on, is turned on again (on ``sys.stderr``).
+
     Args:
         address: A running cluster (``ray://host:10001`` or ``host:6379``); None starts a
             local one with ``num_cpus``.
@@ -176,6 +186,7 @@ class RayExecutor:
             ) from None
         self._ray = ray
         self._started = False
+        self._handlers = _signal_handlers()
         if not ray.is_initialized():
             kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False}
             if address is None:
@@ -185,6 +196,7 @@ class RayExecutor:
                 )  # fmt: skip
             ray.init(address=address, **kwargs)
             self._started = True
+            _restore_signal_handlers(self._handlers)
 
     def run(
         self, fn: Callable[[T], R], tasks: Sequence[T], workers: int, bar: Progress, label: str
@@ -221,6 +233,30 @@ class RayExecutor:
         if self._started:
             self._started = False
             self._ray.shutdown()
+            _restore_signal_handlers(self._handlers)
+
+
+_SignalHandlers = tuple[dict[int, Any], bool]
+
+
+def _signal_handlers() -> _SignalHandlers:
+    """This process's Python SIGINT/SIGTERM handlers and whether faulthandler is on."""
+    handlers = {int(s): signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    return handlers, faulthandler.is_enabled()
+
+
+def _restore_signal_handlers(saved: _SignalHandlers) -> None:
+    """Put back what :func:`_signal_handlers` saw (Python sets handlers in the main thread only)."""
+    handlers, fault = saved
+    if threading.current_thread() is not threading.main_thread():
+        return
+    for signum, handler in handlers.items():
+        if handler is not None:  # None: set outside Python, nothing to put back
+            signal.signal(signum, handler)
+    if fault:
+        faulthandler.disable()  # enable() does nothing while it believes it is still on
+        with contextlib.suppress(RuntimeError, OSError, ValueError, AttributeError):
+            faulthandler.enable(file=sys.stderr)  # a stderr without a file descriptor: off
 
 
 Executor = LocalExecutor | RayExecutor
