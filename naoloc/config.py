@@ -524,6 +524,13 @@ class LocalizeConfig(_Model):
         "the head's limits at each yaw)",
     )
 
+    floor_lines: bool = Field(
+        True,
+        description="scan strategy, when the pictures verify no pose: measure the floor-wall "
+        "lines around the robot (bottom camera) and take the pose they and the map's walls "
+        "allow that the pictures' matches support best (method floorlines)",
+    )
+
     @field_validator("resolution")
     @classmethod
     def _res_ok(cls, v: int | None) -> int | None:

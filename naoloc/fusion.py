@@ -44,6 +44,10 @@ MODE_CELL_M = 0.25  # grid cell of the density search, m
 # uncertainty says so, so it nudges a lost belief but cannot drag a tracked one.
 FALLBACK_SIGMA_M = 1.5
 FALLBACK_SIGMA_RAD = 1.0
+# A pose from the floor-wall lines (method floorlines): the lines place a wall to 1-4 cm, but
+# the candidate chosen may be a wrong one.
+FLOOR_SIGMA_M = 0.2
+FLOOR_SIGMA_RAD = 0.1
 
 FreeTest = Callable[[np.ndarray, np.ndarray], np.ndarray]
 """``free(xs, ys) -> bool array``: which map-frame positions (m) are free floor."""
@@ -149,11 +153,14 @@ def fix_from_confidence(pose: Pose2D, confidence: float, inliers: int | None = N
 
 
 def fix_from_estimate(estimate: Any) -> Fix:
-    """The fix a map estimate gives (:func:`fix_from_confidence`; PnP inliers when it has them).
+    """The fix a map estimate gives (:func:`fix_from_confidence`; PnP inliers when it has them;
+    :data:`FLOOR_SIGMA_M` for a pose from the floor lines).
 
     Args:
         estimate: A found :class:`naoloc.mapping.Estimate` (map frame).
     """
+    if estimate.method == "floorlines":
+        return Fix(estimate.pose(), FLOOR_SIGMA_M, FLOOR_SIGMA_RAD)
     inliers = estimate.details.get("inliers") if estimate.method == "pnp" else None
     fix = fix_from_confidence(estimate.pose(), estimate.confidence, inliers)
     others = (estimate.details.get("alternatives") or []) if inliers is not None else []

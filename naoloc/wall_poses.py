@@ -74,12 +74,17 @@ class WallPoses:
         turn_scale: The odometry's turn per true turn at the survey's corners (the walls
             give the true headings), None when no corner was turned or it reads implausibly;
             the localizer undoes it in the turns it makes in place.
+        wall_frame: The wall frame W's origin (the circuit's first corner) in the map frame.
+        walls: The room's walls in W, ``(x_min, x_max, y_min, y_max)`` (m): the circuit
+            widened by the wall offset; the floor-line fix (:mod:`naoloc.floorfix`) uses them.
     """
 
     keyframes: list[Keyframe]
     side_scales: list[float | None]
     lines_used: int
     turn_scale: float | None = None
+    wall_frame: Pose2D | None = None
+    walls: tuple[float, float, float, float] | None = None
 
     def summary(self) -> dict[str, Any]:
         """JSON-able facts for the map's meta."""
@@ -91,6 +96,17 @@ class WallPoses:
             "lines_used": self.lines_used,
             "frames": len(self.keyframes),
             "turn_scale": None if self.turn_scale is None else round(self.turn_scale, 4),
+            **(
+                {}
+                if self.wall_frame is None or self.walls is None
+                else {
+                    "wall_frame": [
+                        round(v, 5)
+                        for v in (self.wall_frame.x, self.wall_frame.y, self.wall_frame.theta)
+                    ],
+                    "walls_m": [round(v, 4) for v in self.walls],
+                }
+            ),
         }
 
 
@@ -274,7 +290,14 @@ def wall_poses(
         dataclasses.replace(kf, pose=start.inverse() * p, command_pose=None)
         for kf, p in zip(keyframes, poses, strict=True)
     ]
-    return WallPoses(out, scales, used, _turn_scale(keyframes, side_of, lines, turn))
+    # The walls in W: side 0's beside the first corner, the others a side's length beyond.
+    far_y = turn * (float(sides_m[1]) + offset)
+    walls = (
+        -offset, float(sides_m[0]) + offset, min(-turn * offset, far_y), max(-turn * offset, far_y)
+    )  # fmt: skip
+    return WallPoses(
+        out, scales, used, _turn_scale(keyframes, side_of, lines, turn), start.inverse(), walls
+    )
 
 
 def _turn_scale(

@@ -13,6 +13,7 @@ from naoloc.config import CameraConfig, Config, MapConfig, load_config
 from naoloc.geometry import Pose2D, relative_pose
 from naoloc.keyframe import Keyframe
 from naoloc.mapping import VisualMap, build_map
+from naoloc.mapping.localizer import pose_support
 
 PITCH = -0.2
 
@@ -225,3 +226,19 @@ def test_hypotheses_nearly_as_good_elsewhere_are_reported_as_alternatives() -> N
     ]
     alts = _alternatives(vmap, scored, np.array([0.53, -0.10, -0.10]))  # type: ignore[arg-type]
     assert alts == [[0.01, -0.06, -0.1, 35]]
+
+
+def test_pose_support_prefers_the_true_pose(
+    world: tuple[Config, list[Keyframe], list], room_map: VisualMap
+) -> None:
+    _cfg, _survey, trials = world
+    feats_truths = [(room_map.extract(q), q, t) for q, t in trials[:4]]
+    for feats, queries, truth in feats_truths:
+        shifted = [
+            Pose2D(truth.x + 1.0, truth.y, truth.theta),
+            Pose2D(truth.x, truth.y - 1.0, truth.theta),
+            Pose2D(truth.x, truth.y, truth.theta + math.pi / 2),
+        ]
+        support = pose_support(room_map, feats, queries, [truth, *shifted])
+        assert support[0] > max(support[1:]), support
+    assert pose_support(room_map, feats_truths[0][0], feats_truths[0][1], []) == []

@@ -9,11 +9,13 @@ corner, as the survey records them. The wall-referenced poses must match the tru
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 import pytest
 
+from naoloc.floorfix import map_walls
 from naoloc.geometry import Pose2D
 from naoloc.keyframe import Keyframe
 from naoloc.wall_poses import side_distances, wall_poses
@@ -221,3 +223,17 @@ def test_the_corners_measure_the_odometrys_turn_scale() -> None:
     assert walled.turn_scale == pytest.approx(1.05, abs=0.002)
     assert walled.summary()["turn_scale"] == pytest.approx(1.05, abs=0.002)
     assert _errors(walled.keyframes, truth)[1].max() < 0.01
+
+
+def test_the_map_keeps_the_walls_the_survey_walked_inside() -> None:
+    keyframes, _truth, meta = _survey()
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None
+    walls = map_walls(SimpleNamespace(meta={"wall_poses": walled.summary()}))  # type: ignore[arg-type]
+    assert walls is not None
+    # The map frame is the survey start, a corner of the circuit: the walls one offset out.
+    lo_x = walls.frame * Pose2D(walls.bounds[0], 0.0, 0.0)
+    hi_y = walls.frame * Pose2D(0.0, walls.bounds[3], 0.0)
+    assert walls.bounds == pytest.approx((-OFFSET, SIDES[0] + OFFSET, -OFFSET, SIDES[1] + OFFSET))
+    assert abs(walls.frame.x) < 0.02 and abs(walls.frame.y) < 0.02 and abs(walls.frame.theta) < 0.01
+    assert lo_x.x == pytest.approx(-1.0, abs=0.03) and hi_y.y == pytest.approx(3.0, abs=0.03)

@@ -21,7 +21,7 @@ import numpy as np
 from naoloc.behaviours.camera import Camera
 from naoloc.config import CameraConfig
 from naoloc.constants import FRAME_ROBOT
-from naoloc.floorline import WallLine, detect_wall_line
+from naoloc.floorline import WallLine, detect_wall_line, detect_wall_lines
 from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.lens import Lens
 from naoloc.robot import Robot
@@ -82,6 +82,17 @@ class FloorEye:
             frame.bgr(), info.hfov, info.vfov, pose, expect_normal=expect_normal,
             tolerance=tolerance, lens=self.lens,
         )  # fmt: skip
+
+    def lines(self) -> list[WallLine]:
+        """Every floor-wall line in view (up to two: a corner), FRAME_ROBOT."""
+        frame = self.camera.frame()
+        info = self.camera.info(frame)
+        pose = np.asarray(
+            self.robot.motion.getTransform("CameraBottom", FRAME_ROBOT, True), np.float64
+        )
+        if pose.size != 16 or not np.all(np.isfinite(pose)):
+            return []
+        return detect_wall_lines(frame.bgr(), info.hfov, info.vfov, pose, lens=self.lens)
 
     def close(self) -> None:
         """Unsubscribe (best effort)."""

@@ -110,7 +110,8 @@ class Estimate:
 
     @property
     def method(self) -> str:
-        """How the pose was found: ``pnp``, ``keyframes``, ``paper``, ``filter`` or ``none``."""
+        """How the pose was found: ``pnp``, ``floorlines``, ``keyframes``, ``paper``, ``filter``
+        or ``none``."""
         return str(self.details.get("method", self.mode))
 
 
@@ -385,24 +386,32 @@ def _alternatives(
     return out
 
 
-def localize_verified(
+def _correspond(
     vmap: VisualMap,
     feats: Sequence[Features],
     queries: Sequence[Keyframe],
-    top_k: int | None = None,
-) -> Estimate:
-    """Retrieval + landmark matching + PnP + joint 3-DoF refinement (see module doc).
+    usable: Sequence[int],
+    to_last: list[np.ndarray],
+    top_k: int,
+    *,
+    pnp: bool,
+) -> tuple[
+    _Correspondences,
+    list[np.ndarray],
+    list[np.ndarray],
+    list[tuple[int, int, float, np.ndarray]],
+    list[list[int]],
+]:
+    """Each usable query's retrieval candidates, landmark matches and (``pnp``) PnP pose.
 
-    ``top_k`` retrieval candidates per query (default: the map's tuning).
+    Returns:
+        The 2D-3D correspondences, their projection matrices (map point to pixel for a
+        last-robot pose), the PnP hypotheses (last-robot poses, map frame), the per-keyframe
+        match votes and every query's candidates.
     """
     import cv2
 
     tun = vmap.config.tuning.localizer
-    top_k = tun.candidates if top_k is None else top_k
-    usable = [i for i, f in enumerate(feats) if len(f) > 0]
-    if not usable:
-        return no_estimate("verified", "no features")
-    to_last = _to_last(queries, turn_scale_of(vmap))
     matcher = hamming_matcher(vmap.vocabulary.binary)
     corr = _Correspondences()
     mats: list[np.ndarray] = []
@@ -437,6 +446,8 @@ def localize_verified(
         corr.pixels.append(img)
         corr.query.append(np.full(len(q_idx), qi))
         mats.append(np.repeat(m_q[None], len(q_idx), axis=0))
+        if not pnp:
+            continue
         try:
             # OpenCV's RANSAC draws from a process-wide RNG: seed it per call so a query gives
             # the same answer whatever ran before it (in-process, served, or in a worker).
@@ -463,6 +474,58 @@ def localize_verified(
             continue
         t_map_robot_last = t_map_cam @ np.linalg.inv(c_q) @ to_last[qi]
         hypotheses.append(np.array(planar_pose(t_map_robot_last)))
+    return corr, mats, hypotheses, kf_votes, cand_all
+
+
+def pose_support(
+    vmap: VisualMap, feats: Sequence[Features], queries: Sequence[Keyframe], poses: Sequence[Pose2D]
+) -> list[int]:
+    """How many of the queries' landmark matches each pose reprojects within the PnP tolerance.
+
+    A weak but fair vote between candidate poses found another way (the floor-wall lines)
+    where no pose had enough matches to be verified.
+
+    Args:
+        vmap: The map.
+        feats: Features of each query, extracted with the map's extractor.
+        queries: The query images (odometry poses and head angles).
+        poses: Candidate robot poses when the last query was taken, map frame.
+    """
+    tun = vmap.config.tuning.localizer
+    usable = [i for i, f in enumerate(feats) if len(f) > 0]
+    if not usable or not poses:
+        return [0] * len(poses)
+    to_last = _to_last(queries, turn_scale_of(vmap))
+    corr, mats, _h, _v, _c = _correspond(
+        vmap, feats, queries, usable, to_last, tun.candidates, pnp=False
+    )
+    if not corr.points:
+        return [0] * len(poses)
+    pts, px, mm = np.concatenate(corr.points), np.concatenate(corr.pixels), np.concatenate(mats)
+    tol = tun.pnp_reprojection_px
+    return [int((_residuals(np.array(p.to_list()), mm, pts, px) < tol).sum()) for p in poses]
+
+
+def localize_verified(
+    vmap: VisualMap,
+    feats: Sequence[Features],
+    queries: Sequence[Keyframe],
+    top_k: int | None = None,
+) -> Estimate:
+    """Retrieval + landmark matching + PnP + joint 3-DoF refinement (see module doc).
+
+    ``top_k`` retrieval candidates per query (default: the map's tuning).
+    """
+
+    tun = vmap.config.tuning.localizer
+    top_k = tun.candidates if top_k is None else top_k
+    usable = [i for i, f in enumerate(feats) if len(f) > 0]
+    if not usable:
+        return no_estimate("verified", "no features")
+    to_last = _to_last(queries, turn_scale_of(vmap))
+    corr, mats, hypotheses, kf_votes, cand_all = _correspond(
+        vmap, feats, queries, usable, to_last, top_k, pnp=True
+    )
     details: dict[str, Any] = {"candidates": cand_all}
     if corr.points and tun.planar_samples > 0:
         planar = planar_hypotheses(

@@ -1,0 +1,145 @@
+"""Floor-wall lines as a pose fix: the walls the map records, the lines the robot measures.
+
+The survey walks a known rectangle a wall offset inside the room's walls, and its wall
+poses (:mod:`naoloc.wall_poses`) place every keyframe in a wall frame W whose x axis runs
+along the first wall; the map's meta keeps W's place in the map frame and the walls in W
+(``meta.wall_poses.wall_frame``, ``walls_m``; :func:`map_walls`).
+
+A floor-wall line measured at the robot (:class:`naoloc.floorline.WallLine`, FRAME_ROBOT:
+measured to 1-4 cm at 0.5-2 m) says how far a wall is and at which angle. The lines of one
+room agree on the robot's heading modulo a quarter turn, and each gives one coordinate once
+assigned to the wall it faces; furniture in front of a wall gives a coordinate too near
+that wall. :func:`candidates` lists every pose the lines allow; the pictures' landmark
+matches choose among them (:func:`naoloc.behaviours.localize.localize`).
+
+Frames: the map frame in and out (x forward at the survey start, y left, metres, radians);
+W inside.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from naoloc.geometry import Pose2D, modulo2PI
+
+if TYPE_CHECKING:
+    from naoloc.floorline import WallLine
+    from naoloc.mapping.mapfile import MapData
+
+# Lines agree on the heading within this, rad; their coordinates cluster within this, m.
+HEADING_AGREE_RAD = 0.1
+COORD_AGREE_M = 0.12
+# Lines shorter than this along the floor are ignored, m.
+MIN_SPAN_M = 0.25
+
+
+@dataclass(frozen=True)
+class Walls:
+    """Where the room's walls stand.
+
+    Attributes:
+        frame: The wall frame W (x along the survey's first wall) in the map frame.
+        bounds: The walls in W, ``(x_min, x_max, y_min, y_max)``, m.
+    """
+
+    frame: Pose2D
+    bounds: tuple[float, float, float, float]
+
+    @property
+    def coords(self) -> tuple[float, float, float, float]:
+        """Per side (+x, +y, -x, -y of W), its coordinate along its outward normal, m."""
+        x0, x1, y0, y1 = self.bounds
+        return (x1, y1, -x0, -y0)
+
+
+def map_walls(vmap: MapData) -> Walls | None:
+    """The room's walls as the survey's wall poses placed them (``meta.wall_poses``), or None.
+
+    None for a map whose keyframe poses did not come from the walls (odometry poses, a map
+    built before the walls were recorded).
+    """
+    wp = vmap.meta.get("wall_poses")
+    if not isinstance(wp, dict):
+        return None
+    frame, bounds = wp.get("wall_frame"), wp.get("walls_m")
+    if not (isinstance(frame, list) and len(frame) == 3 and isinstance(bounds, list)):
+        return None
+    if len(bounds) != 4 or not all(isinstance(v, (int, float)) for v in [*frame, *bounds]):
+        return None
+    x0, x1, y0, y1 = (float(v) for v in bounds)
+    if not (x0 < x1 and y0 < y1):
+        return None
+    return Walls(Pose2D(*(float(v) for v in frame)), (x0, x1, y0, y1))
+
+
+def candidates(
+    lines: Sequence[WallLine], walls: Walls, heading: float | None = None
+) -> list[Pose2D]:
+    """Every pose the lines allow: a heading they agree on, then per axis each coordinate.
+
+    Lines of one room agree on the robot's heading modulo a quarter turn; each line then
+    gives one coordinate along the axis of the wall it faces (furniture in front of that
+    wall gives one too near it). Coordinates within :data:`COORD_AGREE_M` are one.
+
+    Args:
+        lines: Floor-wall lines measured at the robot, FRAME_ROBOT of the robot now.
+        walls: The room's walls (:func:`map_walls`).
+        heading: A heading to keep to (map frame, rad): only its quarter turn is tried.
+            None tries all four.
+
+    Returns:
+        Robot poses in the map frame (none when fewer than two lines agree on the heading
+        or an axis has no line).
+    """
+    usable = [ln for ln in lines if ln.span_m >= MIN_SPAN_M and math.isfinite(ln.distance)]
+    if len(usable) < 2:
+        return []
+    quarter = math.pi / 2
+    # Headings in W modulo a quarter turn, as offsets from a quarter of each line's normal.
+    d = np.asarray([math.remainder(-ln.normal, quarter) for ln in usable])
+    w = np.asarray([ln.span_m for ln in usable])
+    gap = np.abs(np.remainder(d[:, None] - d[None, :] + quarter / 2, quarter) - quarter / 2)
+    support = (w[None, :] * (gap < HEADING_AGREE_RAD)).sum(axis=1)
+    centre = int(np.argmax(support))
+    agree = gap[centre] < HEADING_AGREE_RAD
+    if agree.sum() < 2:
+        return []
+    off = d[agree] - d[centre]
+    off = np.remainder(off + quarter / 2, quarter) - quarter / 2
+    base = float(d[centre] + np.average(off, weights=w[agree]))
+    if heading is None:
+        turns = [base + k * quarter for k in range(4)]
+    else:
+        h = (walls.frame.inverse() * Pose2D(0.0, 0.0, heading)).theta
+        turns = [base + round((h - base) / quarter) * quarter]
+    out: list[Pose2D] = []
+    for theta in turns:
+        per_axis: list[list[float]] = [[], []]
+        for ln, ok in zip(usable, agree, strict=True):
+            if not ok:
+                continue
+            k = round((theta + ln.normal) / quarter) % 4
+            along = walls.coords[k] - ln.distance  # robot's coordinate along the outward normal
+            per_axis[k % 2].append(along if k < 2 else -along)
+        if not per_axis[0] or not per_axis[1]:
+            continue
+        xs, ys = _clusters(per_axis[0]), _clusters(per_axis[1])
+        out += [walls.frame * Pose2D(x, y, modulo2PI(theta)) for x in xs for y in ys]
+    return out
+
+
+def _clusters(values: Sequence[float]) -> list[float]:
+    """The means of runs of sorted ``values`` closer than :data:`COORD_AGREE_M`."""
+    v = sorted(values)
+    groups: list[list[float]] = [[v[0]]]
+    for a in v[1:]:
+        if a - groups[-1][-1] < COORD_AGREE_M:
+            groups[-1].append(a)
+        else:
+            groups.append([a])
+    return [float(np.mean(g)) for g in groups]

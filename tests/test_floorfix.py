@@ -1,0 +1,86 @@
+"""The floor-line fix: the walls the map records, the poses floor-wall lines allow."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from naoloc.floorfix import Walls, candidates, map_walls
+from naoloc.floorline import WallLine
+from naoloc.geometry import Pose2D, modulo2PI
+
+# A 5 x 4 m room in a wall frame turned 0.05 rad from the map frame.
+WALLS = Walls(Pose2D(0.2, -0.1, 0.05), (-1.0, 4.0, -1.0, 3.0))
+
+
+def _line(distance: float, normal: float, span: float = 1.0) -> WallLine:
+    return WallLine(distance, normal, 200, 0.9, 0.005, span)
+
+
+def _lines_at(pose_w: Pose2D, furniture: float | None = None) -> list[WallLine]:
+    """Exact lines to the four walls from ``pose_w`` (wall frame); optionally a bookcase
+    ``furniture`` m in front of the +x wall."""
+    x0, x1, y0, y1 = WALLS.bounds
+    out = []
+    for k, dist in enumerate((x1 - pose_w.x, y1 - pose_w.y, pose_w.x - x0, pose_w.y - y0)):
+        if k == 0 and furniture is not None:
+            out.append(_line(dist - furniture, modulo2PI(k * math.pi / 2 - pose_w.theta)))
+        out.append(_line(dist, modulo2PI(k * math.pi / 2 - pose_w.theta)))
+    return out
+
+
+def _near(cands: list[Pose2D], truth: Pose2D, metres: float = 0.01, rad: float = 0.01) -> bool:
+    return any(
+        math.hypot(c.x - truth.x, c.y - truth.y) < metres
+        and abs(modulo2PI(c.theta - truth.theta)) < rad
+        for c in cands
+    )
+
+
+@pytest.mark.parametrize("theta", [0.3, -2.0, 2.9])
+def test_the_true_pose_is_among_the_candidates(theta: float) -> None:
+    pose_w = Pose2D(1.2, 0.7, theta)
+    truth = WALLS.frame * pose_w
+    lines = _lines_at(pose_w, furniture=0.8)
+    every = candidates(lines, WALLS)
+    assert _near(every, truth)
+    # one quarter turn: two x coordinates (the wall, the bookcase), one y (both walls agree)
+    kept = candidates(lines, WALLS, heading=truth.theta + 0.3)
+    assert len(kept) == 2 and _near(kept, truth)
+    assert len(every) > len(kept)
+
+
+def test_noisy_lines_still_give_the_pose_within_centimetres() -> None:
+    rng = np.random.default_rng(3)
+    pose_w = Pose2D(2.5, 1.9, 1.0)
+    truth = WALLS.frame * pose_w
+    lines = [
+        _line(ln.distance + rng.normal(0, 0.02), ln.normal + rng.normal(0, 0.02))
+        for ln in _lines_at(pose_w)
+    ]
+    assert _near(candidates(lines, WALLS, heading=truth.theta), truth, metres=0.05, rad=0.03)
+
+
+def test_too_few_or_short_lines_give_nothing() -> None:
+    assert candidates([_line(1.0, 0.2)], WALLS) == []
+    assert candidates([_line(1.0, 0.2, 0.1), _line(2.0, 1.77, 0.1)], WALLS) == []
+    # two lines on one axis only: the other coordinate is unknown
+    assert candidates([_line(1.0, 0.2), _line(2.0, 0.2 + math.pi)], WALLS) == []
+
+
+def test_map_walls_come_from_the_wall_poses_meta() -> None:
+    meta = {"wall_poses": {"wall_frame": [0.2, -0.1, 0.05], "walls_m": [-1.0, 4.0, -1.0, 3.0]}}
+    walls = map_walls(SimpleNamespace(meta=meta))  # type: ignore[arg-type]
+    assert walls == WALLS and walls.coords == (4.0, 3.0, 1.0, 1.0)
+    for bad in (
+        {},
+        {"wall_poses": None},
+        {"wall_poses": {"wall_frame": [0, 0, 0]}},
+        {"wall_poses": {"wall_frame": [0, 0], "walls_m": [-1, 4, -1, 3]}},
+        {"wall_poses": {"wall_frame": [0, 0, 0], "walls_m": [4, -1, -1, 3]}},
+        {"wall_poses": {"wall_frame": [0, 0, "x"], "walls_m": [-1, 4, -1, 3]}},
+    ):
+        assert map_walls(SimpleNamespace(meta=bad)) is None  # type: ignore[arg-type]
