@@ -196,8 +196,7 @@ def go_home(
         try:
             odo_prev = pose_of(robot.motion, True)
             while True:
-                # The floor-line fix is not measured in go-home yet: its figures stand without.
-                loc = localize(robot, vmap, cfg, camera=camera, turns=turns, floor_lines=False)
+                loc = localize(robot, vmap, cfg, camera=camera, turns=turns)
                 rounds.append(loc)
                 if on_round is not None:
                     on_round(tries, loc)

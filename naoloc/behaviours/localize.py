@@ -53,15 +53,14 @@ SCAN_YAWS: tuple[float, ...] = (-2.0, -1.35, -0.7, 0.0, 0.7, 1.35, 2.0)
 PAPER_SECOND_OFFSET = 0.1
 # The floor-line fix (localize.floor_lines): the bottom camera's head yaws and pitches (rad)
 # around the robot; a PnP pose within FLOOR_CONFIRM_* of one of the lines' poses stands; a
-# candidate needs FLOOR_MIN_SUPPORT reprojected matches and more than any candidate farther
-# than FLOOR_DISTINCT_M (m); its confidence (below CONFIDENT: the scan looked all round).
-# Restricting the candidates to 1.5 m around a keyframe fallback was measured worse (rooms
-# 913, 2718, 1595909956: p90 0.34 m against 0.14 m): the fallback is often 2-3 m off.
+# candidate needs FLOOR_MIN_SUPPORT query features it explains and FLOOR_MARGIN times more
+# than any candidate farther than FLOOR_DISTINCT_M (m); its confidence (below CONFIDENT).
 FLOOR_YAWS: tuple[float, ...] = (-2.0, -1.0, 0.0, 1.0, 2.0)
 FLOOR_PITCHES: tuple[float, ...] = (-0.35, 0.0)
 FLOOR_CONFIRM_M = 0.3
 FLOOR_CONFIRM_RAD = 0.15
-FLOOR_MIN_SUPPORT = 2
+FLOOR_MIN_SUPPORT = 20
+FLOOR_MARGIN = 1.15
 FLOOR_DISTINCT_M = 0.3
 FLOOR_CONFIDENCE = 0.3
 # Turns in place (and sweeps) added while the estimate is not confident, and their angle, rad.
@@ -313,8 +312,8 @@ def _floor_fix(
     A PnP pose that one of the floor lines' poses confirms stays. Otherwise the candidate
     the pictures' landmark matches support best (:func:`naoloc.mapping.localizer.pose_support`)
     replaces the estimate (a PnP pose the floor contradicts, a keyframe fallback, or none)
-    when its support is at least :data:`FLOOR_MIN_SUPPORT` and beats every candidate farther
-    than :data:`FLOOR_DISTINCT_M` from it.
+    when its support is at least :data:`FLOOR_MIN_SUPPORT` and :data:`FLOOR_MARGIN` times
+    that of every candidate farther than :data:`FLOOR_DISTINCT_M` from it.
     """
     from naoloc.floorfix import candidates, map_walls
     from naoloc.mapping.localizer import Estimate as _Estimate
@@ -339,7 +338,9 @@ def _floor_fix(
     best = max(range(len(cands)), key=lambda i: support[i])
     rivals = [s for c, s in zip(cands, support, strict=True)
               if not _close(c, cands[best], FLOOR_DISTINCT_M, math.pi)]  # fmt: skip
-    if support[best] < FLOOR_MIN_SUPPORT or (rivals and max(rivals) >= support[best]):
+    if support[best] < FLOOR_MIN_SUPPORT or (
+        rivals and FLOOR_MARGIN * max(rivals) >= support[best]
+    ):
         estimate.details.update(info, floor_support=support[best])
         return estimate
     pose = cands[best]
