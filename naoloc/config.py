@@ -524,11 +524,12 @@ class LocalizeConfig(_Model):
         "the head's limits at each yaw)",
     )
 
-    floor_lines: bool = Field(
-        True,
-        description="scan strategy, when the pictures verify no pose: measure the floor-wall "
-        "lines around the robot (bottom camera) and take the pose they and the map's walls "
-        "allow that the pictures' matches support best (method floorlines)",
+    floor_lines: Literal["off", "unsure", "always"] = Field(
+        "unsure",
+        description="scan strategy: measure the floor-wall lines around the robot (bottom "
+        "camera) and take the pose they and the map's walls allow when the pictures' matches "
+        "support it clearly better (method floorlines): off, unsure (when the pictures "
+        "verified no confident pose) or always (also checks confident ones: 10 more pictures)",
     )
 
     @field_validator("resolution")

@@ -313,7 +313,8 @@ def _floor_fix(
     the pictures' landmark matches support best (:func:`naoloc.mapping.localizer.pose_support`)
     replaces the estimate (a PnP pose the floor contradicts, a keyframe fallback, or none)
     when its support is at least :data:`FLOOR_MIN_SUPPORT` and :data:`FLOOR_MARGIN` times
-    that of every candidate farther than :data:`FLOOR_DISTINCT_M` from it.
+    that of every other place farther than :data:`FLOOR_DISTINCT_M` from it, the estimate's
+    own pose included.
     """
     from naoloc.floorfix import candidates, map_walls
     from naoloc.mapping.localizer import Estimate as _Estimate
@@ -334,9 +335,11 @@ def _floor_fix(
     if not cands:
         estimate.details.update(info)
         return estimate
-    support = pose_support(vmap, vmap.extract(queries), queries, cands)
+    # The estimate itself stands in the vote: a floor pose must beat it too.
+    voters = [*cands, estimate.pose()] if found else cands
+    support = pose_support(vmap, vmap.extract(queries), queries, voters)
     best = max(range(len(cands)), key=lambda i: support[i])
-    rivals = [s for c, s in zip(cands, support, strict=True)
+    rivals = [s for c, s in zip(voters, support, strict=True)
               if not _close(c, cands[best], FLOOR_DISTINCT_M, math.pi)]  # fmt: skip
     if support[best] < FLOOR_MIN_SUPPORT or (
         rivals and FLOOR_MARGIN * max(rivals) >= support[best]
@@ -368,7 +371,7 @@ def localize(
     turns: int = 1,
     extra_turns: int = EXTRA_TURNS,
     camera: Camera | None = None,
-    floor_lines: bool | None = None,
+    floor_lines: str | None = None,
     on_step: Callable[[str], None] | None = None,
 ) -> Localization:
     """Take query pictures without translating and localize them in ``vmap``.
@@ -386,8 +389,9 @@ def localize(
             :data:`naoloc.mapping.localizer.CONFIDENT`, turn a quarter turn in place and sweep
             again, at most this many times (0 = never).
         camera: An open camera subscription to reuse; one is opened otherwise.
-        floor_lines: Try the floor-line fix when the pictures verify no confident pose
-            (scan strategy, verified mode); default ``cfg.localize.floor_lines``.
+        floor_lines: When to try the floor-line fix (scan strategy, verified mode):
+            ``off``, ``unsure`` (the pictures verified no confident pose) or ``always``;
+            default ``cfg.localize.floor_lines``.
         on_step: Called with a short note as the work advances (progress display).
 
     Returns:
@@ -443,11 +447,11 @@ def localize(
             last_sweep = len(order)
         if added and estimate.found:
             estimate = _heading_from_last_sweep(vmap, queries[-last_sweep:], estimate, mode)
+        when = cfg.localize.floor_lines if floor_lines is None else floor_lines
         if (
             strategy == "scan"
             and mode == "verified"
-            and (cfg.localize.floor_lines if floor_lines is None else floor_lines)
-            and estimate.confidence < CONFIDENT
+            and (when == "always" or (when == "unsure" and estimate.confidence < CONFIDENT))
         ):
             estimate = _floor_fix(robot, vmap, cfg, queries, estimate)
             if on_step is not None:

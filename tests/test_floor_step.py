@@ -1,0 +1,123 @@
+"""The localization's floor step: when it replaces the estimate, and when it must not.
+
+The floor lines and the landmark vote are replaced by stand-ins (the geometry is
+``test_floorfix.py``'s, the vote ``test_mapping_localize.py``'s); what is tested is the rule
+in :func:`naoloc.behaviours.localize._floor_fix`.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+from collections.abc import Sequence
+from types import SimpleNamespace
+from typing import Any
+
+import pytest
+
+from naoloc.floorline import WallLine
+from naoloc.geometry import Pose2D, modulo2PI
+from naoloc.mapping.localizer import Estimate, no_estimate
+
+# The module, not the function naoloc.behaviours re-exports under the same name.
+loc = importlib.import_module("naoloc.behaviours.localize")
+localizer = importlib.import_module("naoloc.mapping.localizer")
+TRUTH = Pose2D(1.2, 0.7, 0.4)  # map frame = wall frame here
+META = {"wall_poses": {"wall_frame": [0.0, 0.0, 0.0], "walls_m": [-1.0, 4.0, -1.0, 3.0]}}
+
+
+def _lines() -> list[WallLine]:
+    dists = (4.0 - TRUTH.x, 3.0 - TRUTH.y, TRUTH.x + 1.0, TRUTH.y + 1.0)
+    return [
+        WallLine(d, modulo2PI(k * math.pi / 2 - TRUTH.theta), 200, 0.9, 0.005, 1.0)
+        for k, d in enumerate(dists)
+    ]
+
+
+def _run(
+    monkeypatch: pytest.MonkeyPatch, estimate: Estimate, vote: dict[str, int]
+) -> tuple[Estimate, list[int]]:
+    """``_floor_fix`` with exact lines; the vote gives ``vote['truth']`` to the candidate at
+    the truth, ``vote['estimate']`` (default 0) to the estimate's own pose, ``vote['other']``
+    to one other place, 0 to the rest."""
+    calls: list[int] = []
+
+    def support(_vmap: Any, _f: Any, _q: Any, poses: Sequence[Pose2D]) -> list[int]:
+        calls.append(len(poses))
+        out = []
+        other_given = False
+        for p in poses:
+            if math.hypot(p.x - TRUTH.x, p.y - TRUTH.y) < 0.01:
+                out.append(vote["truth"])
+            elif estimate.found and math.hypot(p.x - estimate.x, p.y - estimate.y) < 1e-9:
+                out.append(vote.get("estimate", 0))
+            elif not other_given:
+                out.append(vote["other"])
+                other_given = True
+            else:
+                out.append(0)
+        return out
+
+    monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: _lines())
+    monkeypatch.setattr(localizer, "pose_support", support)
+    vmap = SimpleNamespace(meta=META, extract=lambda queries: [])
+    return loc._floor_fix(None, vmap, None, [], estimate), calls  # type: ignore[arg-type]
+
+
+def test_a_clear_vote_replaces_a_fallback(monkeypatch: pytest.MonkeyPatch) -> None:
+    guess = Estimate(2.5, 2.0, 0.1, 0.1, "verified", {"method": "keyframes"})
+    est, _ = _run(monkeypatch, guess, {"truth": 60, "other": 20})
+    assert est.method == "floorlines" and est.confidence == loc.FLOOR_CONFIDENCE
+    assert math.hypot(est.x - TRUTH.x, est.y - TRUTH.y) < 1e-6
+    assert abs(modulo2PI(est.theta - TRUTH.theta)) < 1e-6
+    assert est.details["replaced"]["method"] == "keyframes"
+
+
+def test_a_clear_vote_gives_a_pose_where_there_was_none(monkeypatch: pytest.MonkeyPatch) -> None:
+    est, _ = _run(
+        monkeypatch, no_estimate("verified", "no verified match"), {"truth": 40, "other": 5}
+    )
+    assert est.found and est.method == "floorlines"
+
+
+@pytest.mark.parametrize(
+    "vote",
+    [{"truth": 60, "other": 55}, {"truth": loc.FLOOR_MIN_SUPPORT - 1, "other": 0}],
+    ids=["two-places-nearly-equal", "too-little-support"],
+)
+def test_an_unclear_vote_changes_nothing(
+    monkeypatch: pytest.MonkeyPatch, vote: dict[str, int]
+) -> None:
+    est, _ = _run(monkeypatch, no_estimate("verified", "no verified match"), vote)
+    assert not est.found and est.method == "none"
+    guess = Estimate(2.5, 2.0, 0.1, 0.1, "verified", {"method": "keyframes"})
+    est, _ = _run(monkeypatch, guess, vote)
+    assert est.method == "keyframes" and (est.x, est.y) == (2.5, 2.0)
+
+
+def test_a_pnp_pose_the_floor_confirms_stays_without_a_vote(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    pnp = Estimate(TRUTH.x + 0.05, TRUTH.y, TRUTH.theta, 0.4, "verified", {"method": "pnp"})
+    est, calls = _run(monkeypatch, pnp, {"truth": 60, "other": 0})
+    assert est is pnp and est.details["floor_confirmed"] and calls == []
+
+
+def test_a_pnp_pose_the_floor_contradicts_is_replaced(monkeypatch: pytest.MonkeyPatch) -> None:
+    wrong = Estimate(3.0, 2.5, -1.0, 0.4, "verified", {"method": "pnp"})
+    est, calls = _run(monkeypatch, wrong, {"truth": 60, "other": 10})
+    assert calls and est.method == "floorlines"
+    assert math.hypot(est.x - TRUTH.x, est.y - TRUTH.y) < 1e-6
+
+
+def test_a_map_without_walls_is_left_alone(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: pytest.fail("measured"))
+    guess = Estimate(2.5, 2.0, 0.1, 0.1, "verified", {"method": "keyframes"})
+    vmap = SimpleNamespace(meta={}, extract=lambda queries: [])
+    assert loc._floor_fix(None, vmap, None, [], guess) is guess  # type: ignore[arg-type]
+
+
+def test_a_pnp_pose_the_vote_prefers_stays(monkeypatch: pytest.MonkeyPatch) -> None:
+    pnp = Estimate(3.0, 2.5, -1.0, 0.9, "verified", {"method": "pnp", "inliers": 70})
+    est, calls = _run(monkeypatch, pnp, {"truth": 60, "other": 10, "estimate": 80})
+    assert calls and est is pnp and est.method == "pnp"
