@@ -313,8 +313,7 @@ def _floor_fix(
     the pictures' landmark matches support best (:func:`naoloc.mapping.localizer.pose_support`)
     replaces the estimate (a PnP pose the floor contradicts, a keyframe fallback, or none)
     when its support is at least :data:`FLOOR_MIN_SUPPORT` and :data:`FLOOR_MARGIN` times
-    that of every other place farther than :data:`FLOOR_DISTINCT_M` from it, the estimate's
-    own pose included.
+    that of every other candidate farther than :data:`FLOOR_DISTINCT_M` from it.
     """
     from naoloc.floorfix import candidates, map_walls
     from naoloc.mapping.localizer import Estimate as _Estimate
@@ -335,11 +334,12 @@ def _floor_fix(
     if not cands:
         estimate.details.update(info)
         return estimate
-    # The estimate itself stands in the vote: a floor pose must beat it too.
-    voters = [*cands, estimate.pose()] if found else cands
-    support = pose_support(vmap, vmap.extract(queries), queries, voters)
+    # The estimate does not stand in the vote: a wrong PnP pose on a look-alike place
+    # explains nearly as many features as the true one (room 1595909956: two of its poses
+    # 2.7 and 4.4 m off kept that way, with support 47 and 58).
+    support = pose_support(vmap, vmap.extract(queries), queries, cands)
     best = max(range(len(cands)), key=lambda i: support[i])
-    rivals = [s for c, s in zip(voters, support, strict=True)
+    rivals = [s for c, s in zip(cands, support, strict=True)
               if not _close(c, cands[best], FLOOR_DISTINCT_M, math.pi)]  # fmt: skip
     if support[best] < FLOOR_MIN_SUPPORT or (
         rivals and FLOOR_MARGIN * max(rivals) >= support[best]
