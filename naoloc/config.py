@@ -529,13 +529,22 @@ class LocalizeConfig(_Model):
         description="scan strategy: measure the floor-wall lines around the robot (bottom "
         "camera) and take the pose they and the map's walls allow when the pictures' matches "
         "support it clearly better (method floorlines): off, unsure (when the pictures "
-        "verified no confident pose) or always (also checks confident ones: 10 more pictures)",
+        "verified no confident pose) or always (also checks confident ones: 10 more pictures); "
+        "YAML's bare false/off is off, true/on is unsure",
     )
 
     @field_validator("resolution")
     @classmethod
     def _res_ok(cls, v: int | None) -> int | None:
         return None if v is None else _resolution_id(v)
+
+    @field_validator("floor_lines", mode="before")
+    @classmethod
+    def _floor_lines_word(cls, v: object) -> object:
+        # YAML reads a bare off/no/false as False and on/yes/true as True.
+        if isinstance(v, bool):
+            return "unsure" if v else "off"
+        return v
 
     def camera(self, camera: CameraConfig) -> CameraConfig:
         """The camera settings of the query pictures: ``camera`` at ``resolution``."""

@@ -14,7 +14,10 @@ from types import SimpleNamespace
 from typing import Any
 
 import pytest
+from yaml import safe_load
 
+from naoloc.config import load_config
+from naoloc.errors import ConfigError
 from naoloc.floorline import WallLine
 from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.mapping.localizer import Estimate, no_estimate
@@ -112,3 +115,23 @@ def test_a_map_without_walls_is_left_alone(monkeypatch: pytest.MonkeyPatch) -> N
     guess = Estimate(2.5, 2.0, 0.1, 0.1, "verified", {"method": "keyframes"})
     vmap = SimpleNamespace(meta={}, extract=lambda queries: [])
     assert loc._floor_fix(None, vmap, None, [], guess) is guess  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("text", "value"),
+    [
+        ("off", "off"),
+        ("false", "off"),
+        ("on", "unsure"),
+        ("unsure", "unsure"),
+        ("always", "always"),
+    ],
+)
+def test_floor_lines_reads_yaml_words(text: str, value: str) -> None:
+    cfg = load_config({"localize": {"floor_lines": safe_load(f"x: {text}")["x"]}})
+    assert cfg.localize.floor_lines == value
+
+
+def test_floor_lines_refuses_other_words() -> None:
+    with pytest.raises(ConfigError, match="floor_lines"):
+        load_config({"localize": {"floor_lines": "sometimes"}})
