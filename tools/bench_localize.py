@@ -16,6 +16,9 @@ that). In the same process, best of ``--repeats`` CPU times:
 2. One localization of ``--pictures`` pictures (a 7-yaw sweep, and four of them after
    turns in place): extraction plus the verified localizer, with the two-point planar
    RANSAC (``map.tuning.localizer.planar_samples``) and without it.
+3. The floor-line fix's vote (:func:`naoloc.mapping.localizer.pose_support`) over
+   ``--candidates`` poses (keyframe poses stand in for the floor's candidates: the time
+   does not depend on where they are), against that localization.
 """
 
 from __future__ import annotations
@@ -37,8 +40,10 @@ import numpy as np  # noqa: E402
 
 from naoloc.dataset import read_dataset  # noqa: E402
 from naoloc.errors import NaolocError  # noqa: E402
+from naoloc.geometry import Pose2D  # noqa: E402
 from naoloc.mapping import load_map  # noqa: E402
 from naoloc.mapping.features import FeatureExtractor  # noqa: E402
+from naoloc.mapping.localizer import pose_support  # noqa: E402
 
 
 def _best_cpu(fn: Callable[[], Any], repeats: int) -> float:
@@ -67,6 +72,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("map")
     parser.add_argument("--pictures", type=int, nargs="+", default=[7, 28])
     parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--candidates", type=int, default=36)
     args = parser.parse_args(argv)
     cv2.setNumThreads(1)
     try:
@@ -112,6 +118,16 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"  localize {k:2d} pictures: {t_on * 1e3:.0f} ms CPU (extraction {t_ex * 1e3:.0f} "
             f"ms); without the planar RANSAC {t_off * 1e3:.0f} ms = {t_on / t_off:.2f}x"
+        )
+        feats = vmap.extract(queries)
+        step = max(1, len(vmap.refined_poses) // args.candidates)
+        cands = [Pose2D(*map(float, p)) for p in vmap.refined_poses[::step][: args.candidates]]
+        t_vote = _best_cpu(
+            lambda f=feats, q=queries, c=cands: pose_support(vmap, f, q, c), args.repeats
+        )
+        print(
+            f"    floor-line vote over {len(cands)} candidates: {t_vote * 1e3:.0f} ms CPU "
+            f"(+ extraction again {t_ex * 1e3:.0f} ms) = {t_vote / t_on:.2f}x the localization"
         )
     return 0
 
