@@ -73,6 +73,16 @@ class TruthMap:
         self.calls: list[int] = []
         self.keyframe_poses = CIRCUIT
 
+    def extract(self, queries: Sequence[Keyframe]) -> list[None]:
+        """No features: the double answers from the truth (one placeholder per picture)."""
+        return [None] * len(queries)
+
+    def localize_features(
+        self, feats: Sequence[None], queries: Sequence[Keyframe], mode: str = "verified"
+    ) -> Estimate:
+        assert len(feats) == len(queries)
+        return self.localize(queries, mode)
+
     def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> Estimate:
         offset = self.offsets[len(self.calls) % len(self.offsets)]
         self.calls.append(len(queries))
@@ -308,16 +318,18 @@ def test_heading_after_turns_comes_from_the_last_sweep() -> None:
         def __init__(self, method: str) -> None:
             self.method = method
 
-        def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> Estimate:
+        def localize_features(
+            self, feats: Sequence[None], queries: Sequence[Keyframe], mode: str = "verified"
+        ) -> Estimate:
             return Estimate(9.0, 9.0, 0.5, 0.9, mode, {"method": self.method})
 
     combined = Estimate(1.0, 2.0, 0.2, 0.8, "verified", {"method": "pnp"})
-    got = _heading_from_last_sweep(Tail("pnp"), [], combined, "verified")  # type: ignore[arg-type]
+    got = _heading_from_last_sweep(Tail("pnp"), [], [], combined, "verified")  # type: ignore[arg-type]
     assert (got.x, got.y, got.theta) == (1.0, 2.0, 0.5)  # position kept, heading replaced
-    kept = _heading_from_last_sweep(Tail("keyframes"), [], combined, "verified")  # type: ignore[arg-type]
+    kept = _heading_from_last_sweep(Tail("keyframes"), [], [], combined, "verified")  # type: ignore[arg-type]
     assert kept == combined  # keyframe bearings do not replace a PnP heading
     rough = Estimate(1.0, 2.0, 0.2, 0.3, "verified", {"method": "keyframes"})
-    got = _heading_from_last_sweep(Tail("keyframes"), [], rough, "verified")  # type: ignore[arg-type]
+    got = _heading_from_last_sweep(Tail("keyframes"), [], [], rough, "verified")  # type: ignore[arg-type]
     assert (got.x, got.y, got.theta) == (1.0, 2.0, 0.5)  # but they replace the same, combined
 
 

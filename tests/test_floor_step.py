@@ -60,8 +60,8 @@ def _run(
 
     monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: _lines())
     monkeypatch.setattr(localizer, "pose_support", support)
-    vmap = SimpleNamespace(meta=META, extract=lambda queries: [])
-    return loc._floor_fix(None, vmap, None, [], estimate), calls  # type: ignore[arg-type]
+    vmap = SimpleNamespace(meta=META)
+    return loc._floor_fix(None, vmap, None, [], [], estimate), calls  # type: ignore[arg-type]
 
 
 def test_a_clear_vote_replaces_a_fallback(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -113,8 +113,8 @@ def test_a_pnp_pose_the_floor_contradicts_is_replaced(monkeypatch: pytest.Monkey
 def test_a_map_without_walls_is_left_alone(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: pytest.fail("measured"))
     guess = Estimate(2.5, 2.0, 0.1, 0.1, "verified", {"method": "keyframes"})
-    vmap = SimpleNamespace(meta={}, extract=lambda queries: [])
-    assert loc._floor_fix(None, vmap, None, [], guess) is guess  # type: ignore[arg-type]
+    vmap = SimpleNamespace(meta={})
+    assert loc._floor_fix(None, vmap, None, [], [], guess) is guess  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize(

@@ -41,6 +41,7 @@ from naoloc.robot import Robot
 
 if TYPE_CHECKING:
     from naoloc.mapping import Estimate, VisualMap
+    from naoloc.mapping.features import Features
 
 # Head yaws of a scan, rad: the head turns +-2.09 rad, the camera sees +-0.53 rad more. Seven
 # (0.67 rad apart, the camera's 1.06 rad FOV overlapping): with the head tilted up toward the
@@ -265,7 +266,11 @@ def survey_look_ahead(meta: dict[str, Any]) -> float:
 
 
 def _heading_from_last_sweep(
-    vmap: VisualMap, last: Sequence[Keyframe], combined: Estimate, mode: str
+    vmap: VisualMap,
+    last: Sequence[Keyframe],
+    feats: Sequence[Features],
+    combined: Estimate,
+    mode: str,
 ) -> Estimate:
     """The combined estimate's position with the heading the last sweep alone verifies.
 
@@ -275,7 +280,7 @@ def _heading_from_last_sweep(
     are exact, so the last sweep's own heading is kept: its PnP heading always, its
     keyframe-bearing heading when the combined estimate has only that too.
     """
-    tail = vmap.localize(last, mode=mode)  # type: ignore[arg-type]
+    tail = vmap.localize_features(feats, last, mode=mode)  # type: ignore[arg-type]
     if not tail.found:
         return combined
     # A PnP heading beats any; the keyframes' bearings (one sweep: exact head angles) beat
@@ -305,7 +310,12 @@ def measure_floor_lines(robot: Robot, cfg: Config) -> list[WallLine]:
 
 
 def _floor_fix(
-    robot: Robot, vmap: VisualMap, cfg: Config, queries: Sequence[Keyframe], estimate: Estimate
+    robot: Robot,
+    vmap: VisualMap,
+    cfg: Config,
+    queries: Sequence[Keyframe],
+    feats: Sequence[Features],
+    estimate: Estimate,
 ) -> Estimate:
     """The estimate, or a better one from the floor lines (:mod:`naoloc.floorfix`).
 
@@ -337,7 +347,7 @@ def _floor_fix(
     # The estimate does not stand in the vote: a wrong PnP pose on a look-alike place
     # explains nearly as many features as the true one (room 1595909956: two of its poses
     # 2.7 and 4.4 m off kept that way, with support 47 and 58).
-    support = pose_support(vmap, vmap.extract(queries), queries, cands)
+    support = pose_support(vmap, feats, queries, cands)
     best = max(range(len(cands)), key=lambda i: support[i])
     rivals = [s for c, s in zip(cands, support, strict=True)
               if not _close(c, cands[best], FLOOR_DISTINCT_M, math.pi)]  # fmt: skip
@@ -429,31 +439,36 @@ def localize(
             queries = scan_queries(cam, yaws, turns=turns, pitch=pitch)
         if on_step is not None:
             on_step(f"{len(queries)} pictures")
-        estimate = vmap.localize(queries, mode=mode)  # type: ignore[arg-type]
+        feats = vmap.extract(queries)  # each picture's features once, kept across sweeps
+        estimate = vmap.localize_features(feats, queries, mode=mode)  # type: ignore[arg-type]
         order = list(yaws) if turns % 2 == 0 else list(reversed(yaws))
         last_sweep = len(queries)
         while strategy == "scan" and estimate.confidence < CONFIDENT and added < extra_turns:
             try:
                 if not robot.motion.moveTo(0.0, 0.0, EXTRA_TURN_RAD):
                     raise MotionError("turning in place failed during the localization scan")
-                queries += sweep(cam, order, pitch)
+                more = sweep(cam, order, pitch)
+                queries += more
+                feats += vmap.extract(more)
             finally:
                 robot.motion.stopMove()
             order.reverse()  # sweep back from where the head is
             added += 1
             if on_step is not None:
                 on_step(f"turned in place, {len(queries)} pictures")
-            estimate = vmap.localize(queries, mode=mode)  # type: ignore[arg-type]
+            estimate = vmap.localize_features(feats, queries, mode=mode)  # type: ignore[arg-type]
             last_sweep = len(order)
         if added and estimate.found:
-            estimate = _heading_from_last_sweep(vmap, queries[-last_sweep:], estimate, mode)
+            estimate = _heading_from_last_sweep(
+                vmap, queries[-last_sweep:], feats[-last_sweep:], estimate, mode
+            )
         when = cfg.localize.floor_lines if floor_lines is None else floor_lines
         if (
             strategy == "scan"
             and mode == "verified"
             and (when == "always" or (when == "unsure" and estimate.confidence < CONFIDENT))
         ):
-            estimate = _floor_fix(robot, vmap, cfg, queries, estimate)
+            estimate = _floor_fix(robot, vmap, cfg, queries, feats, estimate)
             if on_step is not None:
                 on_step(f"floor lines: {estimate.method}")
     finally:
