@@ -69,7 +69,10 @@ def map_walls(vmap: MapData) -> Walls | None:
     frame, bounds = wp.get("wall_frame"), wp.get("walls_m")
     if not (isinstance(frame, list) and len(frame) == 3 and isinstance(bounds, list)):
         return None
-    if len(bounds) != 4 or not all(isinstance(v, (int, float)) for v in [*frame, *bounds]):
+    values = [*frame, *bounds]
+    if len(bounds) != 4 or not all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values
+    ):
         return None
     x0, x1, y0, y1 = (float(v) for v in bounds)
     if not (x0 < x1 and y0 < y1):

@@ -82,5 +82,7 @@ def test_map_walls_come_from_the_wall_poses_meta() -> None:
         {"wall_poses": {"wall_frame": [0, 0], "walls_m": [-1, 4, -1, 3]}},
         {"wall_poses": {"wall_frame": [0, 0, 0], "walls_m": [4, -1, -1, 3]}},
         {"wall_poses": {"wall_frame": [0, 0, "x"], "walls_m": [-1, 4, -1, 3]}},
+        {"wall_poses": {"wall_frame": [0, float("nan"), 0], "walls_m": [-1, 4, -1, 3]}},
+        {"wall_poses": {"wall_frame": [0, 0, True], "walls_m": [-1, 4, -1, 3]}},
     ):
         assert map_walls(SimpleNamespace(meta=bad)) is None  # type: ignore[arg-type]
