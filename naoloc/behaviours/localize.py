@@ -365,9 +365,7 @@ def _floor_fix(
 
 
 def _close(a: Pose2D, b: Pose2D, metres: float, radians: float) -> bool:
-    return (
-        math.hypot(a.x - b.x, a.y - b.y) <= metres and abs(modulo2PI(a.theta - b.theta)) <= radians
-    )
+    return a.distance(b) <= metres and abs(modulo2PI(a.theta - b.theta)) <= radians
 
 
 def localize(

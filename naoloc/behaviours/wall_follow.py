@@ -71,6 +71,26 @@ class FloorEye:
             expect_normal: Expected normal direction in FRAME_ROBOT, rad (``-pi/2``: right).
             tolerance: Largest accepted difference, rad.
         """
+        view = self._view()
+        if view is None:
+            return None
+        image, hfov, vfov, pose = view
+        return detect_wall_line(
+            image, hfov, vfov, pose, expect_normal=expect_normal, tolerance=tolerance,
+            lens=self.lens,
+        )  # fmt: skip
+
+    def lines(self) -> list[WallLine]:
+        """Every floor-wall line in view (up to two: a corner), FRAME_ROBOT."""
+        view = self._view()
+        if view is None:
+            return []
+        image, hfov, vfov, pose = view
+        return detect_wall_lines(image, hfov, vfov, pose, lens=self.lens)
+
+    def _view(self) -> tuple[np.ndarray, float, float, np.ndarray] | None:
+        """A picture (BGR), its fields of view (rad) and the camera's pose in FRAME_ROBOT;
+        None when the robot reports no usable camera pose."""
         frame = self.camera.frame()
         info = self.camera.info(frame)
         pose = np.asarray(
@@ -78,21 +98,7 @@ class FloorEye:
         )
         if pose.size != 16 or not np.all(np.isfinite(pose)):
             return None
-        return detect_wall_line(
-            frame.bgr(), info.hfov, info.vfov, pose, expect_normal=expect_normal,
-            tolerance=tolerance, lens=self.lens,
-        )  # fmt: skip
-
-    def lines(self) -> list[WallLine]:
-        """Every floor-wall line in view (up to two: a corner), FRAME_ROBOT."""
-        frame = self.camera.frame()
-        info = self.camera.info(frame)
-        pose = np.asarray(
-            self.robot.motion.getTransform("CameraBottom", FRAME_ROBOT, True), np.float64
-        )
-        if pose.size != 16 or not np.all(np.isfinite(pose)):
-            return []
-        return detect_wall_lines(frame.bgr(), info.hfov, info.vfov, pose, lens=self.lens)
+        return frame.bgr(), info.hfov, info.vfov, pose
 
     def close(self) -> None:
         """Unsubscribe (best effort)."""

@@ -389,6 +389,13 @@ def _alternatives(
     return out
 
 
+def _projection(kmat: np.ndarray, c_q: np.ndarray, to_last: np.ndarray) -> np.ndarray:
+    """The 3 x 4 map from a point in the last query's robot frame to a query's pixels
+    (homogeneous): its intrinsics ``kmat``, its camera pose in its robot frame ``c_q`` and
+    its robot pose relative to the last query's ``to_last``."""
+    return kmat @ np.linalg.inv(c_q)[:3, :] @ to_last
+
+
 def _correspond(
     vmap: VisualMap,
     feats: Sequence[Features],
@@ -442,7 +449,7 @@ def _correspond(
         q_idx = np.fromiter(best.keys(), np.int64)
         obj = np.stack([best[a][1] for a in q_idx.tolist()])
         img = f.xy[q_idx].astype(np.float64)
-        m_q = kmat @ np.linalg.inv(c_q)[:3, :] @ to_last[qi]
+        m_q = _projection(kmat, c_q, to_last[qi])
         corr.points.append(obj)
         corr.pixels.append(img)
         corr.query.append(np.full(len(q_idx), qi))
@@ -525,7 +532,7 @@ def pose_support(
         pairs = np.asarray([(m.queryIdx, m.trainIdx) for ms in knn for m in ms], np.int64)
         if pairs.size == 0:
             continue
-        m_q = query_camera(q).matrix() @ np.linalg.inv(q.camera_matrix())[:3, :] @ to_last[qi]
+        m_q = _projection(query_camera(q).matrix(), q.camera_matrix(), to_last[qi])
         obj.append(pts[pairs[:, 1]])
         px.append(f.xy[pairs[:, 0]].astype(np.float64))
         mats.append(np.repeat(m_q[None], len(pairs), axis=0))
