@@ -525,12 +525,12 @@ class LocalizeConfig(_Model):
     )
 
     floor_lines: Literal["off", "unsure", "always"] = Field(
-        "unsure",
+        "always",
         description="scan strategy: measure the floor-wall lines around the robot (bottom "
-        "camera) and take the pose they and the map's walls allow when the pictures' matches "
-        "support it clearly better (method floorlines): off, unsure (when the pictures "
-        "verified no confident pose) or always (also checks confident ones: 10 more pictures); "
-        "YAML's bare false/off is off, true/on is unsure",
+        "camera, 10 pictures) and with the map's walls: a PnP pose they confirm takes their "
+        "pose; otherwise their pose the pictures' matches support clearly best (method "
+        "floorlines). always (default), unsure (only when the pictures verified no "
+        "confident pose) or off; YAML's bare false/off is off, true/on is always",
     )
 
     @field_validator("resolution")
@@ -543,7 +543,7 @@ class LocalizeConfig(_Model):
     def _floor_lines_word(cls, v: object) -> object:
         # YAML reads a bare off/no/false as False and on/yes/true as True.
         if isinstance(v, bool):
-            return "unsure" if v else "off"
+            return "always" if v else "off"
         return v
 
     def camera(self, camera: CameraConfig) -> CameraConfig:

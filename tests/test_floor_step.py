@@ -7,6 +7,7 @@ in :func:`naoloc.behaviours.localize._floor_fix`.
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import math
 from collections.abc import Sequence
@@ -95,12 +96,39 @@ def test_an_unclear_vote_changes_nothing(
     assert est.method == "keyframes" and (est.x, est.y) == (2.5, 2.0)
 
 
-def test_a_pnp_pose_the_floor_confirms_stays_without_a_vote(
+def test_a_pnp_pose_the_floor_confirms_takes_the_floor_pose(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    pnp = Estimate(TRUTH.x + 0.05, TRUTH.y, TRUTH.theta, 0.4, "verified", {"method": "pnp"})
+    pnp = Estimate(TRUTH.x + 0.12, TRUTH.y - 0.08, TRUTH.theta + 0.05, 0.8, "verified",
+                   {"method": "pnp", "inliers": 40})  # fmt: skip
     est, calls = _run(monkeypatch, pnp, {"truth": 60, "other": 0})
-    assert est is pnp and est.details["floor_confirmed"] and calls == []
+    assert est.method == "pnp" and est.confidence == 0.8 and est.details["inliers"] == 40
+    assert math.hypot(est.x - TRUTH.x, est.y - TRUTH.y) < 1e-6
+    assert abs(modulo2PI(est.theta - TRUTH.theta)) < 1e-6
+    assert est.details["floor_confirmed"] and est.details["floor_support"] == 60
+    assert est.details["floor_refined"]["pnp"] == pnp.pose().to_list()
+    assert len(calls) == 1 and calls[0] >= 1  # the vote only over the confirming poses
+    assert "floor_refined" not in pnp.details  # the PnP estimate itself is left as it was
+
+
+def test_a_confirmed_pnp_pose_takes_the_best_supported_nearby_pose(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Two floor poses near the PnP pose (a line of furniture 0.15 m in front of a wall):
+    the vote picks the one the pictures support, not the one nearer the PnP pose."""
+    lines = _lines()
+    furniture = dataclasses.replace(lines[0], distance=lines[0].distance - 0.15)
+    monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: [*lines, furniture])
+
+    def support(_vmap: Any, _f: Any, _q: Any, poses: Sequence[Pose2D]) -> list[int]:
+        return [50 if math.hypot(p.x - TRUTH.x, p.y - TRUTH.y) < 0.01 else 30 for p in poses]
+
+    monkeypatch.setattr(localizer, "pose_support", support)
+    pnp = Estimate(TRUTH.x + 0.11, TRUTH.y, TRUTH.theta, 0.8, "verified", {"method": "pnp"})
+    vmap = SimpleNamespace(meta=META)
+    est = loc._floor_fix(None, vmap, None, [], [], pnp)  # type: ignore[arg-type]
+    assert math.hypot(est.x - TRUTH.x, est.y - TRUTH.y) < 1e-6
+    assert est.details["floor_candidates"] >= 2
 
 
 def test_a_pnp_pose_the_floor_contradicts_is_replaced(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -122,7 +150,7 @@ def test_a_map_without_walls_is_left_alone(monkeypatch: pytest.MonkeyPatch) -> N
     [
         ("off", "off"),
         ("false", "off"),
-        ("on", "unsure"),
+        ("on", "always"),
         ("unsure", "unsure"),
         ("always", "always"),
     ],
