@@ -465,7 +465,9 @@ def side_distances(
     robot's own walk inward explains, a new stretch begins, one level nearer or farther.
     The wall is the farthest level that at least ``max(3, 20 %)`` of the lines see (a lone
     far line, a doorway's or a reflection's, lacks that support); a frame's distance is
-    its line plus how far its stretch stands in front of the wall. Frames without a line
+    its line plus how far its stretch stands in front of the wall, or its own line when its
+    stretch is within :data:`WALL_LEVEL_M` of the wall's level (it sees the wall: such
+    levels differ only by the odometry's sideways error between them). Frames without a line
     take the nearest frame's distance moved by the odometry's walk inward (only the
     odometry's short-range motion is used: a NAO's sideways odometry drifts 0.3 m along a
     5 m side).
@@ -504,8 +506,10 @@ def side_distances(
             break
     if wall is None:
         return None
+    # A line on the wall's level sees the wall: its own distance, not the level's (levels
+    # closer than WALL_LEVEL_M differ only by the odometry's sideways error in between).
     out: list[float | None] = [
-        None if (m is None or v is None) else m + (wall - v)
+        None if (m is None or v is None) else m if abs(v - wall) < WALL_LEVEL_M else m + (wall - v)
         for m, v in zip(measured, levels, strict=True)
     ]
     for i in range(1, len(out)):  # forward: carry the last distance by the walk inward

@@ -177,6 +177,23 @@ def test_side_distances_see_through_furniture_without_trusting_the_sideways_odom
     assert on_wall == [d == 0.0 and i != 15 for i, d in enumerate(depth)]
 
 
+def test_lines_on_the_wall_keep_their_own_distance_across_furniture() -> None:
+    """Room 913's first side: two lines of the wall at 0.99 m, a chest 0.33 m deep the robot
+    steers around, then the wall again. The odometry's walk back off the chest is 5 cm too
+    long, so the wall after it reads as a level 5 cm from the wall before it; both see the
+    wall, and each frame keeps its own line (before: the start took the level most lines
+    were on and was placed 5 cm off, and with it the whole map)."""
+    measured: list[float | None] = [0.99, 0.99, 0.66, 0.81, 0.96, 1.0, 1.0, 1.0, 1.0]
+    truth = [0.99, 0.99, 0.99, 1.14, 1.26, 1.0, 1.0, 1.0, 1.0]
+    inward = [0.0, 0.0, 0.0, 0.15, 0.12, -0.34, 0.0, 0.0, 0.0]  # truly -0.26 back
+    found = side_distances(measured, inward)
+    assert found is not None
+    dists, on_wall = found
+    assert on_wall == [True, True, False, False, False, True, True, True, True]
+    for i in (0, 1, 5, 6, 7, 8):
+        assert dists[i] == pytest.approx(truth[i], abs=1e-9)
+
+
 def test_side_distances_need_a_wall_most_lines_agree_on() -> None:
     assert side_distances([None, None], [0.0, 0.0]) is None
     # Two levels of one frame each: no level has three lines
