@@ -506,11 +506,12 @@ def side_distances(
             break
     if wall is None:
         return None
+    on_wall = [v is not None and abs(v - wall) < WALL_LEVEL_M for v in levels]
     # A line on the wall's level sees the wall: its own distance, not the level's (levels
     # closer than WALL_LEVEL_M differ only by the odometry's sideways error in between).
     out: list[float | None] = [
-        None if (m is None or v is None) else m if abs(v - wall) < WALL_LEVEL_M else m + (wall - v)
-        for m, v in zip(measured, levels, strict=True)
+        m if seen else None if (m is None or v is None) else m + (wall - v)
+        for m, v, seen in zip(measured, levels, on_wall, strict=True)
     ]
     for i in range(1, len(out)):  # forward: carry the last distance by the walk inward
         prev = out[i - 1]
@@ -520,7 +521,6 @@ def side_distances(
         nxt = out[i + 1]
         if out[i] is None and nxt is not None:
             out[i] = nxt - inward[i + 1]
-    on_wall = [v is not None and abs(v - wall) < WALL_LEVEL_M for v in levels]
     return [float(v) for v in out if v is not None], on_wall
 
 
