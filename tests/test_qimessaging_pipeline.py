@@ -75,7 +75,9 @@ def test_qimessaging_pipeline_matches_in_process(
     server_transport: str, tmp_path: Path, in_process: tuple[Path, dict[str, Any]]
 ) -> None:
     local_map, local = in_process
-    with served({**ROOM, "robot": {"backend": "fake"}}, server_transport) as server:
+    # The server's clock at 50 x real time, as in test_naoqi_pipeline: at 1.0 the survey's
+    # walking and head moves take over two minutes of waiting.
+    with served({**ROOM, "robot": {"backend": "fake"}}, server_transport, speed=50.0) as server:
         robot = server.client_config(sim_service=True)["robot"]
         robot["transport"] = "qimessaging"
         net_map, net = _pipeline(robot, tmp_path, "net")
