@@ -227,6 +227,9 @@ def test_zmq_unread_replies_are_bounded_and_do_not_stall_others() -> None:
         finally:
             sock.close(0)
             ctx.term()
-        assert worst < 0.5, f"another client waited {worst:.2f} s behind the flood"
+        # A server that blocks on the unread replies makes the other client wait for its
+        # call timeout (5 s); a served one answers in milliseconds. The bound leaves room for
+        # a loaded CI machine (0.64 s seen once with two evaluations on the same two cores).
+        assert worst < 2.0, f"another client waited {worst:.2f} s behind the flood"
         assert growth < 100, f"the server grew by {growth:.0f} MB holding unread replies"
         assert _answers(server)

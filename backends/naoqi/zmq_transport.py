@@ -43,6 +43,8 @@ from naoloc.urls import parse_url
 PING_EVERY_S: Final = 0.2
 LOST_AFTER_S: Final = 0.9
 _POLL_MS: Final = 50
+# How long close() waits for the I/O thread (it sees the stop within _POLL_MS).
+CLOSE_WAIT_S: Final = 10.0
 REPLY_HWM: Final = 16  # unread replies kept per client before new ones are dropped
 MAX_PENDING_CALLS: Final = 64  # calls one client may have queued at once
 MAX_WORKERS: Final = 256  # (client, service) worker threads at once
@@ -138,16 +140,23 @@ def _destroy(ctx: zmq.Context[Any] | None) -> None:
 
 
 class _Wake:
-    """A pipe other threads write to so that the I/O thread's poll returns."""
+    """A pipe other threads write to so that the I/O thread's poll returns.
+
+    ``poke`` and ``close`` hold a lock: a poke after close writes nothing, never into a
+    descriptor the process has since reused for something else.
+    """
 
     def __init__(self) -> None:
         self.read_fd, self.write_fd = os.pipe()
         os.set_blocking(self.read_fd, False)
         os.set_blocking(self.write_fd, False)
+        self._lock = threading.Lock()
+        self._closed = False
 
     def poke(self) -> None:
-        with contextlib.suppress(BlockingIOError, OSError):
-            os.write(self.write_fd, b"x")
+        with self._lock, contextlib.suppress(BlockingIOError, OSError):
+            if not self._closed:
+                os.write(self.write_fd, b"x")
 
     def drain(self) -> None:
         with contextlib.suppress(BlockingIOError, OSError):
@@ -155,9 +164,13 @@ class _Wake:
                 pass
 
     def close(self) -> None:
-        for fd in (self.read_fd, self.write_fd):
-            with contextlib.suppress(OSError):
-                os.close(fd)
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
+            for fd in (self.read_fd, self.write_fd):
+                with contextlib.suppress(OSError):
+                    os.close(fd)
 
 
 class ZmqServiceProxy:
@@ -194,6 +207,11 @@ class ZmqSession:
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
         self._wake: _Wake | None = None
+        # Who releases the context and the wake pipe: close() once the I/O thread has
+        # ended, or the I/O thread itself when close() could not wait for it (see close).
+        self._release_lock = threading.Lock()
+        self._io_done = False
+        self._io_releases = False
         self._outbox: deque[list[Any]] = deque()
         self._url = ""
         self._connected = False
@@ -326,8 +344,9 @@ class ZmqSession:
                 return promise.future()
             self._pending[ident] = promise
         self._outbox.append(frames)
-        if self._wake is not None:
-            self._wake.poke()
+        wake = self._wake
+        if wake is not None:
+            wake.poke()
         return promise.future()
 
     def _fail_all(self, why: str) -> None:
@@ -384,6 +403,7 @@ class ZmqSession:
                 sock.disable_monitor()
             monitor.close(0)
             sock.close(0)
+            self._io_ended()
 
     def _on_reply(self, frames: list[Any]) -> None:
         """Hand one reply to its waiting call; a malformed one ends the connection."""
@@ -475,8 +495,9 @@ class ZmqSession:
         except ProtocolError as err:
             frames = wire.encode({"k": "err", "i": header["i"], "e": ["ProtocolError", str(err)]})
         self._outbox.append([peer, *frames])
-        if self._wake is not None:
-            self._wake.poke()
+        wake = self._wake
+        if wake is not None:
+            wake.poke()
 
     def _worker(self, key: tuple[bytes, str], obj: Any, lane: _Lane) -> None:
         """Run one client's calls to one service; ends after a second idle."""
@@ -609,6 +630,7 @@ class ZmqSession:
                 self._log(f"server socket failed, no longer serving: {err}")
         finally:
             sock.close(0)
+            self._io_ended()
 
     def _serve_one(self, frames: list[Any]) -> None:
         """Handle one incoming message; nothing a client sends may end the I/O thread."""
@@ -626,23 +648,51 @@ class ZmqSession:
 
     # ------------------------------------------------------------------ both
     def close(self) -> None:
-        """Stop the I/O thread and workers, close the sockets. Safe to call twice."""
+        """Stop the I/O thread and workers, close the sockets. Safe to call twice.
+
+        Only the I/O thread touches its sockets: libzmq aborts the whole process when a
+        socket is used from two threads, and a closed wake pipe's descriptor may be reused
+        by anything the process opens next. So the context and the pipe are released here
+        only once the I/O thread has ended; if it does not end within ``CLOSE_WAIT_S`` (or
+        ``close`` runs on it, from a callback), the I/O thread releases them as it ends.
+        """
         self._stop.set()
-        if self._thread is not None and self._thread is not threading.current_thread():
-            self._thread.join(timeout=2.0)
+        wake = self._wake
+        if wake is not None:
+            wake.poke()
+        thread = self._thread
+        if thread is not None and thread is not threading.current_thread():
+            thread.join(timeout=CLOSE_WAIT_S)
         with self._workers_lock:
             lanes, self._call_workers = list(self._call_workers.values()), {}
         for lane in lanes:
             for _ in lane.handles:
                 lane.jobs.put(None)
         for lane in lanes:
-            for thread in lane.handles:
-                if thread is not threading.current_thread():
-                    thread.join(timeout=2.0)
+            for worker in lane.handles:
+                if worker is not threading.current_thread():
+                    worker.join(timeout=2.0)
         self._stop_auth()
+        with self._release_lock:
+            if thread is None or self._io_done:
+                self._release()
+            elif not self._io_releases:
+                self._io_releases = True
+                if thread is not threading.current_thread():
+                    self._log(f"the I/O thread did not stop within {CLOSE_WAIT_S:.0f} s")
+        self._connected = False
+
+    def _io_ended(self) -> None:
+        """The I/O thread's last step: its sockets are closed; release the rest if asked."""
+        with self._release_lock:
+            self._io_done = True
+            if self._io_releases:
+                self._release()
+
+    def _release(self) -> None:
+        """Close the wake pipe and terminate the context (no socket of it is open)."""
         if self._wake is not None:
             self._wake.close()
             self._wake = None
         _destroy(self._ctx)
         self._ctx = None
-        self._connected = False
