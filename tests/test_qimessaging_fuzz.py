@@ -75,16 +75,29 @@ def _drain(sock: socket.socket) -> None:
             pass
 
 
+_DRAINS: dict[socket.socket, threading.Thread] = {}
+
+
 def _close(sock: socket.socket) -> None:
+    """Shut the connection, wait for its drain thread to see it, then close it.
+
+    Closing first would leave the thread in ``recv`` until its 5 s timeout: hundreds of
+    threads alive at once in the test runner.
+    """
     with contextlib.suppress(OSError):
         sock.shutdown(socket.SHUT_RDWR)  # wakes the drain thread, sends FIN
+    drain = _DRAINS.pop(sock, None)
+    if drain is not None:
+        drain.join(timeout=5)
     sock.close()
 
 
 def _connect(url: str, authenticate: bool) -> socket.socket:
     host, port = url[len("tcp://") :].rsplit(":", 1)
     sock = socket.create_connection((host, int(port)), timeout=5)
-    threading.Thread(target=_drain, args=(sock,), daemon=True).start()
+    drain = threading.Thread(target=_drain, args=(sock,), daemon=True)
+    drain.start()
+    _DRAINS[sock] = drain
     if authenticate:
         payload = codec.encode_bytes("{sm}", capability.client_request())
         sock.sendall(message.pack_header(1, len(payload), 1, 0, 0, 0, 8) + payload)
