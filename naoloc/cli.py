@@ -123,7 +123,8 @@ def build_parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     p.add_argument(
         "-o", "--output", required=True, metavar="OUTDIR", type=Path,
-        help="folder for summary.json, report.md, PNGs, surveys and maps",
+        help="folder for summary.json, report.md, PNGs, surveys and maps "
+        "(held while the run lasts: a second evaluate into it fails at once)",
     )  # fmt: skip
     p = add("serve")
     p.add_argument(

@@ -48,6 +48,10 @@ class ProtocolError(NaolocError):
     """Bytes on the wire that do not decode into a valid message."""
 
 
+class OutputBusy(NaolocError):
+    """An output folder is held by another running naoloc command (see ``outputs.folder_lock``)."""
+
+
 class MapFormatError(NaolocError):
     """A map file is truncated, foreign, tampered with or from a newer format version."""
 

@@ -3,15 +3,22 @@
 A command writes each output under a temporary name in the output's own folder and moves
 it into place with :func:`os.replace` (atomic on POSIX) only once every output of the run
 exists. A run that fails or is interrupted before that leaves the previous outputs, and
-the config copy that describes them, exactly as they were.
+the config copy that describes them, exactly as they were. A command that fills a whole
+folder (``evaluate``) holds :func:`folder_lock` on it, so two runs never mix their files.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import IO
+
+from naoloc.errors import OutputBusy
+
+LOCK_NAME = ".naoloc.lock"
 
 
 def staging_path(path: Path) -> Path:
@@ -61,3 +68,76 @@ def atomic_write_text(path: Path, text: str) -> Path:
     with staged(path) as (tmp,):
         tmp.write_text(text, encoding="utf-8")
     return path
+
+
+@contextmanager
+def folder_lock(folder: Path, what: str) -> Iterator[Path]:
+    """Hold ``folder`` (created) for this process, or fail at once if another one holds it.
+
+    The lock is an OS file lock on ``folder/.naoloc.lock`` (``flock`` on POSIX,
+    ``msvcrt.locking`` on Windows): the OS releases it when the holder ends, also on a
+    crash or a kill, so a stale lock never blocks a later run. The file stays; it holds
+    the last holder's process id, which the error names.
+
+    Args:
+        folder: The output folder.
+        what: The command, for the message (e.g. ``"naoloc evaluate"``).
+
+    Yields:
+        ``folder``.
+
+    Raises:
+        OutputBusy: Another process holds the folder.
+    """
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / LOCK_NAME
+    handle = open(path, "a+", encoding="utf-8")  # noqa: SIM115 - held for the block
+    try:
+        if not _try_lock(handle):
+            handle.seek(0)
+            holder = handle.read().strip() or "unknown"
+            raise OutputBusy(
+                f"{folder} is in use by another naoloc run (pid {holder}); "
+                f"wait for it or give {what} another output folder"
+            )
+        handle.seek(0)
+        handle.truncate()
+        handle.write(f"{os.getpid()}\n")
+        handle.flush()
+        yield folder
+    finally:
+        with contextlib.suppress(OSError):
+            _unlock(handle)
+        handle.close()
+
+
+def _try_lock(handle: IO[str]) -> bool:
+    """Take an exclusive lock on ``handle`` without waiting; False if another holds it."""
+    try:
+        import fcntl
+    except ImportError:  # Windows
+        import msvcrt
+
+        handle.seek(0)
+        try:
+            msvcrt.locking(handle.fileno(), msvcrt.LK_NBLCK, 1)  # type: ignore[attr-defined]
+        except OSError:
+            return False
+        return True
+    try:
+        fcntl.flock(handle.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except (BlockingIOError, PermissionError):
+        return False
+    return True
+
+
+def _unlock(handle: IO[str]) -> None:
+    try:
+        import fcntl
+    except ImportError:  # Windows
+        import msvcrt
+
+        handle.seek(0)
+        msvcrt.locking(handle.fileno(), msvcrt.LK_UNLCK, 1)  # type: ignore[attr-defined]
+        return
+    fcntl.flock(handle.fileno(), fcntl.LOCK_UN)

@@ -51,7 +51,7 @@ from naoloc.evaluation.runner import (
     survey_task,
 )
 from naoloc.evaluation.stats import group_rows, heading_errors, json_float, summarize
-from naoloc.outputs import atomic_write_text
+from naoloc.outputs import atomic_write_text, folder_lock
 
 
 def check_simulated(cfg: Config) -> None:
@@ -117,10 +117,8 @@ def evaluate(
     Raises:
         BackendError: The robot is not simulated.
         ConfigError: The protocol does not fit the config.
+        OutputBusy: Another run is writing into ``outdir``.
     """
-    from naoloc.cli import write_resolved_config
-
-    t_start = time.monotonic()
     check_simulated(cfg)
     if protocol not in ("paper", "random", "anywhere"):
         raise ConfigError(f"unknown protocol {protocol!r}; valid: paper, random, anywhere")
@@ -129,6 +127,30 @@ def evaluate(
             f"the paper protocol needs a 4 x 4 m survey square; this config walks "
             f"{cfg.survey_sides()[0]:g} x {cfg.survey_sides()[1]:g} m"
         )
+    with folder_lock(outdir, "naoloc evaluate"):
+        return _evaluate(
+            cfg, protocol, n, seed, outdir, workers=workers, studies=studies,
+            chunk_size=chunk_size, progress=progress, executor=executor,
+        )  # fmt: skip
+
+
+def _evaluate(
+    cfg: Config,
+    protocol: str,
+    n: int,
+    seed: int,
+    outdir: Path,
+    *,
+    workers: int | None,
+    studies: tuple[str, ...],
+    chunk_size: int | None,
+    progress: bool | None,
+    executor: Executor | None,
+) -> dict[str, Any]:
+    """:func:`evaluate` with ``outdir`` held."""
+    from naoloc.cli import write_resolved_config
+
+    t_start = time.monotonic()
     workers = max(1, workers if workers is not None else (os.cpu_count() or 1))
     outdir.mkdir(parents=True, exist_ok=True)
     plan = make_plan(cfg, protocol, studies)
