@@ -36,6 +36,9 @@ HEADING_AGREE_RAD = 0.1
 COORD_AGREE_M = 0.12
 # Lines shorter than this along the floor are ignored, m.
 MIN_SPAN_M = 0.25
+# A candidate may put a seen line at most this far behind its wall (the lines' error at
+# 2-3 m; furniture stands 0.3-0.6 m deep), m.
+BEHIND_WALL_M = 0.2
 
 
 @dataclass(frozen=True)
@@ -122,18 +125,45 @@ def candidates(
         turns = [base + round((h - base) / quarter) * quarter]
     out: list[Pose2D] = []
     for theta in turns:
-        per_axis: list[list[float]] = [[], []]
+        # Per axis of W, the robot coordinate each line gives, and whether its wall is the
+        # one on the axis's + side.
+        per_axis: list[list[tuple[float, bool]]] = [[], []]
         for ln, ok in zip(usable, agree, strict=True):
             if not ok:
                 continue
             k = round((theta + ln.normal) / quarter) % 4
             along = walls.coords[k] - ln.distance  # robot's coordinate along the outward normal
-            per_axis[k % 2].append(along if k < 2 else -along)
-        if not per_axis[0] or not per_axis[1]:
+            per_axis[k % 2].append((along if k < 2 else -along, k < 2))
+        axes = [_feasible(values) for values in per_axis]
+        if not axes[0] or not axes[1]:
             continue
-        xs, ys = _clusters(per_axis[0]), _clusters(per_axis[1])
-        out += [walls.frame * Pose2D(x, y, modulo2PI(theta)) for x in xs for y in ys]
+        out += [walls.frame * Pose2D(x, y, modulo2PI(theta)) for x in axes[0] for y in axes[1]]
     return out
+
+
+def _feasible(values: Sequence[tuple[float, bool]]) -> list[float]:
+    """The coordinates along one axis that no line contradicts.
+
+    A line is where the floor ends: at the wall, or at furniture in front of it. So the wall
+    is never nearer than a line seen in its direction: a + side line at coordinate ``v``
+    puts the robot at ``v`` (the wall's line) or below it (furniture's), a - side line at
+    ``v`` or above. Of the clusters (:func:`_clusters`) only those between the highest
+    - side line and the lowest + side line (within :data:`BEHIND_WALL_M`) remain: the
+    robot is where one of those two lines is the wall's. A cluster beyond them would put a
+    seen line behind a wall.
+
+    Args:
+        values: ``(coordinate, on the + side)`` per line, m in W.
+
+    Returns:
+        Cluster means, ascending (empty when there is no line, or the lines contradict
+        each other: a - side line above a + side line).
+    """
+    if not values:
+        return []
+    lo = max((v for v, plus in values if not plus), default=-math.inf) - BEHIND_WALL_M
+    hi = min((v for v, plus in values if plus), default=math.inf) + BEHIND_WALL_M
+    return [c for c in _clusters([v for v, _ in values]) if lo <= c <= hi]
 
 
 def _clusters(values: Sequence[float]) -> list[float]:

@@ -47,10 +47,32 @@ def test_the_true_pose_is_among_the_candidates(theta: float) -> None:
     lines = _lines_at(pose_w, furniture=0.8)
     every = candidates(lines, WALLS)
     assert _near(every, truth)
-    # one quarter turn: two x coordinates (the wall, the bookcase), one y (both walls agree)
+    # One quarter turn: one pose. The bookcase's x coordinate would put the +x wall's own
+    # line behind that wall, so only the walls' coordinates remain; both y walls agree.
     kept = candidates(lines, WALLS, heading=truth.theta + 0.3)
-    assert len(kept) == 2 and _near(kept, truth)
+    assert len(kept) == 1 and _near(kept, truth)
     assert len(every) > len(kept)
+
+
+def test_furniture_hiding_its_wall_leaves_both_coordinates() -> None:
+    pose_w = Pose2D(1.2, 0.7, 0.3)
+    truth = WALLS.frame * pose_w
+    # The bookcase 0.8 m in front of the +x wall hides it: the bookcase's line or the -x
+    # wall's line may be the wall's, so x has two candidates.
+    lines = [ln for ln in _lines_at(pose_w, furniture=0.8) if abs(ln.distance - 2.8) > 1e-6]
+    kept = candidates(lines, WALLS, heading=truth.theta)
+    assert len(kept) == 2 and _near(kept, truth)
+    assert sorted(round((WALLS.frame.inverse() * c).x, 6) for c in kept) == [1.2, 2.0]
+
+
+def test_lines_that_contradict_each_other_leave_no_pose() -> None:
+    pose_w = Pose2D(1.2, 0.7, 0.3)
+    lines = _lines_at(pose_w)
+    # The -x wall's line measured 0.5 m too far (2.7 m, beyond that wall), with the +x
+    # wall's own line: no x coordinate keeps both lines in front of their walls.
+    x_minus = modulo2PI(math.pi - pose_w.theta)
+    bad = [*(ln for ln in lines if ln.normal != x_minus), _line(2.7, x_minus)]
+    assert candidates(bad, WALLS, heading=(WALLS.frame * pose_w).theta) == []
 
 
 def test_noisy_lines_still_give_the_pose_within_centimetres() -> None:
