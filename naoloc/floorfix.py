@@ -90,7 +90,8 @@ def candidates(
 
     Lines of one room agree on the robot's heading modulo a quarter turn; each line then
     gives one coordinate along the axis of the wall it faces (furniture in front of that
-    wall gives one too near it). Coordinates within :data:`COORD_AGREE_M` are one.
+    wall gives one too near it). Coordinates within :data:`COORD_AGREE_M` are one, and
+    only those that put no seen line behind a wall remain (:func:`_feasible`).
 
     Args:
         lines: Floor-wall lines measured at the robot, FRAME_ROBOT of the robot now.
@@ -102,9 +103,80 @@ def candidates(
         Robot poses in the map frame (none when fewer than two lines agree on the heading
         or an axis has no line).
     """
+    found = _line_heading(lines)
+    if found is None:
+        return []
+    agreeing, base = found
+    quarter = math.pi / 2
+    if heading is None:
+        turns = [base + k * quarter for k in range(4)]
+    else:
+        h = (walls.frame.inverse() * Pose2D(0.0, 0.0, heading)).theta
+        turns = [base + round((h - base) / quarter) * quarter]
+    out: list[Pose2D] = []
+    for theta in turns:
+        axes = [_feasible(values) for values in _axis_values(agreeing, walls, theta)]
+        if not axes[0] or not axes[1]:
+            continue
+        out += [walls.frame * Pose2D(x, y, modulo2PI(theta)) for x in axes[0] for y in axes[1]]
+    return out
+
+
+def check_pose(
+    lines: Sequence[WallLine], walls: Walls, pose: Pose2D, metres: float, radians: float
+) -> tuple[Pose2D, int] | None:
+    """``pose`` sharpened by the lines where they pin it, or None when they contradict it.
+
+    The lines contradict a pose when their heading is more than ``radians`` from its
+    heading (taken in the pose's own quarter turn), or when the pose puts a
+    seen line more than :data:`BEHIND_WALL_M` behind its wall. Otherwise the pose takes
+    the lines' heading and, per axis, the nearest coordinate a line gives within
+    ``metres`` (:func:`_feasible`); an axis where no wall was seen (only furniture, or
+    nothing) keeps the pose's coordinate. A pose the lines do not pin is not contradicted:
+    a bookcase hiding its wall bounds the coordinate without giving it.
+
+    Args:
+        lines: Floor-wall lines measured at the robot, FRAME_ROBOT.
+        walls: The room's walls (:func:`map_walls`).
+        pose: A pose in the map frame (e.g. from PnP).
+        metres: Largest move of one coordinate, m.
+        radians: Largest heading change, rad.
+
+    Returns:
+        The sharpened pose in the map frame and how many of its two coordinates a line
+        gave, or None. None too when fewer than two lines agree on a heading (nothing to
+        check with).
+    """
+    found = _line_heading(lines)
+    if found is None:
+        return None
+    agreeing, base = found
+    quarter = math.pi / 2
+    pose_w = walls.frame.inverse() * pose
+    theta = base + round((pose_w.theta - base) / quarter) * quarter
+    if abs(modulo2PI(theta - pose_w.theta)) > radians:
+        return None
+    coords = [pose_w.x, pose_w.y]
+    pinned = 0
+    for axis, values in enumerate(_axis_values(agreeing, walls, theta)):
+        c = coords[axis]
+        if any(c > v + BEHIND_WALL_M if plus else c < v - BEHIND_WALL_M for v, plus in values):
+            return None
+        near = [v for v in _feasible(values) if abs(v - c) <= metres]
+        if near:
+            coords[axis] = min(near, key=lambda v: abs(v - c))
+            pinned += 1
+    return walls.frame * Pose2D(coords[0], coords[1], modulo2PI(theta)), pinned
+
+
+def _line_heading(lines: Sequence[WallLine]) -> tuple[list[WallLine], float] | None:
+    """The usable lines that agree on a heading in W (modulo a quarter turn), and it (rad).
+
+    None when fewer than two usable lines (:data:`MIN_SPAN_M`) agree.
+    """
     usable = [ln for ln in lines if ln.span_m >= MIN_SPAN_M and math.isfinite(ln.distance)]
     if len(usable) < 2:
-        return []
+        return None
     quarter = math.pi / 2
     # Headings in W modulo a quarter turn, as offsets from a quarter of each line's normal.
     d = np.asarray([math.remainder(-ln.normal, quarter) for ln in usable])
@@ -114,31 +186,25 @@ def candidates(
     centre = int(np.argmax(support))
     agree = gap[centre] < HEADING_AGREE_RAD
     if agree.sum() < 2:
-        return []
+        return None
     off = d[agree] - d[centre]
     off = np.remainder(off + quarter / 2, quarter) - quarter / 2
     base = float(d[centre] + np.average(off, weights=w[agree]))
-    if heading is None:
-        turns = [base + k * quarter for k in range(4)]
-    else:
-        h = (walls.frame.inverse() * Pose2D(0.0, 0.0, heading)).theta
-        turns = [base + round((h - base) / quarter) * quarter]
-    out: list[Pose2D] = []
-    for theta in turns:
-        # Per axis of W, the robot coordinate each line gives, and whether its wall is the
-        # one on the axis's + side.
-        per_axis: list[list[tuple[float, bool]]] = [[], []]
-        for ln, ok in zip(usable, agree, strict=True):
-            if not ok:
-                continue
-            k = round((theta + ln.normal) / quarter) % 4
-            along = walls.coords[k] - ln.distance  # robot's coordinate along the outward normal
-            per_axis[k % 2].append((along if k < 2 else -along, k < 2))
-        axes = [_feasible(values) for values in per_axis]
-        if not axes[0] or not axes[1]:
-            continue
-        out += [walls.frame * Pose2D(x, y, modulo2PI(theta)) for x in axes[0] for y in axes[1]]
-    return out
+    return [ln for ln, ok in zip(usable, agree, strict=True) if ok], base
+
+
+def _axis_values(
+    lines: Sequence[WallLine], walls: Walls, theta: float
+) -> list[list[tuple[float, bool]]]:
+    """Per axis of W (x, y), the robot coordinate each line gives at heading ``theta`` (W),
+    and whether its wall is the one on the axis's + side."""
+    quarter = math.pi / 2
+    per_axis: list[list[tuple[float, bool]]] = [[], []]
+    for ln in lines:
+        k = round((theta + ln.normal) / quarter) % 4
+        along = walls.coords[k] - ln.distance  # robot's coordinate along the outward normal
+        per_axis[k % 2].append((along if k < 2 else -along, k < 2))
+    return per_axis
 
 
 def _feasible(values: Sequence[tuple[float, bool]]) -> list[float]:

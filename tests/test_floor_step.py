@@ -138,6 +138,69 @@ def test_a_pnp_pose_the_floor_contradicts_is_replaced(monkeypatch: pytest.Monkey
     assert math.hypot(est.x - TRUTH.x, est.y - TRUTH.y) < 1e-6
 
 
+def _hidden_y_walls() -> list[WallLine]:
+    """The x walls' lines, and a bookcase 0.5 m in front of the +y wall hiding it (the -y
+    wall out of sight): y is bounded (at most TRUTH.y + 0.5) but not given."""
+    xp, yp, xm, _ = _lines()
+    return [xp, xm, dataclasses.replace(yp, distance=yp.distance - 0.5)]
+
+
+def test_a_pnp_pose_no_line_contradicts_keeps_the_axis_the_lines_do_not_pin(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: _hidden_y_walls())
+    est = _vote_between(monkeypatch, kept=60, bookcase=30)
+    assert est.method == "pnp" and est.confidence == 0.7 and est.details["floor_consistent"]
+    assert abs(est.x - TRUTH.x) < 1e-6  # pinned by the x walls' lines
+    assert est.y == pytest.approx(TRUTH.y + 0.06)  # kept: only the bookcase bounds y
+    assert abs(modulo2PI(est.theta - TRUTH.theta)) < 1e-6  # the lines' heading
+    assert est.details["floor_refined"]["pnp"] == PNP.pose().to_list()
+    assert est.details["floor_support"] == 60 and est.details["floor_rival"] == 30
+
+
+@pytest.mark.parametrize("kept", [20, 80])  # out-voted; not out-voting it 1.5 times
+def test_a_consistent_pnp_pose_that_does_not_clearly_win_the_vote_goes_to_the_vote(
+    monkeypatch: pytest.MonkeyPatch, kept: int
+) -> None:
+    monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: _hidden_y_walls())
+    est = _vote_between(monkeypatch, kept=kept, bookcase=60)
+    assert est.method == "floorlines" and "floor_consistent" not in est.details
+    assert est.y == pytest.approx(TRUTH.y + 0.5)  # the bookcase's pose won the vote
+
+
+PNP = Estimate(TRUTH.x + 0.04, TRUTH.y + 0.06, TRUTH.theta + 0.03, 0.7, "verified",
+               {"method": "pnp", "inliers": 30})  # fmt: skip
+
+
+def _vote_between(monkeypatch: pytest.MonkeyPatch, kept: int, bookcase: int) -> Estimate:
+    """``_floor_fix`` of :data:`PNP` with a vote giving ``kept`` to the pose at the truth's
+    x and the PnP pose's y, ``bookcase`` to the one at the bookcase's y, 0 elsewhere."""
+
+    def support(_vmap: Any, _f: Any, _q: Any, poses: Sequence[Pose2D]) -> list[int]:
+        def one(p: Pose2D) -> int:
+            if abs(p.x - TRUTH.x) > 0.01:
+                return 0
+            return kept if abs(p.y - PNP.y) < 0.01 else bookcase if abs(p.y - 1.2) < 0.01 else 0
+
+        return [one(p) for p in poses]
+
+    monkeypatch.setattr(localizer, "pose_support", support)
+    vmap = SimpleNamespace(meta=META)
+    return loc._floor_fix(None, vmap, None, [], [], PNP)  # type: ignore[arg-type]
+
+
+def test_a_pnp_pose_behind_a_seen_line_is_contradicted(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: _hidden_y_walls())
+    monkeypatch.setattr(localizer, "pose_support", lambda _v, _f, _q, poses: [0] * len(poses))
+    # 0.4 m beyond the bookcase's bound (and from its candidate): the bookcase's line would
+    # lie behind the +y wall.
+    pnp = Estimate(TRUTH.x, TRUTH.y + 0.9, TRUTH.theta, 0.7, "verified", {"method": "pnp"})
+    vmap = SimpleNamespace(meta=META)
+    est = loc._floor_fix(None, vmap, None, [], [], pnp)  # type: ignore[arg-type]
+    assert "floor_consistent" not in est.details and "floor_refined" not in est.details
+    assert (est.x, est.y) == (pnp.x, pnp.y)  # no clear vote: left as it was
+
+
 def test_a_map_without_walls_is_left_alone(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: pytest.fail("measured"))
     guess = Estimate(2.5, 2.0, 0.1, 0.1, "verified", {"method": "keyframes"})

@@ -8,7 +8,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from naoloc.floorfix import Walls, candidates, map_walls
+from naoloc.floorfix import Walls, candidates, check_pose, map_walls
 from naoloc.floorline import WallLine
 from naoloc.geometry import Pose2D, modulo2PI
 
@@ -108,3 +108,23 @@ def test_map_walls_come_from_the_wall_poses_meta() -> None:
         {"wall_poses": {"wall_frame": [0, 0, True], "walls_m": [-1, 4, -1, 3]}},
     ):
         assert map_walls(SimpleNamespace(meta=bad)) is None  # type: ignore[arg-type]
+
+
+def test_check_pose_pins_the_axes_the_walls_give_and_refuses_contradicted_poses() -> None:
+    pose_w = Pose2D(1.2, 0.7, 0.3)
+    truth = WALLS.frame * pose_w
+    lines = _lines_at(pose_w)
+    guess = WALLS.frame * Pose2D(1.25, 0.64, 0.33)
+    checked = check_pose(lines, WALLS, guess, 0.3, 0.15)
+    assert checked is not None and checked[1] == 2  # both axes from walls' lines
+    assert _near([checked[0]], truth, metres=1e-6, rad=1e-6)
+    # farther than `metres` from every line's coordinate (but within BEHIND_WALL_M of
+    # them): kept, not snapped
+    off = check_pose(lines, WALLS, WALLS.frame * Pose2D(1.1, 0.7, 0.3), 0.05, 0.15)
+    assert off is not None and off[1] == 1
+    assert (WALLS.frame.inverse() * off[0]).x == pytest.approx(1.1)
+    # every wall seen: a pose 0.5 m off puts the +x wall's line behind that wall
+    assert check_pose(lines, WALLS, WALLS.frame * Pose2D(1.7, 0.7, 0.3), 0.3, 0.15) is None
+    # heading 0.3 rad off the lines' heading
+    assert check_pose(lines, WALLS, WALLS.frame * Pose2D(1.2, 0.7, 0.6), 0.3, 0.15) is None
+    assert check_pose(lines[:1], WALLS, truth, 0.3, 0.15) is None  # one line: nothing to check

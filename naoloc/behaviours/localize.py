@@ -65,6 +65,9 @@ FLOOR_CONFIRM_M = 0.3
 FLOOR_CONFIRM_RAD = 0.15
 FLOOR_MIN_SUPPORT = 20
 FLOOR_MARGIN = 1.15
+# A PnP pose the lines do not contradict but no candidate confirms stays (refined) only
+# with this many times the support of every distinct candidate.
+FLOOR_KEEP_MARGIN = 1.5
 FLOOR_DISTINCT_M = 0.3
 FLOOR_CONFIDENCE = 0.3
 # Turns in place (and sweeps) added while the estimate is not confident, and their angle, rad.
@@ -327,13 +330,18 @@ def _floor_fix(
     best (:func:`naoloc.mapping.localizer.pose_support`): it keeps method ``pnp`` and its
     confidence, and ``details["floor_refined"]`` keeps the PnP pose. The lines place the
     walls to 1-4 cm, while PnP carries the map's landmark errors (anywhere protocol, six
-    rooms: median 0.07 m for PnP poses, 0.02 m for floor-line poses). Otherwise the
+    rooms: median 0.07 m for PnP poses, 0.02 m for floor-line poses). A PnP pose no
+    candidate confirms but no line contradicts (a wall hidden behind furniture gives no
+    candidate on its axis) keeps its place on the axes the lines do not pin and takes the
+    lines' heading and coordinates on the others (:func:`naoloc.floorfix.check_pose`;
+    ``details["floor_consistent"]``), if one axis is pinned and its support is
+    :data:`FLOOR_KEEP_MARGIN` times that of every distinct candidate. Otherwise the
     candidate supported best replaces the estimate (a PnP pose the floor contradicts, a
     keyframe fallback, or none) when its support is at least :data:`FLOOR_MIN_SUPPORT` and
     :data:`FLOOR_MARGIN` times that of every other candidate farther than
     :data:`FLOOR_DISTINCT_M` from it.
     """
-    from naoloc.floorfix import candidates, map_walls
+    from naoloc.floorfix import candidates, check_pose, map_walls
     from naoloc.mapping.localizer import Estimate as _Estimate
     from naoloc.mapping.localizer import pose_support
 
@@ -354,6 +362,28 @@ def _floor_fix(
             details["floor_refined"] = {"pnp": estimate.pose().to_list()}
             p = near[pick]
             return _Estimate(p.x, p.y, p.theta, estimate.confidence, estimate.mode, details)
+        # No candidate near it, but maybe no line against it either: a wall hidden behind
+        # furniture bounds that axis without giving it (fresh rooms: three correct PnP
+        # poses replaced by candidates 0.43-0.49 m off, made from the furniture's line).
+        # It must have one axis from a wall's line and clearly out-vote every distinct
+        # candidate: a PnP pose on a look-alike print can be consistent too (room
+        # 938307118: 1.9 m and a quarter turn off, support 128 against the truth's 112).
+        checked = check_pose(lines, walls, estimate.pose(), FLOOR_CONFIRM_M, FLOOR_CONFIRM_RAD)
+        if checked is not None and checked[1] >= 1:
+            kept = checked[0]
+            votes = pose_support(vmap, feats, queries, [kept, *cands])
+            rivals = [v for c, v in zip(cands, votes[1:], strict=True)
+                      if not _close(c, kept, FLOOR_DISTINCT_M, math.pi)]  # fmt: skip
+            beaten = max(rivals, default=0)
+            if beaten < FLOOR_MIN_SUPPORT or votes[0] >= FLOOR_KEEP_MARGIN * beaten:
+                details = dict(estimate.details)
+                details.update(
+                    info, floor_consistent=True, floor_support=votes[0], floor_rival=beaten
+                )
+                details["floor_refined"] = {"pnp": estimate.pose().to_list()}
+                return _Estimate(
+                    kept.x, kept.y, kept.theta, estimate.confidence, estimate.mode, details
+                )
     if not cands:
         estimate.details.update(info)
         return estimate
