@@ -160,7 +160,8 @@ def check_pose(
     pinned = 0
     for axis, values in enumerate(_axis_values(agreeing, walls, theta)):
         c = coords[axis]
-        if any(c > v + BEHIND_WALL_M if plus else c < v - BEHIND_WALL_M for v, plus in values):
+        lo, hi = _bounds(values)
+        if lo <= hi and not lo <= c <= hi:  # lines that contradict each other bound nothing
             return None
         near = [v for v in _feasible(values) if abs(v - c) <= metres]
         if near:
@@ -222,14 +223,23 @@ def _feasible(values: Sequence[tuple[float, bool]]) -> list[float]:
         values: ``(coordinate, on the + side)`` per line, m in W.
 
     Returns:
-        Cluster means, ascending (empty when there is no line, or the lines contradict
-        each other: a - side line above a + side line).
+        Cluster means, ascending (empty when there is no line). When the lines contradict
+        each other (a - side line above a + side line: one of them is not where the floor
+        ends, e.g. a misread edge), every cluster, as if no line bounded the axis.
     """
     if not values:
         return []
+    lo, hi = _bounds(values)
+    clusters = _clusters([v for v, _ in values])
+    return [c for c in clusters if lo <= c <= hi] if lo <= hi else clusters
+
+
+def _bounds(values: Sequence[tuple[float, bool]]) -> tuple[float, float]:
+    """The robot's coordinate range along one axis that keeps every line in front of its
+    wall (within :data:`BEHIND_WALL_M`); ``lo > hi`` when the lines contradict each other."""
     lo = max((v for v, plus in values if not plus), default=-math.inf) - BEHIND_WALL_M
     hi = min((v for v, plus in values if plus), default=math.inf) + BEHIND_WALL_M
-    return [c for c in _clusters([v for v, _ in values]) if lo <= c <= hi]
+    return lo, hi
 
 
 def _clusters(values: Sequence[float]) -> list[float]:

@@ -65,14 +65,19 @@ def test_furniture_hiding_its_wall_leaves_both_coordinates() -> None:
     assert sorted(round((WALLS.frame.inverse() * c).x, 6) for c in kept) == [1.2, 2.0]
 
 
-def test_lines_that_contradict_each_other_leave_no_pose() -> None:
+def test_lines_that_contradict_each_other_bound_nothing() -> None:
     pose_w = Pose2D(1.2, 0.7, 0.3)
+    truth = WALLS.frame * pose_w
     lines = _lines_at(pose_w)
-    # The -x wall's line measured 0.5 m too far (2.7 m, beyond that wall), with the +x
-    # wall's own line: no x coordinate keeps both lines in front of their walls.
+    # The -x wall's line misread 0.5 m too far (2.7 m, beyond that wall), with the +x
+    # wall's own line: no x coordinate keeps both lines in front of their walls, so one of
+    # them is not where the floor ends and neither bounds x: both coordinates stay.
     x_minus = modulo2PI(math.pi - pose_w.theta)
     bad = [*(ln for ln in lines if ln.normal != x_minus), _line(2.7, x_minus)]
-    assert candidates(bad, WALLS, heading=(WALLS.frame * pose_w).theta) == []
+    kept = candidates(bad, WALLS, heading=truth.theta)
+    assert len(kept) == 2 and _near(kept, truth)
+    checked = check_pose(bad, WALLS, truth, 0.3, 0.15)
+    assert checked is not None and _near([checked[0]], truth, metres=1e-6, rad=1e-6)
 
 
 def test_noisy_lines_still_give_the_pose_within_centimetres() -> None:
