@@ -163,7 +163,9 @@ def test_a_consistent_pnp_pose_that_does_not_clearly_win_the_vote_goes_to_the_vo
     monkeypatch: pytest.MonkeyPatch, kept: int
 ) -> None:
     monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: _hidden_y_walls())
-    est = _vote_between(monkeypatch, kept=kept, bookcase=60)
+    calls: list[int] = []
+    est = _vote_between(monkeypatch, kept=kept, bookcase=60, calls=calls)
+    assert len(calls) == 1  # the candidates' votes are counted once, with the PnP pose's
     assert est.method == "floorlines" and "floor_consistent" not in est.details
     assert est.y == pytest.approx(TRUTH.y + 0.5)  # the bookcase's pose won the vote
 
@@ -172,11 +174,16 @@ PNP = Estimate(TRUTH.x + 0.04, TRUTH.y + 0.06, TRUTH.theta + 0.03, 0.7, "verifie
                {"method": "pnp", "inliers": 30})  # fmt: skip
 
 
-def _vote_between(monkeypatch: pytest.MonkeyPatch, kept: int, bookcase: int) -> Estimate:
+def _vote_between(
+    monkeypatch: pytest.MonkeyPatch, kept: int, bookcase: int, calls: list[int] | None = None
+) -> Estimate:
     """``_floor_fix`` of :data:`PNP` with a vote giving ``kept`` to the pose at the truth's
     x and the PnP pose's y, ``bookcase`` to the one at the bookcase's y, 0 elsewhere."""
 
     def support(_vmap: Any, _f: Any, _q: Any, poses: Sequence[Pose2D]) -> list[int]:
+        if calls is not None:
+            calls.append(len(poses))
+
         def one(p: Pose2D) -> int:
             if abs(p.x - TRUTH.x) > 0.01:
                 return 0

@@ -352,6 +352,7 @@ def _floor_fix(
     cands = candidates(lines, walls)
     info: dict[str, Any] = {"floor_lines": len(lines), "floor_candidates": len(cands)}
     found = estimate.found
+    support: list[int] | None = None  # the candidates' votes, once counted
     if found and estimate.method == "pnp":
         near = [c for c in cands if _close(c, estimate.pose(), FLOOR_CONFIRM_M, FLOOR_CONFIRM_RAD)]
         if near:
@@ -372,7 +373,8 @@ def _floor_fix(
         if checked is not None and checked[1] >= 1:
             kept = checked[0]
             votes = pose_support(vmap, feats, queries, [kept, *cands])
-            rivals = [v for c, v in zip(cands, votes[1:], strict=True)
+            support = votes[1:]  # each pose's vote is its own: the vote below reuses them
+            rivals = [v for c, v in zip(cands, support, strict=True)
                       if not _close(c, kept, FLOOR_DISTINCT_M, math.pi)]  # fmt: skip
             beaten = max(rivals, default=0)
             if beaten < FLOOR_MIN_SUPPORT or votes[0] >= FLOOR_KEEP_MARGIN * beaten:
@@ -390,7 +392,8 @@ def _floor_fix(
     # The estimate does not stand in the vote: a wrong PnP pose on a look-alike place
     # explains nearly as many features as the true one (room 1595909956: two of its poses
     # 2.7 and 4.4 m off kept that way, with support 47 and 58).
-    support = pose_support(vmap, feats, queries, cands)
+    if support is None:
+        support = pose_support(vmap, feats, queries, cands)
     best = max(range(len(cands)), key=lambda i: support[i])
     rivals = [s for c, s in zip(cands, support, strict=True)
               if not _close(c, cands[best], FLOOR_DISTINCT_M, math.pi)]  # fmt: skip

@@ -152,7 +152,6 @@ def _evaluate(
 
     t_start = time.monotonic()
     workers = max(1, workers if workers is not None else (os.cpu_count() or 1))
-    outdir.mkdir(parents=True, exist_ok=True)
     plan = make_plan(cfg, protocol, studies)
     base_dict = cfg.to_dict()
 
