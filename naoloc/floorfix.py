@@ -9,7 +9,8 @@ A floor-wall line measured at the robot (:class:`naoloc.floorline.WallLine`, FRA
 measured to 1-4 cm at 0.5-2 m) says how far a wall is and at which angle. The lines of one
 room agree on the robot's heading modulo a quarter turn, and each gives one coordinate once
 assigned to the wall it faces; furniture in front of a wall gives a coordinate too near
-that wall. :func:`candidates` lists every pose the lines allow; the pictures' landmark
+that wall. :func:`candidates` lists every pose the lines allow (and, on an axis whose
+walls no line saw, the places the landmarks' bearings give); the pictures' landmark
 matches choose among them (:func:`naoloc.behaviours.localize.localize`).
 
 Frames: the map frame in and out (x forward at the survey start, y left, metres, radians);
@@ -19,7 +20,7 @@ W inside.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -39,6 +40,20 @@ MIN_SPAN_M = 0.25
 # A candidate may put a seen line at most this far behind its wall (the lines' error at
 # 2-3 m; furniture stands 0.3-0.6 m deep), m.
 BEHIND_WALL_M = 0.2
+# The robot's centre stays this far inside the walls, m.
+WALL_CLEARANCE_M = 0.1
+# At most this many candidates from the landmarks' bearings (:data:`AxisSolver`), the
+# best agreed first, and only where no line's coordinate is this near on their axis (m):
+# the landmarks' place is where the map's landmarks fit, 0.1-0.2 m from the wall frame's
+# where the map's poses err, so near a wall's line it would out-vote the truth.
+SWEEP_KEEP = 8
+SWEEP_APART_M = 0.3
+
+#: Where along one axis of W the landmarks put the robot: ``(theta, axis, fixed, span)`` ->
+#: ``[(coordinate, agreeing features), ...]`` for heading ``theta`` (W, rad), solving axis
+#: ``axis`` (0 = x, 1 = y) with the other coordinate at ``fixed`` (m) inside ``span``
+#: (``(low, high)``, m); e.g. :func:`naoloc.mapping.support.axis_peaks`.
+AxisSolver = Callable[[float, int, float, tuple[float, float]], list[tuple[float, int]]]
 
 
 @dataclass(frozen=True)
@@ -84,7 +99,10 @@ def map_walls(vmap: MapData) -> Walls | None:
 
 
 def candidates(
-    lines: Sequence[WallLine], walls: Walls, heading: float | None = None
+    lines: Sequence[WallLine],
+    walls: Walls,
+    heading: float | None = None,
+    solve: AxisSolver | None = None,
 ) -> list[Pose2D]:
     """Every pose the lines allow: a heading they agree on, then per axis each coordinate.
 
@@ -93,15 +111,22 @@ def candidates(
     wall gives one too near it). Coordinates within :data:`COORD_AGREE_M` are one, and
     only those that put no seen line behind a wall remain (:func:`_feasible`).
 
+    An axis whose walls no line saw (4 m away, or hidden behind furniture) has only
+    furniture's coordinates or none, so no candidate near the truth. ``solve`` adds, per
+    heading and per coordinate both walls' lines give on the other axis, the places along
+    that axis where the landmarks' bearings agree (within the lines' bounds and the walls; the
+    :data:`SWEEP_KEEP` best agreed over all).
+
     Args:
         lines: Floor-wall lines measured at the robot, FRAME_ROBOT of the robot now.
         walls: The room's walls (:func:`map_walls`).
         heading: A heading to keep to (map frame, rad): only its quarter turn is tried.
             None tries all four.
+        solve: The landmarks' places along an axis (:data:`AxisSolver`); None adds none.
 
     Returns:
-        Robot poses in the map frame (none when fewer than two lines agree on the heading
-        or an axis has no line).
+        Robot poses in the map frame, the lines' first (none when fewer than two lines
+        agree on the heading; without ``solve``, none either when an axis has no line).
     """
     found = _line_heading(lines)
     if found is None:
@@ -114,12 +139,23 @@ def candidates(
         h = (walls.frame.inverse() * Pose2D(0.0, 0.0, heading)).theta
         turns = [base + round((h - base) / quarter) * quarter]
     out: list[Pose2D] = []
+    swept: list[tuple[int, Pose2D]] = []
     for theta in turns:
-        axes = [_feasible(values) for values in _axis_values(agreeing, walls, theta)]
-        if not axes[0] or not axes[1]:
-            continue
+        values = _axis_values(agreeing, walls, theta)
+        axes = [_feasible(v) for v in values]
         out += [walls.frame * Pose2D(x, y, modulo2PI(theta)) for x in axes[0] for y in axes[1]]
-    return out
+        if solve is None:
+            continue
+        for axis in (0, 1):
+            span = _span(values[axis], walls, axis)
+            for fixed in _two_sided(values[1 - axis], axes[1 - axis]):
+                for coord, n in solve(theta, axis, fixed, span):
+                    if any(abs(coord - v) < SWEEP_APART_M for v in axes[axis]):
+                        continue  # a line gives it, or one near it
+                    xy = (coord, fixed) if axis == 0 else (fixed, coord)
+                    swept.append((n, walls.frame * Pose2D(*xy, modulo2PI(theta))))
+    swept.sort(key=lambda t: -t[0])
+    return out + [p for _n, p in swept[:SWEEP_KEEP]]
 
 
 def check_pose(
@@ -240,6 +276,31 @@ def _bounds(values: Sequence[tuple[float, bool]]) -> tuple[float, float]:
     lo = max((v for v, plus in values if not plus), default=-math.inf) - BEHIND_WALL_M
     hi = min((v for v, plus in values if plus), default=math.inf) + BEHIND_WALL_M
     return lo, hi
+
+
+def _two_sided(values: Sequence[tuple[float, bool]], clusters: Sequence[float]) -> list[float]:
+    """The clusters both walls of the axis agree on: a line of each side within
+    :data:`COORD_AGREE_M`. In a wrong quarter turn the two walls' lines agree only where the
+    room's width and length do (and rarely furniture's), so a place along the other axis
+    is searched only from such a coordinate (three fresh rooms: the landmarks' places from
+    one-sided coordinates gave poses a quarter or half turn off, with support 70-183)."""
+    return [
+        c
+        for c in clusters
+        if any(abs(v - c) < COORD_AGREE_M for v, plus in values if plus)
+        and any(abs(v - c) < COORD_AGREE_M for v, plus in values if not plus)
+    ]
+
+
+def _span(values: Sequence[tuple[float, bool]], walls: Walls, axis: int) -> tuple[float, float]:
+    """Where on one axis of W the robot may be: inside the walls, and inside the lines'
+    bounds (:func:`_bounds`) unless they contradict each other, m."""
+    low = walls.bounds[2 * axis] + WALL_CLEARANCE_M
+    high = walls.bounds[2 * axis + 1] - WALL_CLEARANCE_M
+    lo, hi = _bounds(values)
+    if lo <= hi:
+        low, high = max(low, lo), min(high, hi)
+    return low, high
 
 
 def _clusters(values: Sequence[float]) -> list[float]:

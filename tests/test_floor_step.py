@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from types import SimpleNamespace
 from typing import Any
 
@@ -25,9 +25,24 @@ from naoloc.mapping.localizer import Estimate, no_estimate
 
 # The module, not the function naoloc.behaviours re-exports under the same name.
 loc = importlib.import_module("naoloc.behaviours.localize")
-localizer = importlib.import_module("naoloc.mapping.localizer")
+sup = importlib.import_module("naoloc.mapping.support")
 TRUTH = Pose2D(1.2, 0.7, 0.4)  # map frame = wall frame here
 META = {"wall_poses": {"wall_frame": [0.0, 0.0, 0.0], "walls_m": [-1.0, 4.0, -1.0, 3.0]}}
+
+
+def _patch(
+    monkeypatch: pytest.MonkeyPatch,
+    support: Callable[[Any, Any, Any, Sequence[Pose2D]], list[int]],
+    peaks: Callable[..., list[tuple[float, int]]] | None = None,
+) -> None:
+    """Stand-ins for the landmarks: ``support`` votes, ``peaks`` places along an axis
+    (:func:`naoloc.mapping.support.axis_peaks`'s arguments after the matches; none by
+    default)."""
+    monkeypatch.setattr(sup, "support_matches", lambda *_a, **_k: None)
+    monkeypatch.setattr(sup, "pose_support", lambda v, f, q, poses, **_k: support(v, f, q, poses))
+    monkeypatch.setattr(
+        sup, "axis_peaks", lambda _m, *a, **k: [] if peaks is None else peaks(*a, **k)
+    )
 
 
 def _lines() -> list[WallLine]:
@@ -60,7 +75,7 @@ def _run(
         return out
 
     monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: _lines())
-    monkeypatch.setattr(localizer, "pose_support", support)
+    _patch(monkeypatch, support)
     vmap = SimpleNamespace(meta=META)
     return loc._floor_fix(None, vmap, None, [], [], estimate), calls  # type: ignore[arg-type]
 
@@ -123,7 +138,7 @@ def test_a_confirmed_pnp_pose_takes_the_best_supported_nearby_pose(
     def support(_vmap: Any, _f: Any, _q: Any, poses: Sequence[Pose2D]) -> list[int]:
         return [50 if math.hypot(p.x - TRUTH.x, p.y - TRUTH.y) < 0.01 else 30 for p in poses]
 
-    monkeypatch.setattr(localizer, "pose_support", support)
+    _patch(monkeypatch, support)
     pnp = Estimate(TRUTH.x + 0.11, TRUTH.y, TRUTH.theta, 0.8, "verified", {"method": "pnp"})
     vmap = SimpleNamespace(meta=META)
     est = loc._floor_fix(None, vmap, None, [], [], pnp)  # type: ignore[arg-type]
@@ -191,14 +206,59 @@ def _vote_between(
 
         return [one(p) for p in poses]
 
-    monkeypatch.setattr(localizer, "pose_support", support)
+    _patch(monkeypatch, support)
     vmap = SimpleNamespace(meta=META)
     return loc._floor_fix(None, vmap, None, [], [], PNP)  # type: ignore[arg-type]
 
 
+@pytest.mark.parametrize("truth_vote", [loc.FLOOR_SWEPT_MIN_SUPPORT + 10, 40])
+def test_the_landmarks_give_the_axis_no_wall_line_gave(
+    monkeypatch: pytest.MonkeyPatch, truth_vote: int
+) -> None:
+    """y has only the bookcase's line: the landmarks' place along y (the truth's) is a
+    candidate, and wins the vote if it is clearly and well supported."""
+    monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: _hidden_y_walls())
+    asked: list[tuple[int, float]] = []
+
+    def peaks(_frame: Any, _theta: float, axis: int, fixed: float, span: Any) -> list[Any]:
+        asked.append((axis, fixed))
+        return [(TRUTH.y, 45)] if axis == 1 and span[0] <= TRUTH.y <= span[1] else []
+
+    def support(_v: Any, _f: Any, _q: Any, poses: Sequence[Pose2D]) -> list[int]:
+        return [truth_vote if p.distance(TRUTH) < 0.01 else 10 for p in poses]
+
+    _patch(monkeypatch, support, peaks)
+    vmap = SimpleNamespace(meta=META)
+    none = no_estimate("verified", "no verified match")
+    est = loc._floor_fix(None, vmap, None, [], [], none)  # type: ignore[arg-type]
+    assert (1, pytest.approx(TRUTH.x)) in asked  # along y, at the x walls' x
+    assert est.details["floor_swept"] >= 1
+    if truth_vote >= loc.FLOOR_SWEPT_MIN_SUPPORT:
+        assert est.method == "floorlines" and est.details["floor_axis_from"] == "landmarks"
+        assert est.pose().distance(TRUTH) < 1e-6
+    else:  # too little support for a place only the landmarks give: no estimate
+        assert not est.found
+
+
+def test_only_the_lines_confirm_a_pnp_pose(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A landmarks' place next to the PnP pose does not confirm it (on a look-alike print
+    both fit the same landmarks): the PnP pose is only checked against the lines."""
+    monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: _hidden_y_walls())
+
+    def support(_v: Any, _f: Any, _q: Any, poses: Sequence[Pose2D]) -> list[int]:
+        return [100 if p.distance(TRUTH) < 0.1 else 10 for p in poses]
+
+    _patch(monkeypatch, support, lambda _fr, _th, axis, _fx, _sp: [(TRUTH.y, 90)] * axis)
+    vmap = SimpleNamespace(meta=META)
+    est = loc._floor_fix(None, vmap, None, [], [], PNP)  # type: ignore[arg-type]
+    assert est.details["floor_swept"] >= 1
+    assert "floor_confirmed" not in est.details and est.details["floor_consistent"]
+    assert est.y == pytest.approx(PNP.y)  # its own y: the lines do not pin it
+
+
 def test_a_pnp_pose_behind_a_seen_line_is_contradicted(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: _hidden_y_walls())
-    monkeypatch.setattr(localizer, "pose_support", lambda _v, _f, _q, poses: [0] * len(poses))
+    _patch(monkeypatch, lambda _v, _f, _q, poses: [0] * len(poses))
     # 0.4 m beyond the bookcase's bound (and from its candidate): the bookcase's line would
     # lie behind the +y wall.
     pnp = Estimate(TRUTH.x, TRUTH.y + 0.9, TRUTH.theta, 0.7, "verified", {"method": "pnp"})

@@ -65,6 +65,41 @@ def test_furniture_hiding_its_wall_leaves_both_coordinates() -> None:
     assert sorted(round((WALLS.frame.inverse() * c).x, 6) for c in kept) == [1.2, 2.0]
 
 
+def test_an_axis_no_wall_line_gives_takes_the_landmarks_places() -> None:
+    """The x walls out of range, a chest 0.6 m in front of the -x wall: the lines give x
+    only from the chest. The solver's place along x (the landmarks') becomes a candidate,
+    searched within the walls and in front of the chest's line."""
+    pose_w = Pose2D(2.1, 0.7, 0.3)
+    truth = WALLS.frame * pose_w
+    _xp, yp, xm, ym = _lines_at(pose_w)
+    chest = _line(xm.distance - 0.6, xm.normal)
+    lines = [yp, ym, chest]
+    assert not _near(candidates(lines, WALLS, heading=truth.theta), truth, metres=0.3)
+    asked: list[tuple[float, int, float, tuple[float, float]]] = []
+
+    def solve(
+        theta: float, axis: int, fixed: float, span: tuple[float, float]
+    ) -> list[tuple[float, int]]:
+        asked.append((theta, axis, fixed, span))
+        places = [(2.1, 40), (-0.5, 30)] if axis == 0 else [(0.7, 50)]
+        return [(c, n) for c, n in places if span[0] <= c <= span[1]]
+
+    kept = candidates(lines, WALLS, heading=truth.theta, solve=solve)
+    assert _near(kept, truth)
+    on_x = [a for a in asked if a[1] == 0]
+    assert len(on_x) == 1 and on_x[0][2] == pytest.approx(0.7)  # the y walls' coordinate
+    low, high = on_x[0][3]
+    assert low == pytest.approx(pose_w.x - 0.6 - 0.2) and high == pytest.approx(3.9)
+    # The chest's pose and the landmarks' x; the solver's y agrees with the y walls' line.
+    assert len(kept) == 2
+    # One y wall only: its coordinate could be another wall's in a wrong quarter turn, so
+    # nothing is searched from it.
+    asked.clear()
+    one_sided = candidates([yp, chest, _line(0.9, xm.normal)], WALLS, solve=solve)
+    assert not [a for a in asked if a[1] == 0]
+    assert not _near(one_sided, truth, metres=0.3)
+
+
 def test_lines_that_contradict_each_other_bound_nothing() -> None:
     pose_w = Pose2D(1.2, 0.7, 0.3)
     truth = WALLS.frame * pose_w

@@ -13,7 +13,7 @@ from naoloc.config import CameraConfig, Config, MapConfig, load_config
 from naoloc.geometry import Pose2D, relative_pose
 from naoloc.keyframe import Keyframe
 from naoloc.mapping import VisualMap, build_map
-from naoloc.mapping.localizer import pose_support
+from naoloc.mapping.support import pose_support
 
 PITCH = -0.2
 

@@ -16,9 +16,12 @@ that). In the same process, best of ``--repeats`` CPU times:
 2. One localization of ``--pictures`` pictures (a 7-yaw sweep, and four of them after
    turns in place): extraction plus the verified localizer, with the two-point planar
    RANSAC (``map.tuning.localizer.planar_samples``) and without it.
-3. The floor-line fix's vote (:func:`naoloc.mapping.localizer.pose_support`) over
+3. The floor-line fix's vote (:func:`naoloc.mapping.support.pose_support`) over
    ``--candidates`` poses (keyframe poses stand in for the floor's candidates: the time
-   does not depend on where they are), against that localization.
+   does not depend on where they are), against that localization; and its search of the
+   axes no wall line gave (:func:`naoloc.mapping.support.axis_peaks`): the features
+   matched once, then 32 searches (4 headings x 2 axes x 4 coordinates, more than a
+   scan's lines give).
 """
 
 from __future__ import annotations
@@ -43,7 +46,12 @@ from naoloc.errors import NaolocError  # noqa: E402
 from naoloc.geometry import Pose2D  # noqa: E402
 from naoloc.mapping import load_map  # noqa: E402
 from naoloc.mapping.features import FeatureExtractor  # noqa: E402
-from naoloc.mapping.localizer import pose_support  # noqa: E402
+from naoloc.mapping.support import (  # noqa: E402
+    SupportMatches,
+    axis_peaks,
+    pose_support,
+    support_matches,
+)
 
 
 def _best_cpu(fn: Callable[[], Any], repeats: int) -> float:
@@ -53,6 +61,16 @@ def _best_cpu(fn: Callable[[], Any], repeats: int) -> float:
         fn()
         best = min(best, time.process_time() - t0)
     return best
+
+
+AXIS_SEARCHES = 32
+
+
+def _axis_searches(matches: SupportMatches) -> None:
+    """4 headings x 2 axes x 4 coordinates of the other axis, along 7 m."""
+    frame = Pose2D(0.0, 0.0, 0.0)
+    for i in range(AXIS_SEARCHES):
+        axis_peaks(matches, frame, (i // 8) * np.pi / 2, (i // 4) % 2, float(i % 4), (-1.0, 6.0))
 
 
 def _per_threshold(ex: FeatureExtractor, gray: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -128,6 +146,13 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"    floor-line vote over {len(cands)} candidates: {t_vote * 1e3:.0f} ms CPU "
             f"(the pictures' features reused) = {t_vote / t_on:.2f}x the localization"
+        )
+        t_match = _best_cpu(lambda f=feats, q=queries: support_matches(vmap, f, q), args.repeats)
+        matches = support_matches(vmap, feats, queries)
+        t_axes = _best_cpu(lambda m=matches: _axis_searches(m), args.repeats)
+        print(
+            f"    matching for the votes {t_match * 1e3:.0f} ms CPU; {AXIS_SEARCHES} axis "
+            f"searches {t_axes * 1e3:.0f} ms = {t_axes / t_on:.2f}x the localization"
         )
     return 0
 

@@ -65,6 +65,11 @@ FLOOR_CONFIRM_M = 0.3
 FLOOR_CONFIRM_RAD = 0.15
 FLOOR_MIN_SUPPORT = 20
 FLOOR_MARGIN = 1.15
+# A candidate from the landmarks' bearings (an axis no wall line gave) stands in the vote
+# only with this much support. They fit the map's landmarks, so they out-vote true line
+# poses that fit the walls: six fresh rooms, the true ones got 83-159, wrong ones 24-63
+# (against true line poses of 29-40).
+FLOOR_SWEPT_MIN_SUPPORT = 70
 # A PnP pose the lines do not contradict but no candidate confirms stays (refined) only
 # with this many times the support of every distinct candidate.
 FLOOR_KEEP_MARGIN = 1.5
@@ -327,7 +332,7 @@ def _floor_fix(
 
     A PnP pose that floor-line poses confirm (within :data:`FLOOR_CONFIRM_M` and
     :data:`FLOOR_CONFIRM_RAD`) takes the one of them the pictures' landmark matches support
-    best (:func:`naoloc.mapping.localizer.pose_support`): it keeps method ``pnp`` and its
+    best (:func:`naoloc.mapping.support.pose_support`): it keeps method ``pnp`` and its
     confidence, and ``details["floor_refined"]`` keeps the PnP pose. The lines place the
     walls to 1-4 cm, while PnP carries the map's landmark errors (anywhere protocol, six
     rooms: median 0.07 m for PnP poses, 0.02 m for floor-line poses). A PnP pose no
@@ -340,23 +345,46 @@ def _floor_fix(
     keyframe fallback, or none) when its support is at least :data:`FLOOR_MIN_SUPPORT` and
     :data:`FLOOR_MARGIN` times that of every other candidate farther than
     :data:`FLOOR_DISTINCT_M` from it.
+
+    Where no wall line gives one axis (its walls 4 m away or behind furniture), the
+    candidates take that coordinate from where the landmarks' bearings agree
+    (:func:`naoloc.mapping.support.axis_peaks`); those stand in the votes only with
+    :data:`FLOOR_SWEPT_MIN_SUPPORT` (``details["floor_axis_from"]`` says when one won).
     """
     from naoloc.floorfix import candidates, check_pose, map_walls
+    from naoloc.mapping import support as sup
     from naoloc.mapping.localizer import Estimate as _Estimate
-    from naoloc.mapping.localizer import pose_support
 
     walls = map_walls(vmap)
     if walls is None:
         return estimate
     lines = measure_floor_lines(robot, cfg)
-    cands = candidates(lines, walls)
-    info: dict[str, Any] = {"floor_lines": len(lines), "floor_candidates": len(cands)}
+    matches = sup.support_matches(vmap, feats, queries)  # matched once, for every vote
+
+    def pose_support(poses: Sequence[Pose2D]) -> list[int]:
+        return sup.pose_support(vmap, feats, queries, poses, matches=matches)
+
+    def solve(
+        theta: float, axis: int, fixed: float, span: tuple[float, float]
+    ) -> list[tuple[float, int]]:
+        return sup.axis_peaks(matches, walls.frame, theta, axis, fixed, span)
+
+    cands = candidates(lines, walls, solve=solve)
+    from_lines = len(candidates(lines, walls))  # the landmarks' places come after these
+    info: dict[str, Any] = {
+        "floor_lines": len(lines),
+        "floor_candidates": from_lines,
+        "floor_swept": len(cands) - from_lines,
+    }
     found = estimate.found
     support: list[int] | None = None  # the candidates' votes, once counted
     if found and estimate.method == "pnp":
-        near = [c for c in cands if _close(c, estimate.pose(), FLOOR_CONFIRM_M, FLOOR_CONFIRM_RAD)]
+        # Only the lines' candidates confirm: a place from the landmarks' bearings agrees
+        # with a PnP pose on a look-alike print as well (room 551152189: 5.7 m off).
+        near = [c for c in cands[:from_lines]
+                if _close(c, estimate.pose(), FLOOR_CONFIRM_M, FLOOR_CONFIRM_RAD)]  # fmt: skip
         if near:
-            votes = pose_support(vmap, feats, queries, near)
+            votes = pose_support(near)
             pick = max(range(len(near)), key=lambda i: votes[i])
             details = dict(estimate.details)
             details.update(info, floor_confirmed=True, floor_support=votes[pick])
@@ -372,10 +400,10 @@ def _floor_fix(
         checked = check_pose(lines, walls, estimate.pose(), FLOOR_CONFIRM_M, FLOOR_CONFIRM_RAD)
         if checked is not None and checked[1] >= 1:
             kept = checked[0]
-            votes = pose_support(vmap, feats, queries, [kept, *cands])
+            votes = pose_support([kept, *cands])
             support = votes[1:]  # each pose's vote is its own: the vote below reuses them
-            rivals = [v for c, v in zip(cands, support, strict=True)
-                      if not _close(c, kept, FLOOR_DISTINCT_M, math.pi)]  # fmt: skip
+            rivals = [support[i] for i in _standing(support, from_lines)
+                      if not _close(cands[i], kept, FLOOR_DISTINCT_M, math.pi)]  # fmt: skip
             beaten = max(rivals, default=0)
             if beaten < FLOOR_MIN_SUPPORT or votes[0] >= FLOOR_KEEP_MARGIN * beaten:
                 details = dict(estimate.details)
@@ -393,10 +421,14 @@ def _floor_fix(
     # explains nearly as many features as the true one (room 1595909956: two of its poses
     # 2.7 and 4.4 m off kept that way, with support 47 and 58).
     if support is None:
-        support = pose_support(vmap, feats, queries, cands)
-    best = max(range(len(cands)), key=lambda i: support[i])
-    rivals = [s for c, s in zip(cands, support, strict=True)
-              if not _close(c, cands[best], FLOOR_DISTINCT_M, math.pi)]  # fmt: skip
+        support = pose_support(cands)
+    standing = _standing(support, from_lines)
+    if not standing:
+        estimate.details.update(info, floor_support=max(support))
+        return estimate
+    best = max(standing, key=lambda i: support[i])
+    rivals = [support[i] for i in standing
+              if not _close(cands[i], cands[best], FLOOR_DISTINCT_M, math.pi)]  # fmt: skip
     if support[best] < FLOOR_MIN_SUPPORT or (
         rivals and FLOOR_MARGIN * max(rivals) >= support[best]
     ):
@@ -405,9 +437,17 @@ def _floor_fix(
     pose = cands[best]
     details = dict(estimate.details)
     details.update(info, method="floorlines", floor_support=support[best])
+    if best >= from_lines:
+        details["floor_axis_from"] = "landmarks"  # one coordinate from their bearings
     if found:
         details["replaced"] = {"method": estimate.method, "pose": estimate.pose().to_list()}
     return _Estimate(pose.x, pose.y, pose.theta, FLOOR_CONFIDENCE, "verified", details)
+
+
+def _standing(support: Sequence[int], from_lines: int) -> list[int]:
+    """The candidates that stand in the vote: every one the lines give, and those only the
+    landmarks' bearings give (index ``from_lines`` on) with :data:`FLOOR_SWEPT_MIN_SUPPORT`."""
+    return [i for i, s in enumerate(support) if i < from_lines or s >= FLOOR_SWEPT_MIN_SUPPORT]
 
 
 def _close(a: Pose2D, b: Pose2D, metres: float, radians: float) -> bool:

@@ -73,7 +73,8 @@ AMBIGUOUS_SHARE = 0.8
 CONFIDENT = 1.0 - math.exp(-DEFAULTS.confident_inliers / DEFAULTS.confidence_scale)
 #: An estimate with alternatives is capped below CONFIDENT, so a scan turns and looks more.
 AMBIGUOUS_CONFIDENCE = 0.9 * CONFIDENT
-# pose_support: nearest landmark descriptors per query feature, and the reprojection radius.
+# naoloc.mapping.support.pose_support: nearest landmark descriptors per query feature, and
+# the reprojection radius.
 SUPPORT_NEIGHBOURS = 3
 SUPPORT_RADIUS_PX = 12.0
 FALLBACK_MAX_CONFIDENCE = DEFAULTS.fallback_max_confidence
@@ -481,74 +482,6 @@ def _correspond(
         t_map_robot_last = t_map_cam @ np.linalg.inv(c_q) @ to_last[qi]
         hypotheses.append(np.array(planar_pose(t_map_robot_last)))
     return corr, mats, hypotheses, kf_votes, cand_all
-
-
-def pose_support(
-    vmap: VisualMap,
-    feats: Sequence[Features],
-    queries: Sequence[Keyframe],
-    poses: Sequence[Pose2D],
-    *,
-    neighbours: int = SUPPORT_NEIGHBOURS,
-    radius_px: float = SUPPORT_RADIUS_PX,
-) -> list[int]:
-    """How many query features each candidate pose explains: a vote between poses found
-    another way (the floor-wall lines) where no pose had enough matches to be verified.
-
-    Every query feature is matched to its ``neighbours`` nearest landmark descriptors over
-    the whole map (no retrieval, no ratio test: where the scan verified nothing, retrieval
-    picked the wrong places and look-alikes fail the ratio). A feature supports a pose when
-    one of its landmarks reprojects within ``radius_px`` of it from there. Measured at 14
-    floor-line scans of room 1595909956, the candidate nearest the truth got the most
-    support every time, 1.2-10x the next (docs/RESULTS.md, "Issue 12, fifth step").
-
-    Args:
-        vmap: The map.
-        feats: Features of each query, extracted with the map's extractor.
-        queries: The query images (odometry poses and head angles).
-        poses: Candidate robot poses when the last query was taken, map frame.
-        neighbours: Nearest landmark descriptors tried per feature.
-        radius_px: Reprojection tolerance, pixels.
-    """
-    if not poses:
-        return []
-    points = np.asarray(vmap.kp_points, np.float64)
-    known = np.flatnonzero(np.isfinite(points).all(axis=1))
-    if known.size == 0:
-        return [0] * len(poses)
-    pts, desc = points[known], np.ascontiguousarray(vmap.kp_desc[known])
-    matcher = hamming_matcher(vmap.vocabulary.binary)
-    to_last = _to_last(queries, turn_scale_of(vmap))
-    obj: list[np.ndarray] = []
-    px: list[np.ndarray] = []
-    mats: list[np.ndarray] = []
-    owner: list[np.ndarray] = []  # which query feature each match is of (an id per feature)
-    first = 0
-    for qi, (q, f) in enumerate(zip(queries, feats, strict=True)):
-        base, first = first, first + len(f)
-        if len(f) == 0:
-            continue
-        knn = matcher.knnMatch(f.descriptors, desc, k=neighbours)  # type: ignore[attr-defined]
-        pairs = np.asarray([(m.queryIdx, m.trainIdx) for ms in knn for m in ms], np.int64)
-        if pairs.size == 0:
-            continue
-        m_q = _projection(query_camera(q).matrix(), q.camera_matrix(), to_last[qi])
-        obj.append(pts[pairs[:, 1]])
-        px.append(f.xy[pairs[:, 0]].astype(np.float64))
-        mats.append(np.repeat(m_q[None], len(pairs), axis=0))
-        owner.append(base + pairs[:, 0])
-    if not obj:
-        return [0] * len(poses)
-    o, u, mm, who = (
-        np.concatenate(obj),
-        np.concatenate(px),
-        np.concatenate(mats),
-        np.concatenate(owner),
-    )
-    return [
-        int(np.unique(who[_residuals(np.array(p.to_list()), mm, o, u) < radius_px]).size)
-        for p in poses
-    ]
 
 
 def localize_verified(
