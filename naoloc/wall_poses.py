@@ -58,6 +58,12 @@ EDGE_M: Final = 0.2  # a side line that jumps more between frames sees another t
 # (6 % of the survey's first steering), so the start's own line is preferred.
 START_HEADING_M: Final = 1.0
 START_GATE_RAD: Final = 0.06
+# A survey start beside furniture: its distance from the wall is carried back by the
+# odometry's walk inward from side 0's frames that see the wall within this many frames
+# (their median), not taken from its stretch's depth (room 1327980321: two chests 0.36 and
+# 0.45 m deep, 0.09 m apart, read as one stretch put the start, and every map pose, 9.7 cm
+# off; the walk back errs 1-5 cm).
+START_FROM_WALL_FRAMES: Final = 8
 WALL_LEVEL_M: Final = 0.1  # stretches whose levels are this close see the same thing
 MIN_WALL_FRAMES: Final = 3  # frames that must see a side's wall
 WALL_SUPPORT: Final = 0.2  # and the share of the side's lines that must
@@ -241,7 +247,8 @@ def wall_poses(
             continue
         dists, on_wall = found
         if k == 0:
-            start_dist, dists, on_wall = dists[0], dists[1:], on_wall[1:]
+            start_dist = dists[0] if on_wall[0] else _start_from_wall(dists, on_wall, dy)
+            dists, on_wall = dists[1:], on_wall[1:]
         used += sum(on_wall)
         for i, v in zip(idx, dists, strict=True):
             dist[i] = v
@@ -522,6 +529,29 @@ def side_distances(
         if out[i] is None and nxt is not None:
             out[i] = nxt - inward[i + 1]
     return [float(v) for v in out if v is not None], on_wall
+
+
+def _start_from_wall(
+    dists: Sequence[float], on_wall: Sequence[bool], inward: Sequence[float]
+) -> float:
+    """The survey start's distance from side 0's wall when its own line saw furniture (m).
+
+    Each of the first :data:`START_FROM_WALL_FRAMES` frames whose line sees the wall gives
+    its distance less the odometry's walk inward since the start; their median. Without
+    such a frame, the start's distance from its stretch (``dists[0]``).
+
+    Args:
+        dists: :func:`side_distances` of side 0, the start first.
+        on_wall: Whether each line saw the wall, the start first.
+        inward: The walk inward before each, the start first (m).
+    """
+    walked = np.cumsum([0.0, *inward[1:]])
+    back = [
+        dists[j] - walked[j]
+        for j in range(1, min(len(dists), START_FROM_WALL_FRAMES + 1))
+        if on_wall[j]
+    ]
+    return float(np.median(back)) if back else float(dists[0])
 
 
 def _start_heading(

@@ -18,7 +18,7 @@ import pytest
 from naoloc.floorfix import map_walls
 from naoloc.geometry import Pose2D
 from naoloc.keyframe import Keyframe
-from naoloc.wall_poses import side_distances, wall_poses
+from naoloc.wall_poses import _start_from_wall, side_distances, wall_poses
 
 OFFSET = 1.0
 SIDES = (3.0, 2.0)
@@ -254,3 +254,19 @@ def test_the_map_keeps_the_walls_the_survey_walked_inside() -> None:
     assert walls.bounds == pytest.approx((-OFFSET, SIDES[0] + OFFSET, -OFFSET, SIDES[1] + OFFSET))
     assert abs(walls.frame.x) < 0.02 and abs(walls.frame.y) < 0.02 and abs(walls.frame.theta) < 0.01
     assert lo_x.x == pytest.approx(-1.0, abs=0.03) and hi_y.y == pytest.approx(3.0, abs=0.03)
+
+
+def test_a_start_beside_furniture_is_placed_from_the_wall_frames_after_it() -> None:
+    """Room 1327980321's start: two chests 0.36 and 0.45 m deep, read as one stretch, put
+    the start 1.097 m from the wall (truth 1.0); the frames that see the wall, walked back
+    by the odometry, put it within 1 cm."""
+    measured = [0.641, 0.666, 0.78, 0.928, 1.457, 1.307, 1.198, 1.031, 0.686]
+    inward = [0.0, 0.119, 0.119, 0.119, 0.072, -0.119, -0.119, -0.119, -0.03]
+    found = side_distances(measured, inward)
+    assert found is not None
+    dists, on_wall = found
+    assert on_wall[4:8] == [True] * 4 and not on_wall[0]
+    assert dists[0] == pytest.approx(1.097, abs=0.005)  # the stretch's depth: 9.7 cm off
+    assert _start_from_wall(dists, on_wall, inward) == pytest.approx(1.0, abs=0.01)
+    # No frame sees the wall soon enough: the stretch's depth is all there is.
+    assert _start_from_wall(dists, [False] * len(dists), inward) == dists[0]
