@@ -47,6 +47,9 @@ WALL_CLEARANCE_M = 0.1
 # the landmarks' place is where the map's landmarks fit, 0.1-0.2 m from the wall frame's
 # where the map's poses err, so near a wall's line it would out-vote the truth.
 SWEEP_KEEP = 8
+# A cluster of lines stays a candidate beyond a line that puts it behind a wall when it has
+# this many times as many lines as those it puts behind one (:func:`_feasible`).
+OUTVOTE = 3
 SWEEP_APART_M = 0.3
 
 #: Where along one axis of W the landmarks put the robot: ``(theta, axis, fixed, span)`` ->
@@ -165,7 +168,8 @@ def check_pose(
 
     The lines contradict a pose when their heading is more than ``radians`` from its
     heading (taken in the pose's own quarter turn), or when the pose puts a
-    seen line more than :data:`BEHIND_WALL_M` behind its wall. Otherwise the pose takes
+    seen line more than :data:`BEHIND_WALL_M` behind its wall and no coordinate that
+    outvotes such lines (:func:`_feasible`) is within ``metres`` of it. Otherwise the pose takes
     the lines' heading and, per axis, the nearest coordinate a line gives within
     ``metres`` (:func:`_feasible`); an axis where no wall was seen (only furniture, or
     nothing) keeps the pose's coordinate. A pose the lines do not pin is not contradicted:
@@ -197,9 +201,9 @@ def check_pose(
     for axis, values in enumerate(_axis_values(agreeing, walls, theta)):
         c = coords[axis]
         lo, hi = _bounds(values)
-        if lo <= hi and not lo <= c <= hi:  # lines that contradict each other bound nothing
-            return None
         near = [v for v in _feasible(values) if abs(v - c) <= metres]
+        if lo <= hi and not lo <= c <= hi and not near:  # (contradicting lines bound nothing)
+            return None
         if near:
             coords[axis] = min(near, key=lambda v: abs(v - c))
             pinned += 1
@@ -250,10 +254,12 @@ def _feasible(values: Sequence[tuple[float, bool]]) -> list[float]:
     A line is where the floor ends: at the wall, or at furniture in front of it. So the wall
     is never nearer than a line seen in its direction: a + side line at coordinate ``v``
     puts the robot at ``v`` (the wall's line) or below it (furniture's), a - side line at
-    ``v`` or above. Of the clusters (:func:`_clusters`) only those between the highest
+    ``v`` or above. Of the clusters (:func:`_groups`) only those between the highest
     - side line and the lowest + side line (within :data:`BEHIND_WALL_M`) remain: the
     robot is where one of those two lines is the wall's. A cluster beyond them would put a
-    seen line behind a wall.
+    seen line behind a wall, unless its own lines outnumber the lines it puts behind a wall
+    :data:`OUTVOTE` times: a lone line read past its wall (the paper room: one line 0.3 m
+    beyond the wall five lines agree on) does not veto the wall.
 
     Args:
         values: ``(coordinate, on the + side)`` per line, m in W.
@@ -266,8 +272,18 @@ def _feasible(values: Sequence[tuple[float, bool]]) -> list[float]:
     if not values:
         return []
     lo, hi = _bounds(values)
-    clusters = _clusters([v for v, _ in values])
-    return [c for c in clusters if lo <= c <= hi] if lo <= hi else clusters
+    groups = _groups([v for v, _ in values])
+    if lo > hi:
+        return [float(np.mean(g)) for g in groups]
+    out = []
+    for g in groups:
+        c = float(np.mean(g))
+        behind = sum(
+            1 for v, plus in values if (v < c - BEHIND_WALL_M if plus else v > c + BEHIND_WALL_M)
+        )
+        if lo <= c <= hi or len(g) >= OUTVOTE * behind:
+            out.append(c)
+    return out
 
 
 def _bounds(values: Sequence[tuple[float, bool]]) -> tuple[float, float]:
@@ -303,8 +319,8 @@ def _span(values: Sequence[tuple[float, bool]], walls: Walls, axis: int) -> tupl
     return low, high
 
 
-def _clusters(values: Sequence[float]) -> list[float]:
-    """The means of runs of sorted ``values`` closer than :data:`COORD_AGREE_M`."""
+def _groups(values: Sequence[float]) -> list[list[float]]:
+    """Runs of sorted ``values`` closer than :data:`COORD_AGREE_M`, ascending."""
     v = sorted(values)
     groups: list[list[float]] = [[v[0]]]
     for a in v[1:]:
@@ -312,4 +328,4 @@ def _clusters(values: Sequence[float]) -> list[float]:
             groups[-1].append(a)
         else:
             groups.append([a])
-    return [float(np.mean(g)) for g in groups]
+    return groups

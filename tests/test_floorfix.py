@@ -115,6 +115,24 @@ def test_lines_that_contradict_each_other_bound_nothing() -> None:
     assert checked is not None and _near([checked[0]], truth, metres=1e-6, rad=1e-6)
 
 
+def test_a_lone_line_read_past_its_wall_does_not_veto_the_wall_many_lines_see() -> None:
+    pose_w = Pose2D(0.5, 2.5, 0.3)  # 0.5 m from the +y wall
+    truth = WALLS.frame * pose_w
+    lines = _lines_at(pose_w)
+    y_plus = modulo2PI(math.pi / 2 - pose_w.theta)
+    # The +y wall seen by three more pictures, and once 0.3 m too far (beyond the wall):
+    # that line alone would bound y below the truth; three lines agree on the wall.
+    past = [_line(0.5, y_plus), _line(0.5, y_plus), _line(0.8, y_plus)]
+    kept = candidates([*lines, *past], WALLS, heading=truth.theta)
+    assert _near(kept, truth)
+    checked = check_pose([*lines, *past], WALLS, truth, 0.3, 0.15)
+    assert checked is not None and _near([checked[0]], truth, metres=1e-6, rad=1e-6)
+    # With only as many lines on the wall as past it (two to one), the lone line wins:
+    # the wall's coordinate goes, as before.
+    fewer = [*(ln for ln in lines if ln.normal != y_plus), _line(0.5, y_plus), _line(0.8, y_plus)]
+    assert not _near(candidates(fewer, WALLS, heading=truth.theta), truth)
+
+
 def test_noisy_lines_still_give_the_pose_within_centimetres() -> None:
     rng = np.random.default_rng(3)
     pose_w = Pose2D(2.5, 1.9, 1.0)
