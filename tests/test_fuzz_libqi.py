@@ -18,6 +18,7 @@ import pytest
 from naoloc.backends.naoqi.testing import served
 
 import naoloc
+from naoloc.errors import ConnectionLost
 from tests.fuzz.libqi_fuzzer import churn_authenticated, fuzz_libqi
 from tests.fuzz.proc import rss_mb
 
@@ -45,11 +46,25 @@ def test_fuzzed_libqi_server_survives_answers_and_stays_small() -> None:
         after, fds_after = rss_mb(pid), _open_fds(pid)
         assert report.sent == MESSAGES and report.connections > 400
         assert server.process.poll() is None, server.stderr()[-2000:]
-        with naoloc.connect(server.client_config()) as robot:  # the watchdog check
+        with _connect_retrying(server.client_config()) as robot:  # the watchdog check
             assert len(robot.motion.getRobotPosition(True)) == 3
         assert "Traceback" not in server.stderr(), server.stderr()[-3000:]
         assert after - before < MAX_GROWTH_MB, (before, after)
         assert fds_after - fds_before < 20, (fds_before, fds_after)
+
+
+def _connect_retrying(config: dict[str, object], attempts: int = 3) -> naoloc.Robot:
+    """``naoloc.connect``, retried on a connect that times out (5 s each): on the loaded
+    2-core CI machine libqi's accept fell behind the 10,000 fuzz messages once (the same
+    allowance the fuzzer's own connects get, about 20 s); a wedged server still fails."""
+    for attempt in range(attempts):
+        try:
+            return naoloc.connect(config)
+        except ConnectionLost:
+            if attempt == attempts - 1:
+                raise
+            time.sleep(1.0)
+    raise AssertionError("unreachable")
 
 
 _CONNECT = """
