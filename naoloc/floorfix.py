@@ -9,8 +9,8 @@ A floor-wall line measured at the robot (:class:`naoloc.floorline.WallLine`, FRA
 measured to 1-4 cm at 0.5-2 m) says how far a wall is and at which angle. The lines of one
 room agree on the robot's heading modulo a quarter turn, and each gives one coordinate once
 assigned to the wall it faces; furniture in front of a wall gives a coordinate too near
-that wall. :func:`candidates` lists every pose the lines allow (and, on an axis whose
-walls no line saw, the places the landmarks' bearings give); the pictures' landmark
+that wall. :func:`candidates` lists every pose the lines allow (and :func:`landmark_candidates`, on
+an axis whose walls no line saw, the places the landmarks' bearings give); the pictures' landmark
 matches choose among them (:func:`naoloc.behaviours.localize.localize`).
 
 Frames: the map frame in and out (x forward at the survey start, y left, metres, radians);
@@ -47,10 +47,10 @@ WALL_CLEARANCE_M = 0.1
 # the landmarks' place is where the map's landmarks fit, 0.1-0.2 m from the wall frame's
 # where the map's poses err, so near a wall's line it would out-vote the truth.
 SWEEP_KEEP = 8
+SWEEP_APART_M = 0.3
 # A cluster of lines stays a candidate beyond a line that puts it behind a wall when it has
 # this many times as many lines as those it puts behind one (:func:`_feasible`).
 OUTVOTE = 3
-SWEEP_APART_M = 0.3
 
 #: Where along one axis of W the landmarks put the robot: ``(theta, axis, fixed, span)`` ->
 #: ``[(coordinate, agreeing features), ...]`` for heading ``theta`` (W, rad), solving axis
@@ -102,10 +102,7 @@ def map_walls(vmap: MapData) -> Walls | None:
 
 
 def candidates(
-    lines: Sequence[WallLine],
-    walls: Walls,
-    heading: float | None = None,
-    solve: AxisSolver | None = None,
+    lines: Sequence[WallLine], walls: Walls, heading: float | None = None
 ) -> list[Pose2D]:
     """Every pose the lines allow: a heading they agree on, then per axis each coordinate.
 
@@ -114,23 +111,69 @@ def candidates(
     wall gives one too near it). Coordinates within :data:`COORD_AGREE_M` are one, and
     only those that put no seen line behind a wall remain (:func:`_feasible`).
 
-    An axis whose walls no line saw (4 m away, or hidden behind furniture) has only
-    furniture's coordinates or none, so no candidate near the truth. ``solve`` adds, per
-    heading and per coordinate both walls' lines give on the other axis, the places along
-    that axis where the landmarks' bearings agree (within the lines' bounds and the walls; the
-    :data:`SWEEP_KEEP` best agreed over all).
-
     Args:
         lines: Floor-wall lines measured at the robot, FRAME_ROBOT of the robot now.
         walls: The room's walls (:func:`map_walls`).
         heading: A heading to keep to (map frame, rad): only its quarter turn is tried.
             None tries all four.
-        solve: The landmarks' places along an axis (:data:`AxisSolver`); None adds none.
 
     Returns:
-        Robot poses in the map frame, the lines' first (none when fewer than two lines
-        agree on the heading; without ``solve``, none either when an axis has no line).
+        Robot poses in the map frame (none when fewer than two lines agree on the heading
+        or an axis has no line).
     """
+    return [
+        walls.frame * Pose2D(x, y, modulo2PI(theta))
+        for theta, _values, axes in _per_turn(lines, walls, heading)
+        for x in axes[0]
+        for y in axes[1]
+    ]
+
+
+def landmark_candidates(
+    lines: Sequence[WallLine],
+    walls: Walls,
+    solve: AxisSolver,
+    heading: float | None = None,
+) -> list[Pose2D]:
+    """The poses an axis no wall line gave takes from the landmarks' bearings.
+
+    An axis whose walls no line saw (4 m away, or hidden behind furniture) has only
+    furniture's coordinates or none, so :func:`candidates` has none near the truth there.
+    Per heading the lines agree on, and per coordinate both walls' lines give on the other
+    axis (:func:`_two_sided`), ``solve`` gives the places along that axis where the
+    landmarks' bearings agree (within the lines' bounds and the walls, :func:`_span`), and
+    those no line's coordinate is within :data:`SWEEP_APART_M` of are kept, the
+    :data:`SWEEP_KEEP` best agreed over all.
+
+    Args:
+        lines: Floor-wall lines measured at the robot, FRAME_ROBOT of the robot now.
+        walls: The room's walls (:func:`map_walls`).
+        solve: The landmarks' places along an axis (:data:`AxisSolver`).
+        heading: As for :func:`candidates`.
+
+    Returns:
+        Robot poses in the map frame, the best agreed first.
+    """
+    swept: list[tuple[int, Pose2D]] = []
+    for theta, values, axes in _per_turn(lines, walls, heading):
+        for axis in (0, 1):
+            span = _span(values[axis], walls, axis)
+            for fixed in _two_sided(values[1 - axis], axes[1 - axis]):
+                for coord, n in solve(theta, axis, fixed, span):
+                    if any(abs(coord - v) < SWEEP_APART_M for v in axes[axis]):
+                        continue  # a line gives it, or one near it
+                    xy = (coord, fixed) if axis == 0 else (fixed, coord)
+                    swept.append((n, walls.frame * Pose2D(*xy, modulo2PI(theta))))
+    swept.sort(key=lambda t: -t[0])
+    return [p for _n, p in swept[:SWEEP_KEEP]]
+
+
+def _per_turn(
+    lines: Sequence[WallLine], walls: Walls, heading: float | None
+) -> list[tuple[float, list[list[tuple[float, bool]]], list[list[float]]]]:
+    """Per heading in W the lines allow (all four quarter turns, or ``heading``'s): the
+    heading, each axis's line coordinates (:func:`_axis_values`) and its feasible ones
+    (:func:`_feasible`). Empty when fewer than two lines agree on a heading."""
     found = _line_heading(lines)
     if found is None:
         return []
@@ -141,24 +184,11 @@ def candidates(
     else:
         h = (walls.frame.inverse() * Pose2D(0.0, 0.0, heading)).theta
         turns = [base + round((h - base) / quarter) * quarter]
-    out: list[Pose2D] = []
-    swept: list[tuple[int, Pose2D]] = []
+    out = []
     for theta in turns:
         values = _axis_values(agreeing, walls, theta)
-        axes = [_feasible(v) for v in values]
-        out += [walls.frame * Pose2D(x, y, modulo2PI(theta)) for x in axes[0] for y in axes[1]]
-        if solve is None:
-            continue
-        for axis in (0, 1):
-            span = _span(values[axis], walls, axis)
-            for fixed in _two_sided(values[1 - axis], axes[1 - axis]):
-                for coord, n in solve(theta, axis, fixed, span):
-                    if any(abs(coord - v) < SWEEP_APART_M for v in axes[axis]):
-                        continue  # a line gives it, or one near it
-                    xy = (coord, fixed) if axis == 0 else (fixed, coord)
-                    swept.append((n, walls.frame * Pose2D(*xy, modulo2PI(theta))))
-    swept.sort(key=lambda t: -t[0])
-    return out + [p for _n, p in swept[:SWEEP_KEEP]]
+        out.append((theta, values, [_feasible(v) for v in values]))
+    return out
 
 
 def check_pose(

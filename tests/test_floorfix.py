@@ -8,7 +8,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from naoloc.floorfix import Walls, candidates, check_pose, map_walls
+from naoloc.floorfix import Walls, candidates, check_pose, landmark_candidates, map_walls
 from naoloc.floorline import WallLine
 from naoloc.geometry import Pose2D, modulo2PI
 
@@ -84,7 +84,10 @@ def test_an_axis_no_wall_line_gives_takes_the_landmarks_places() -> None:
         places = [(2.1, 40), (-0.5, 30)] if axis == 0 else [(0.7, 50)]
         return [(c, n) for c, n in places if span[0] <= c <= span[1]]
 
-    kept = candidates(lines, WALLS, heading=truth.theta, solve=solve)
+    kept = [
+        *candidates(lines, WALLS, heading=truth.theta),
+        *landmark_candidates(lines, WALLS, solve, heading=truth.theta),
+    ]
     assert _near(kept, truth)
     on_x = [a for a in asked if a[1] == 0]
     assert len(on_x) == 1 and on_x[0][2] == pytest.approx(0.7)  # the y walls' coordinate
@@ -95,7 +98,8 @@ def test_an_axis_no_wall_line_gives_takes_the_landmarks_places() -> None:
     # One y wall only: its coordinate could be another wall's in a wrong quarter turn, so
     # nothing is searched from it.
     asked.clear()
-    one_sided = candidates([yp, chest, _line(0.9, xm.normal)], WALLS, solve=solve)
+    seen = [yp, chest, _line(0.9, xm.normal)]
+    one_sided = [*candidates(seen, WALLS), *landmark_candidates(seen, WALLS, solve)]
     assert not [a for a in asked if a[1] == 0]
     assert not _near(one_sided, truth, metres=0.3)
 

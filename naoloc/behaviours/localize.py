@@ -351,7 +351,7 @@ def _floor_fix(
     (:func:`naoloc.mapping.support.axis_peaks`); those stand in the votes only with
     :data:`FLOOR_SWEPT_MIN_SUPPORT` (``details["floor_axis_from"]`` says when one won).
     """
-    from naoloc.floorfix import candidates, check_pose, map_walls
+    from naoloc.floorfix import candidates, check_pose, landmark_candidates, map_walls
     from naoloc.mapping import support as sup
     from naoloc.mapping.localizer import Estimate as _Estimate
 
@@ -369,8 +369,9 @@ def _floor_fix(
     ) -> list[tuple[float, int]]:
         return sup.axis_peaks(matches, walls.frame, theta, axis, fixed, span)
 
-    cands = candidates(lines, walls, solve=solve)
-    from_lines = len(candidates(lines, walls))  # the landmarks' places come after these
+    cands = candidates(lines, walls)
+    from_lines = len(cands)  # the landmarks' places come after these
+    cands += landmark_candidates(lines, walls, solve)
     info: dict[str, Any] = {
         "floor_lines": len(lines),
         "floor_candidates": from_lines,
