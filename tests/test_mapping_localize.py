@@ -194,18 +194,18 @@ def test_ratio_matches_are_one_to_one() -> None:
 def test_turns_between_queries_are_unwrapped_and_rescaled() -> None:
     """Three quarter turns read 5 % large by odometry: the relative rotations come out true."""
     from naoloc.geometry import modulo2PI
-    from naoloc.mapping.localizer import _to_last
+    from naoloc.mapping.localizer import robot_to_last
 
     image = np.zeros((4, 4), np.uint8)
     true_turns = [0.0, math.pi / 2, math.pi, 1.5 * math.pi]
     queries = [
         Keyframe(image=image, pose=Pose2D(0.0, 0.0, modulo2PI(1.05 * t))) for t in true_turns
     ]
-    mats = _to_last(queries, 1.05)
+    mats = robot_to_last(queries, 1.05)
     for t, m in zip(true_turns, mats, strict=True):
         want = true_turns[-1] - t  # the turn from that query to the last
         assert math.atan2(m[1, 0], m[0, 0]) == pytest.approx(modulo2PI(want), abs=1e-9)
-    plain = _to_last(queries)  # no correction: the odometry's own rotations
+    plain = robot_to_last(queries)  # no correction: the odometry's own rotations
     assert math.atan2(plain[0][1, 0], plain[0][0, 0]) == pytest.approx(
         modulo2PI(1.05 * 1.5 * math.pi), abs=1e-9
     )

@@ -166,7 +166,7 @@ def turn_scale_of(vmap: MapData) -> float:
     return float(scale) if isinstance(scale, (int, float)) and scale > 0 else 1.0
 
 
-def _to_last(queries: Sequence[Keyframe], turn_scale: float = 1.0) -> list[np.ndarray]:
+def robot_to_last(queries: Sequence[Keyframe], turn_scale: float = 1.0) -> list[np.ndarray]:
     """Per query, ``T_robotq_robotlast`` from the queries' odometry poses.
 
     The turn from each query to the last is the sum of the turns between consecutive
@@ -238,7 +238,7 @@ def localize_paper(
     usable = [i for i, f in enumerate(feats) if len(f) > 0]
     if not usable or posed.size == 0:
         return no_estimate("paper", "no features" if not usable else "no posed neuron")
-    to_last = _to_last(queries, turn_scale_of(vmap))
+    to_last = robot_to_last(queries, turn_scale_of(vmap))
     xs, ys, headings, closeness, winners = [], [], [], [], []
     weights = vmap.gcs.weights[posed]
     for i in usable:
@@ -291,7 +291,18 @@ def _project(
     return uv, z
 
 
-def _residuals(pose: np.ndarray, mats: np.ndarray, pts: np.ndarray, px: np.ndarray) -> np.ndarray:
+def pixel_residuals(
+    pose: np.ndarray, mats: np.ndarray, pts: np.ndarray, px: np.ndarray
+) -> np.ndarray:
+    """Each match's reprojection error from robot pose ``pose`` (pixels; inf behind the
+    camera or not finite).
+
+    Args:
+        pose: ``(x, y, theta)`` of the robot when the last query was taken, map frame.
+        mats: Per match, map point in the last query's robot frame -> pixels, (n, 3, 4).
+        pts: The matched landmarks, (n, 3), map frame, m.
+        px: The matched features' pixels, (n, 2).
+    """
     uv, z = _project(pose, mats, pts)
     err = np.linalg.norm(uv - px, axis=1)
     err[~(z > 0.05) | ~np.isfinite(err)] = np.inf
@@ -347,7 +358,7 @@ def _best_plausible(
     tun = vmap.config.tuning.localizer
     scored = []
     for h in hypotheses:
-        inl = _residuals(h, mm, pts, px) < tun.pnp_reprojection_px
+        inl = pixel_residuals(h, mm, pts, px) < tun.pnp_reprojection_px
         scored.append((int(inl.sum()), h, inl))
     scored.sort(key=lambda t: -t[0])
     rejected = 0
@@ -360,7 +371,7 @@ def _best_plausible(
             if inl.sum() < 4:
                 break
             pose = _refine(pose, mm[inl], pts[inl], px[inl])
-            inl = _residuals(pose, mm, pts, px) < tun.pnp_reprojection_px
+            inl = pixel_residuals(pose, mm, pts, px) < tun.pnp_reprojection_px
         if int(inl.sum()) < tun.min_pnp_inliers:
             continue
         if crowded_landmarks(vmap, float(pose[0]), float(pose[1])) > tun.clearance_max_landmarks:
@@ -390,7 +401,7 @@ def _alternatives(
     return out
 
 
-def _projection(kmat: np.ndarray, c_q: np.ndarray, to_last: np.ndarray) -> np.ndarray:
+def query_projection(kmat: np.ndarray, c_q: np.ndarray, to_last: np.ndarray) -> np.ndarray:
     """The 3 x 4 map from a point in the last query's robot frame to a query's pixels
     (homogeneous): its intrinsics ``kmat``, its camera pose in its robot frame ``c_q`` and
     its robot pose relative to the last query's ``to_last``."""
@@ -450,7 +461,7 @@ def _correspond(
         q_idx = np.fromiter(best.keys(), np.int64)
         obj = np.stack([best[a][1] for a in q_idx.tolist()])
         img = f.xy[q_idx].astype(np.float64)
-        m_q = _projection(kmat, c_q, to_last[qi])
+        m_q = query_projection(kmat, c_q, to_last[qi])
         corr.points.append(obj)
         corr.pixels.append(img)
         corr.query.append(np.full(len(q_idx), qi))
@@ -500,7 +511,7 @@ def localize_verified(
     usable = [i for i, f in enumerate(feats) if len(f) > 0]
     if not usable:
         return no_estimate("verified", "no features")
-    to_last = _to_last(queries, turn_scale_of(vmap))
+    to_last = robot_to_last(queries, turn_scale_of(vmap))
     corr, mats, hypotheses, kf_votes, cand_all = _correspond(
         vmap, feats, queries, usable, to_last, top_k
     )

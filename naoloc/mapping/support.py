@@ -28,9 +28,9 @@ from naoloc.mapping.landmarks import hamming_matcher, query_camera
 from naoloc.mapping.localizer import (
     SUPPORT_NEIGHBOURS,
     SUPPORT_RADIUS_PX,
-    _projection,
-    _residuals,
-    _to_last,
+    pixel_residuals,
+    query_projection,
+    robot_to_last,
     turn_scale_of,
 )
 
@@ -96,7 +96,7 @@ def support_matches(
     if known.size:
         pts, desc = points[known], np.ascontiguousarray(vmap.kp_desc[known])
         matcher = hamming_matcher(vmap.vocabulary.binary)
-        to_last = _to_last(queries, turn_scale_of(vmap))
+        to_last = robot_to_last(queries, turn_scale_of(vmap))
         first = 0
         for qi, (q, f) in enumerate(zip(queries, feats, strict=True)):
             base, first = first, first + len(f)
@@ -106,7 +106,7 @@ def support_matches(
             pairs = np.asarray([(m.queryIdx, m.trainIdx) for ms in knn for m in ms], np.int64)
             if pairs.size == 0:
                 continue
-            m_q = _projection(query_camera(q).matrix(), q.camera_matrix(), to_last[qi])
+            m_q = query_projection(query_camera(q).matrix(), q.camera_matrix(), to_last[qi])
             obj.append(pts[pairs[:, 1]])
             px.append(f.xy[pairs[:, 0]].astype(np.float64))
             mats.append(np.repeat(m_q[None], len(pairs), axis=0))
@@ -162,7 +162,7 @@ def pose_support(
     if m.owner.size == 0:
         return [0] * len(poses)
     return [
-        int(np.unique(m.owner[_residuals(np.array(p.to_list()), m.mats, m.points, m.pixels)
+        int(np.unique(m.owner[pixel_residuals(np.array(p.to_list()), m.mats, m.points, m.pixels)
                                < radius_px]).size)
         for p in poses
     ]  # fmt: skip
