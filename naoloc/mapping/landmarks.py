@@ -19,6 +19,7 @@ from naoloc.geometry import planar_pose, robot_matrix
 from naoloc.keyframe import CameraInfo, Keyframe, camera_in_robot
 
 __all__ = [
+    "DescriptorMatcher",
     "LandmarkSet",
     "camera_matrix_in_map",
     "camera_poses",
@@ -64,32 +65,93 @@ def camera_poses(poses: np.ndarray, heads: np.ndarray, cam_index: Sequence[int])
     )
 
 
-def hamming_matcher(binary: bool) -> object:
-    """A brute-force OpenCV matcher for the descriptor kind."""
-    import cv2
+# Binary descriptors are zero-padded to a multiple of this many bytes before matching: the
+# same Hamming distances, and OpenCV's SIMD popcount then covers every byte (A-KAZE's 61
+# bytes leave a 13-byte tail it counts byte by byte). Measured on room 913's map
+# (tools/bench_localize.py): 1.5-1.6x faster matching.
+PAD_BYTES = 16
 
-    return cv2.BFMatcher(cv2.NORM_HAMMING if binary else cv2.NORM_L2)
+
+def _padded(desc: np.ndarray) -> np.ndarray:
+    """``desc`` (uint8 rows) zero-padded to a multiple of :data:`PAD_BYTES` bytes."""
+    width = desc.shape[1]
+    if width % PAD_BYTES == 0:
+        return desc
+    out = np.zeros((desc.shape[0], width + PAD_BYTES - width % PAD_BYTES), np.uint8)
+    out[:, :width] = desc
+    return out
+
+
+@dataclass(frozen=True)
+class DescriptorMatcher:
+    """Brute-force nearest descriptors: Hamming for binary descriptors, L2 otherwise.
+
+    Attributes:
+        binary: Whether the descriptors are binary (uint8 bit strings).
+    """
+
+    binary: bool
+
+    def knn(self, query: np.ndarray, train: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Each query row's ``k`` nearest train rows, nearest first.
+
+        Args:
+            query: ``(n, d)`` descriptors.
+            train: ``(m, d)`` descriptors.
+            k: Neighbours per query row.
+
+        Returns:
+            ``(distances (n, k'), indices (n, k'))`` with ``k' = min(k, m)``: Hamming bit
+            counts (binary) or L2 distances, and the train rows (int64); the same as
+            OpenCV's ``BFMatcher.knnMatch``, whose ranking (ties included) it uses.
+        """
+        import cv2
+
+        kk = min(k, train.shape[0])
+        n = query.shape[0]
+        if n == 0 or kk == 0:
+            return np.zeros((n, kk)), np.zeros((n, kk), np.int64)
+        if self.binary:
+            q, t = _padded(np.ascontiguousarray(query)), _padded(np.ascontiguousarray(train))
+            norm, dtype = cv2.NORM_HAMMING, cv2.CV_32S
+        else:
+            q, t = np.asarray(query, np.float32), np.asarray(train, np.float32)
+            norm, dtype = cv2.NORM_L2, cv2.CV_32F
+        dist, idx = cv2.batchDistance(q, t, dtype, normType=norm, K=kk)
+        return dist.astype(np.float64), idx.astype(np.int64)
+
+
+def hamming_matcher(binary: bool) -> DescriptorMatcher:
+    """A brute-force matcher for the descriptor kind (Hamming when ``binary``)."""
+    return DescriptorMatcher(binary)
 
 
 def ratio_matches(
-    matcher: object, query: np.ndarray, train: np.ndarray, ratio: float = DEFAULT.ratio_test
+    matcher: DescriptorMatcher,
+    query: np.ndarray,
+    train: np.ndarray,
+    ratio: float = DEFAULT.ratio_test,
 ) -> np.ndarray:
     """Lowe-ratio-tested nearest-neighbour matches ``(m, 2)``: query index, train index.
 
     One-to-one: when several query keypoints pick the same train keypoint, only the closest
-    is kept (a train image with few keypoints otherwise "matches" a whole query image).
+    is kept (the first of equally close ones; a train image with few keypoints otherwise
+    "matches" a whole query image). Rows are sorted by query index.
     """
     if query.shape[0] == 0 or train.shape[0] < 2:
         return np.zeros((0, 2), np.int64)
-    knn = matcher.knnMatch(query, train, k=2)  # type: ignore[attr-defined]
-    best: dict[int, tuple[float, int]] = {}
-    for m in knn:
-        if len(m) == 2 and m[0].distance < ratio * m[1].distance:
-            held = best.get(m[0].trainIdx)
-            if held is None or m[0].distance < held[0]:
-                best[m[0].trainIdx] = (m[0].distance, m[0].queryIdx)
-    pairs = sorted((q, t) for t, (_d, q) in best.items())
-    return np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    dist, idx = matcher.knn(query, train, 2)
+    qi = np.flatnonzero(dist[:, 0] < ratio * dist[:, 1])
+    if qi.size == 0:
+        return np.zeros((0, 2), np.int64)
+    ti, d = idx[qi, 0], dist[qi, 0]
+    order = np.lexsort((qi, d, ti))  # by train row, then distance, then query row
+    ti_sorted = ti[order]
+    first = np.ones(order.size, bool)
+    first[1:] = ti_sorted[1:] != ti_sorted[:-1]
+    pos = order[first]
+    pos = pos[np.argsort(qi[pos])]
+    return np.column_stack([qi[pos], ti[pos]]).astype(np.int64)
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,13 @@ import numpy as np
 from naoloc.config import PoseGraphTuning
 from naoloc.geometry import planar_pose, robot_matrix, se2_compose_local, se2_relative
 from naoloc.keyframe import camera_in_robot
-from naoloc.mapping.landmarks import camera_poses, hamming_matcher, ratio_matches, triangulate
+from naoloc.mapping.landmarks import (
+    DescriptorMatcher,
+    camera_poses,
+    hamming_matcher,
+    ratio_matches,
+    triangulate,
+)
 from naoloc.mapping.planar import solve_planar
 from naoloc.mapping.vocabulary import dbow_scores
 
@@ -297,7 +303,7 @@ class _LoopContext:
     cam_index: Sequence[int]
     points: np.ndarray  # (M, 3) local landmarks, map frame of the odometry poses
     offsets: np.ndarray
-    matcher: object
+    matcher: DescriptorMatcher
     tuning: PoseGraphTuning
 
 

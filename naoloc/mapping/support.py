@@ -102,8 +102,10 @@ def support_matches(
             base, first = first, first + len(f)
             if len(f) == 0:
                 continue
-            knn = matcher.knnMatch(f.descriptors, desc, k=neighbours)  # type: ignore[attr-defined]
-            pairs = np.asarray([(m.queryIdx, m.trainIdx) for ms in knn for m in ms], np.int64)
+            _dist, nearest = matcher.knn(f.descriptors, desc, neighbours)
+            pairs = np.column_stack(
+                [np.repeat(np.arange(len(f)), nearest.shape[1]), nearest.ravel()]
+            )
             if pairs.size == 0:
                 continue
             m_q = query_projection(query_camera(q).matrix(), q.camera_matrix(), to_last[qi])
