@@ -34,6 +34,8 @@ MIN_INLIERS = 12
 MIN_INLIER_FRACTION = 0.5
 MIN_SPAN_M = 0.3
 RANSAC_TOLERANCE_M = 0.03
+# Random point pairs a line's RANSAC tries.
+RANSAC_SAMPLES = 200
 MAX_RANGE_M = 4.0
 # Lightness of a board of the same floor against the floor's (ratio): planks' tones vary.
 TONE_RATIO = (0.75, 1.45)
@@ -201,21 +203,24 @@ def refine_boundary(
         The refined rows.
     """
     out = rows.copy()
-    for i, (r, c) in enumerate(zip(rows.tolist(), cols.tolist(), strict=True)):
-        top = r - reach - 6
-        if top < 0:
-            continue
-        wall = np.median(lab[top : top + 6, c], axis=0)
-        k = r
-        while k > r - reach:
-            px = lab[k - 1, c]
-            to_floor = np.linalg.norm(px - floor)
-            lighter = px[0] > DARKEST_FOOT * floor[0]  # much darker: a skirting, not floor
-            if lighter and to_floor < 3.0 * threshold and to_floor < np.linalg.norm(px - wall):
-                k -= 1
-            else:
-                break
-        out[i] = k
+    ok = rows - reach - 6 >= 0
+    if not ok.any() or reach < 1:
+        return out
+    r, c = rows[ok], cols[ok]
+    top = r - reach - 6
+    wall = np.median(lab[top[:, None] + np.arange(6), c[:, None]], axis=1)  # (n, 3)
+    # Pixels r-1, r-2, ... r-reach above each boundary: (n, reach, 3).
+    px = lab[r[:, None] - np.arange(1, reach + 1), c[:, None]]
+    to_floor = np.linalg.norm(px - floor, axis=-1)
+    lighter = px[..., 0] > DARKEST_FOOT * floor[0]  # much darker: a skirting, not floor
+    floorish = (
+        lighter
+        & (to_floor < 3.0 * threshold)
+        & (to_floor < np.linalg.norm(px - wall[:, None, :], axis=-1))
+    )
+    # Each boundary moves up while its pixels stay floorish: the first that is not stops it.
+    steps = np.where(floorish.all(axis=1), reach, np.argmin(floorish, axis=1))
+    out[ok] = r - steps
     return out
 
 
@@ -237,19 +242,27 @@ def subpixel_edges(
     """
     h = lab.shape[0]
     out = rows.astype(np.float64)
-    for i, (r, c) in enumerate(zip(rows.tolist(), cols.tolist(), strict=True)):
-        if r < 7 or r + 4 >= h:
-            continue
-        wall = np.median(lab[r - 7 : r - 3, c], axis=0)
-        d = wall - floor
-        n2 = float(d @ d)
-        if n2 < 1e-6:
-            continue
-        t = ((lab[r - 3 : r + 4, c] - floor) @ d) / n2  # ~1 on the wall, ~0 on the floor
-        for k in range(6):
-            if t[k] >= 0.5 > t[k + 1]:
-                out[i] = (r - 3 + k) + 0.5 + (t[k] - 0.5) / (t[k] - t[k + 1])
-                break
+    ok = (rows >= 7) & (rows + 4 < h)
+    if not ok.any():
+        return out
+    r, c = rows[ok], cols[ok]
+    wall = np.median(lab[r[:, None] + np.arange(-7, -3), c[:, None]], axis=1)  # (n, 3)
+    d = wall - floor
+    n2 = np.einsum("nj,nj->n", d, d)
+    # ~1 on the wall, ~0 on the floor, rows r-3 .. r+3: (n, 7)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.einsum("nkj,nj->nk", lab[r[:, None] + np.arange(-3, 4), c[:, None]] - floor, d)
+        t = t / n2[:, None]
+    cross = (t[:, :6] >= 0.5) & (t[:, 1:] < 0.5)  # the first k with t[k] >= 0.5 > t[k+1]
+    found = cross.any(axis=1) & (n2 >= 1e-6)
+    k = np.argmax(cross, axis=1)
+    rows_n = np.arange(len(r))
+    tk, tk1 = t[rows_n, k], t[rows_n, k + 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        edge = (r - 3 + k) + 0.5 + (tk - 0.5) / (tk - tk1)
+    sub = out[ok]
+    sub[found] = edge[found]
+    out[ok] = sub
     return out
 
 
@@ -291,21 +304,16 @@ def boundary_pixels(mask: np.ndarray, min_run: int) -> tuple[np.ndarray, np.ndar
     Returns:
         ``(rows, cols)`` of the boundary pixels (the last floor pixel of each column).
     """
-    h, w = mask.shape
-    rows, cols = [], []
-    for c in range(w):
-        col = mask[::-1, c]  # from the bottom up
-        idx = np.flatnonzero(col)
-        if idx.size == 0:
-            continue
-        start = int(idx[0])
-        gaps = np.flatnonzero(~col[start:])
-        end = start + int(gaps[0]) if gaps.size else h
-        if end >= h or end - start < min_run:
-            continue  # floor up to the top of the image, or no sustained floor
-        rows.append(h - end)  # first row (from the top) of the floor run
-        cols.append(c)
-    return np.asarray(rows, dtype=np.int64), np.asarray(cols, dtype=np.int64)
+    h = mask.shape[0]
+    col = mask[::-1]  # from the bottom up
+    start = np.argmax(col, axis=0)  # the first floor pixel from the bottom
+    above = np.arange(h)[:, None] >= start[None, :]
+    gaps = ~col & above
+    end = np.where(gaps.any(axis=0), np.argmax(gaps, axis=0), h)  # the run's end
+    # floor up to the top of the image, or no sustained floor: no boundary
+    keep = col.any(axis=0) & (end < h) & (end - start >= min_run)
+    cols = np.flatnonzero(keep)
+    return (h - end[cols]).astype(np.int64), cols.astype(np.int64)
 
 
 def fit_line(points: np.ndarray, seed: int = 0) -> tuple[np.ndarray, np.ndarray] | None:
@@ -317,22 +325,26 @@ def fit_line(points: np.ndarray, seed: int = 0) -> tuple[np.ndarray, np.ndarray]
     n = len(points)
     if n < MIN_INLIERS:
         return None
+    # RANSAC_SAMPLES random pairs of distinct points (drawn one pair at a time, as ever: the
+    # same seed gives the same lines), scored at once.
     rng = np.random.default_rng(seed)
-    best: np.ndarray | None = None
-    best_count = 0
-    for _ in range(200):
-        i, j = rng.choice(n, 2, replace=False)
-        d = points[j] - points[i]
-        norm = float(np.hypot(*d))
-        if norm < 0.05:
-            continue
-        normal = np.array([-d[1], d[0]]) / norm
-        res = np.abs((points - points[i]) @ normal)
-        inl = res < RANSAC_TOLERANCE_M
-        count = int(inl.sum())
-        if count > best_count:
-            best, best_count = inl, count
-    if best is None or best_count < MIN_INLIERS:
+    pairs = np.array([rng.choice(n, 2, replace=False) for _ in range(RANSAC_SAMPLES)])
+    d = points[pairs[:, 1]] - points[pairs[:, 0]]
+    norm = np.hypot(d[:, 0], d[:, 1])
+    usable = norm >= 0.05
+    if not usable.any():
+        return None
+    d, norm, first = d[usable], norm[usable], points[pairs[usable, 0]]
+    normal = np.column_stack([-d[:, 1], d[:, 0]]) / norm[:, None]
+    # |(p - p_i) . normal| for every point and pair: (pairs, n)
+    res = np.abs(
+        (points[None, :, 0] - first[:, 0, None]) * normal[:, 0, None]
+        + (points[None, :, 1] - first[:, 1, None]) * normal[:, 1, None]
+    )
+    counts = (res < RANSAC_TOLERANCE_M).sum(axis=1)
+    k = int(np.argmax(counts))  # the first of the best
+    best, best_count = res[k] < RANSAC_TOLERANCE_M, int(counts[k])
+    if best_count < MIN_INLIERS:
         return None
     inl = best
     for _ in range(2):
@@ -388,9 +400,12 @@ def detect_wall_lines(
     if pose.size != 16 or not np.all(np.isfinite(pose)):
         raise FeatureError("floor line: the camera pose must be 16 finite floats (4x4)")
     h, w = img.shape[:2]
-    origin, rays = pixel_rays(w, h, hfov, vfov, pose, lens)
-    # the rows whose centre column looks at the floor between 0.25 m and near_m
-    centre = floor_points(np.arange(h), np.full(h, w // 2), origin, rays)
+    # the rows whose centre column looks at the floor between 0.25 m and near_m (pixel
+    # centres at integer coordinates, as pixel_rays has them)
+    origin = pose.reshape(4, 4)[:3, 3].copy()
+    mid = rays_at(np.arange(h) + 0.5, np.full(h, w // 2), (w, h), hfov, vfov,
+                  pose.reshape(4, 4), lens)  # fmt: skip
+    centre = floor_points(np.arange(h), np.zeros(h, np.int64), origin, mid[:, None])
     reach = np.hypot(centre[:, 0], centre[:, 1])
     sample_rows = (reach > 0.2) & (reach < near_m)
     if sample_rows.sum() < 5:
