@@ -187,3 +187,19 @@ def test_a_lighter_board_and_a_wooden_skirting_are_not_the_wall(
     line = detect_wall_line(image, HFOV, VFOV, pose, expect_normal=yaw)
     assert line is not None
     assert abs(line.distance - distance) < 0.03 * distance
+
+
+def test_boundary_pixels_takes_the_top_of_the_lowest_floor_run() -> None:
+    """Per column, from the bottom: the robot's body is skipped, a run shorter than min_run
+    or floor up to the image's top gives nothing."""
+    from naoloc.floorline import boundary_pixels
+
+    h = 20
+    mask = np.zeros((h, 5), bool)
+    mask[12:, 0] = True  # floor from row 12 down: boundary 12
+    mask[8:17, 1] = True  # body in the bottom 3 rows, floor above: boundary 8
+    mask[18:, 2] = True  # a 2-row run: too short
+    mask[:, 3] = True  # floor to the top: no wall
+    mask[2:6, 4] = mask[10:, 4] = True  # the lowest run counts, not the one above it
+    rows, cols = boundary_pixels(mask, min_run=4)
+    assert cols.tolist() == [0, 1, 4] and rows.tolist() == [12, 8, 10]

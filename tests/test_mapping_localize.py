@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -242,3 +243,52 @@ def test_pose_support_prefers_the_true_pose(
         support = pose_support(room_map, feats, queries, [truth, *shifted])
         assert support[0] > max(support[1:]), support
     assert pose_support(room_map, feats_truths[0][0], feats_truths[0][1], []) == []
+
+
+def test_padded_hamming_matching_is_opencvs() -> None:
+    """Zero-padding 61-byte descriptors changes no distance: OpenCV's own knnMatch on the
+    unpadded descriptors gives the same neighbours, ties included."""
+    import cv2
+
+    from naoloc.mapping.landmarks import hamming_matcher
+
+    rng = np.random.default_rng(1)
+    train = rng.integers(0, 256, (400, 61), dtype=np.uint8)
+    query = train[rng.integers(0, 400, 150)].copy()
+    query[:, :8] = rng.integers(0, 256, (150, 8), dtype=np.uint8)  # near, not equal
+    query[:5] = train[:5]  # exact copies: distance 0
+    dist, idx = hamming_matcher(True).knn(query, train, 3)
+    knn = cv2.BFMatcher(cv2.NORM_HAMMING).knnMatch(query, train, k=3)
+    assert idx.tolist() == [[m.trainIdx for m in ms] for ms in knn]
+    assert dist.tolist() == [[m.distance for m in ms] for ms in knn]
+    assert hamming_matcher(True).knn(query, train[:2], 3)[1].shape == (150, 2)
+
+
+def test_the_memo_gives_the_same_answers_and_matches_each_picture_once(
+    world: tuple[Config, list[Keyframe], list], room_map: VisualMap
+) -> None:
+    """A scan asked after each sweep: with a memo the answers are the same, and each
+    picture is retrieved and matched once."""
+    from naoloc.mapping import localizer
+    from naoloc.mapping.localizer import MatchMemo
+
+    _cfg, _survey, trials = world
+    queries = [q for qs, _truth in trials[:3] for q in qs]  # 15 pictures in 3 "sweeps"
+    feats = room_map.extract(queries)
+    memo = MatchMemo()
+    calls: list[int] = []
+    real = localizer._picture_matches
+
+    def counted(*args: Any) -> Any:
+        calls.append(1)
+        return real(*args)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(localizer, "_picture_matches", counted)
+        for k in (5, 10, 15):
+            plain = room_map.localize_features(feats[:k], queries[:k])
+            kept = room_map.localize_features(feats[:k], queries[:k], memo=memo)
+            assert (kept.x, kept.y, kept.theta, kept.details) == (
+                plain.x, plain.y, plain.theta, plain.details
+            )  # fmt: skip
+    assert len(calls) == (5 + 10 + 15) + 15  # without the memo each call matched again

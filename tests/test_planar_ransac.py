@@ -88,3 +88,36 @@ def test_same_seed_same_hypotheses_and_nothing_from_noise() -> None:
     assert not noise or noise[0][0] < 12
     assert planar_hypotheses(mats[:1], pts[:1], px[:1], bearing_tol_rad=0.015, samples=10,
                              keep=1, seed=0) == []  # fmt: skip
+
+
+def test_float32_scoring_counts_as_the_angles_do() -> None:
+    """The float32 scoring without angles counts the inliers the bearing-angle formula
+    counts (to one, where a point sits on a threshold)."""
+    from naoloc.mapping.planar_ransac import _score
+
+    rng = np.random.default_rng(3)
+    n = 2000
+    points = rng.uniform(0.0, 6.0, (n, 2))
+    centres = rng.normal(0.0, 0.05, (n, 2))
+    truth = np.array([2.0, 3.0, 0.7])
+    c, s = math.cos(truth[2]), math.sin(truth[2])
+    d = points - truth[:2]
+    rx = c * d[:, 0] + s * d[:, 1] - centres[:, 0]
+    ry = -s * d[:, 0] + c * d[:, 1] - centres[:, 1]
+    azimuths = np.arctan2(ry, rx) + rng.normal(0.0, 0.02, n)
+    ranges = np.hypot(rx, ry) * rng.uniform(0.5, 2.0, n)
+    poses = np.vstack([truth, rng.uniform([0, 0, -3], [6, 6, 3], (300, 3))])
+    tol = 0.02
+
+    cp, sp = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+    dx, dy = points[None, :, 0] - poses[:, 0, None], points[None, :, 1] - poses[:, 1, None]
+    qx = cp * dx + sp * dy - centres[None, :, 0]
+    qy = -sp * dx + cp * dy - centres[None, :, 1]
+    err = np.abs((np.arctan2(qy, qx) - azimuths + np.pi) % (2 * np.pi) - np.pi)
+    dist = np.hypot(qx, qy)
+    near = (dist < 1.6 * ranges + 0.1) & (ranges < 1.6 * dist + 0.1)
+    expected = ((err < tol) & near).sum(axis=1)
+
+    got = _score(poses, centres, azimuths, ranges, points, tol)
+    assert np.abs(got - expected).max() <= 1
+    assert got[0] == expected[0] > 0.3 * n and int(np.argmax(got)) == 0

@@ -18,6 +18,7 @@ taken (metres, radians).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from collections.abc import Callable, Sequence
@@ -33,6 +34,7 @@ from naoloc.keyframe import Keyframe, camera_in_robot
 from naoloc.mapping.data import MapData
 from naoloc.mapping.features import FeatureExtractor, Features
 from naoloc.mapping.landmarks import (
+    DescriptorMatcher,
     hamming_matcher,
     planar_pose,
     query_camera,
@@ -48,6 +50,7 @@ __all__ = [
     "Estimate",
     "LocalizeMode",
     "LocalizeStrategy",
+    "MatchMemo",
     "localize_features",
     "localize_paper",
     "localize_verified",
@@ -135,6 +138,7 @@ def localize_features(
     feats: Sequence[Features],
     queries: Sequence[Keyframe],
     mode: LocalizeMode | str = LocalizeMode.VERIFIED,
+    memo: MatchMemo | None = None,
 ) -> Estimate:
     """Estimate the pose at the last query from the queries' features (see module doc).
 
@@ -143,6 +147,8 @@ def localize_features(
         feats: Features of each query, extracted with the map's extractor.
         queries: The query images (odometry poses and head angles).
         mode: ``verified`` (default) or ``paper``.
+        memo: Keeps each picture's work across calls on a growing scan (verified mode;
+            :class:`MatchMemo`); the answer is the same without it.
 
     Raises:
         NaolocError: On an unknown mode or no queries.
@@ -156,7 +162,7 @@ def localize_features(
         raise NaolocError("localize needs at least one query image and one feature set each")
     if chosen is LocalizeMode.PAPER:
         return localize_paper(vmap, feats, queries)
-    return localize_verified(vmap, feats, queries)
+    return localize_verified(vmap, feats, queries, memo=memo)
 
 
 def turn_scale_of(vmap: MapData) -> float:
@@ -268,6 +274,64 @@ class _Correspondences:
     points: list[np.ndarray] = field(default_factory=list)  # (n, 3) map frame
     pixels: list[np.ndarray] = field(default_factory=list)  # (n, 2)
     query: list[np.ndarray] = field(default_factory=list)  # (n,) query index
+
+
+@dataclass(frozen=True)
+class _PictureMatches:
+    """One query picture's retrieval and landmark matches: they do not depend on the other
+    pictures of a scan.
+
+    Attributes:
+        cands: Retrieved keyframes.
+        votes: ``(keyframe, weight, matches)`` per candidate with matches.
+        q_idx: The picture's features matched to a landmark, (n,).
+        obj: Their landmarks, (n, 3), map frame, m.
+    """
+
+    cands: list[int]
+    votes: list[tuple[int, float, np.ndarray]]
+    q_idx: np.ndarray
+    obj: np.ndarray
+
+
+class MatchMemo:
+    """The verified localizer's per-picture work, kept across calls on a growing scan.
+
+    A scan that turns in place and sweeps again asks the map with every picture so far
+    (:func:`naoloc.behaviours.localize.localize`); a picture's retrieval, landmark matches
+    and PnP camera do not depend on the other pictures, so with one memo they are computed
+    once per picture instead of once per call. Entries are keyed by the picture's
+    :class:`Features` and :class:`Keyframe` objects (held, so their ids are not reused) and
+    the retrieval depth; a PnP result also by the picture's index in the call (its RANSAC
+    seed), so answers are the same with or without a memo.
+    """
+
+    def __init__(self) -> None:
+        self._matches: dict[tuple[int, int, int], tuple[Any, Any, _PictureMatches]] = {}
+        self._pnp: dict[tuple[int, int, int], tuple[Any, np.ndarray | None]] = {}
+
+    def matches(
+        self, f: Features, q: Keyframe, top_k: int, compute: Callable[[], _PictureMatches]
+    ) -> _PictureMatches:
+        """The picture's matches, computed by ``compute`` the first time."""
+        key = (id(f), id(q), top_k)
+        held = self._matches.get(key)
+        if held is None:
+            held = (f, q, compute())
+            self._matches[key] = held
+        return held[2]
+
+    def pnp(
+        self, matches: _PictureMatches, qi: int, compute: Callable[[], np.ndarray | None]
+    ) -> np.ndarray | None:
+        """The picture's PnP camera pose (``T_map_cam``; None: no plausible pose) at index
+        ``qi`` of a call, computed by ``compute`` the first time."""
+        key = (id(matches), qi, 0)
+        held = self._pnp.get(key)
+        if held is None:
+            held = (matches, compute())
+            self._pnp[key] = held
+        return held[1]
 
 
 def _candidates(vmap: VisualMap, hist: np.ndarray, top_k: int) -> list[int]:
@@ -415,6 +479,7 @@ def _correspond(
     usable: Sequence[int],
     to_last: list[np.ndarray],
     top_k: int,
+    memo: MatchMemo | None = None,
 ) -> tuple[
     _Correspondences,
     list[np.ndarray],
@@ -427,11 +492,11 @@ def _correspond(
     Returns:
         The 2D-3D correspondences, their projection matrices (map point to pixel for a
         last-robot pose), the PnP hypotheses (last-robot poses, map frame), the per-keyframe
-        match votes and every query's candidates.
+        match votes and every query's candidates. ``memo`` keeps each picture's work for
+        the next call (:class:`MatchMemo`).
     """
-    import cv2
-
     tun = vmap.config.tuning.localizer
+    memo = memo if memo is not None else MatchMemo()
     matcher = hamming_matcher(vmap.vocabulary.binary)
     corr = _Correspondences()
     mats: list[np.ndarray] = []
@@ -440,54 +505,21 @@ def _correspond(
     cand_all: list[list[int]] = []
     for qi in usable:
         q, f = queries[qi], feats[qi]
-        cam = query_camera(q)
-        kmat = cam.matrix()
+        pm = memo.matches(f, q, top_k, functools.partial(_picture_matches, vmap, matcher, f, top_k))
+        cand_all.append(pm.cands)
+        kf_votes += [(qi, c, w, m) for c, w, m in pm.votes]
+        if len(pm.q_idx) < 6:
+            continue
+        img = f.xy[pm.q_idx].astype(np.float64)
         c_q = q.camera_matrix()  # the robot's own kinematics at capture
-        cands = _candidates(vmap, vmap.vocabulary.histogram(f.descriptors), top_k)
-        cand_all.append(cands)
-        best: dict[int, tuple[float, np.ndarray]] = {}
-        for c in cands:
-            lo, hi = int(vmap.kp_offsets[c]), int(vmap.kp_offsets[c + 1])
-            m = ratio_matches(matcher, f.descriptors, vmap.kp_desc[lo:hi])
-            if m.shape[0] == 0:
-                continue
-            kf_votes.append((qi, c, float(m.shape[0]), m))
-            pts = vmap.kp_points[lo + m[:, 1]]
-            for (a, _b), p in zip(m.tolist(), pts, strict=True):
-                if np.isfinite(p[0]) and a not in best:
-                    best[a] = (0.0, p)
-        if len(best) < 6:
-            continue
-        q_idx = np.fromiter(best.keys(), np.int64)
-        obj = np.stack([best[a][1] for a in q_idx.tolist()])
-        img = f.xy[q_idx].astype(np.float64)
-        m_q = query_projection(kmat, c_q, to_last[qi])
-        corr.points.append(obj)
+        m_q = query_projection(query_camera(q).matrix(), c_q, to_last[qi])
+        corr.points.append(pm.obj)
         corr.pixels.append(img)
-        corr.query.append(np.full(len(q_idx), qi))
-        mats.append(np.repeat(m_q[None], len(q_idx), axis=0))
-        try:
-            # OpenCV's RANSAC draws from a process-wide RNG: seed it per call so a query gives
-            # the same answer whatever ran before it (in-process, served, or in a worker).
-            cv2.setRNGSeed(int(vmap.config.seed) + qi)
-            ok, rvec, tvec, inl = cv2.solvePnPRansac(
-                obj,
-                img,
-                kmat,
-                None,
-                iterationsCount=tun.pnp_iterations,
-                reprojectionError=tun.pnp_reprojection_px,
-                confidence=0.99,
-                flags=cv2.SOLVEPNP_AP3P,
-            )
-        except cv2.error:
-            ok = False
-        if not ok or inl is None or len(inl) < 6:
+        corr.query.append(np.full(len(pm.q_idx), qi))
+        mats.append(np.repeat(m_q[None], len(pm.q_idx), axis=0))
+        t_map_cam = memo.pnp(pm, qi, functools.partial(_pnp, vmap, q, pm, img, qi))
+        if t_map_cam is None:
             continue
-        rot, _ = cv2.Rodrigues(rvec)
-        t_cam_map = np.eye(4)
-        t_cam_map[:3, :3], t_cam_map[:3, 3] = rot, tvec.ravel()
-        t_map_cam = np.linalg.inv(t_cam_map)
         if abs(t_map_cam[2, 3] - c_q[2, 3]) > tun.camera_height_tolerance_m:
             continue
         t_map_robot_last = t_map_cam @ np.linalg.inv(c_q) @ to_last[qi]
@@ -495,15 +527,70 @@ def _correspond(
     return corr, mats, hypotheses, kf_votes, cand_all
 
 
+def _picture_matches(
+    vmap: VisualMap, matcher: DescriptorMatcher, f: Features, top_k: int
+) -> _PictureMatches:
+    """One picture's retrieval candidates and ratio-tested landmark matches."""
+    cands = _candidates(vmap, vmap.vocabulary.histogram(f.descriptors), top_k)
+    votes: list[tuple[int, float, np.ndarray]] = []
+    best: dict[int, np.ndarray] = {}
+    for c in cands:
+        lo, hi = int(vmap.kp_offsets[c]), int(vmap.kp_offsets[c + 1])
+        m = ratio_matches(matcher, f.descriptors, vmap.kp_desc[lo:hi])
+        if m.shape[0] == 0:
+            continue
+        votes.append((c, float(m.shape[0]), m))
+        pts = vmap.kp_points[lo + m[:, 1]]
+        for (a, _b), p in zip(m.tolist(), pts, strict=True):
+            if np.isfinite(p[0]) and a not in best:
+                best[a] = p
+    q_idx = np.fromiter(best.keys(), np.int64, len(best))
+    obj = np.stack([best[a] for a in q_idx.tolist()]) if best else np.zeros((0, 3))
+    return _PictureMatches(cands, votes, q_idx, obj)
+
+
+def _pnp(
+    vmap: VisualMap, q: Keyframe, pm: _PictureMatches, img: np.ndarray, qi: int
+) -> np.ndarray | None:
+    """``T_map_cam`` of the picture by PnP RANSAC on its matches (None: no pose)."""
+    import cv2
+
+    tun = vmap.config.tuning.localizer
+    try:
+        # OpenCV's RANSAC draws from a process-wide RNG: seed it per call so a query gives
+        # the same answer whatever ran before it (in-process, served, or in a worker).
+        cv2.setRNGSeed(int(vmap.config.seed) + qi)
+        ok, rvec, tvec, inl = cv2.solvePnPRansac(
+            pm.obj,
+            img,
+            query_camera(q).matrix(),
+            None,
+            iterationsCount=tun.pnp_iterations,
+            reprojectionError=tun.pnp_reprojection_px,
+            confidence=0.99,
+            flags=cv2.SOLVEPNP_AP3P,
+        )
+    except cv2.error:
+        return None
+    if not ok or inl is None or len(inl) < 6:
+        return None
+    rot, _ = cv2.Rodrigues(rvec)
+    t_cam_map = np.eye(4)
+    t_cam_map[:3, :3], t_cam_map[:3, 3] = rot, tvec.ravel()
+    return np.linalg.inv(t_cam_map)
+
+
 def localize_verified(
     vmap: VisualMap,
     feats: Sequence[Features],
     queries: Sequence[Keyframe],
     top_k: int | None = None,
+    memo: MatchMemo | None = None,
 ) -> Estimate:
     """Retrieval + landmark matching + PnP + joint 3-DoF refinement (see module doc).
 
-    ``top_k`` retrieval candidates per query (default: the map's tuning).
+    ``top_k`` retrieval candidates per query (default: the map's tuning); ``memo`` keeps
+    each picture's work across calls (:class:`MatchMemo`).
     """
 
     tun = vmap.config.tuning.localizer
@@ -513,7 +600,7 @@ def localize_verified(
         return no_estimate("verified", "no features")
     to_last = robot_to_last(queries, turn_scale_of(vmap))
     corr, mats, hypotheses, kf_votes, cand_all = _correspond(
-        vmap, feats, queries, usable, to_last, top_k
+        vmap, feats, queries, usable, to_last, top_k, memo
     )
     details: dict[str, Any] = {"candidates": cand_all}
     if corr.points and tun.planar_samples > 0:

@@ -25,7 +25,13 @@ from naoloc.mapping.builder import ProgressFn, build_map_data, pinhole_features
 from naoloc.mapping.data import MapData
 from naoloc.mapping.features import FeatureExtractor, Features
 from naoloc.mapping.landmarks import query_camera
-from naoloc.mapping.localizer import Estimate, LocalizeMode, localize_features, map_extractor
+from naoloc.mapping.localizer import (
+    Estimate,
+    LocalizeMode,
+    MatchMemo,
+    localize_features,
+    map_extractor,
+)
 from naoloc.mapping.mapfile import read_map, save_map
 
 __all__ = ["MODES", "VisualMap", "build_map", "load_map"]
@@ -83,9 +89,12 @@ class VisualMap(MapData):
         feats: Sequence[Features],
         queries: Sequence[Keyframe],
         mode: LocalizeMode | str = LocalizeMode.VERIFIED,
+        memo: MatchMemo | None = None,
     ) -> Estimate:
-        """Like :meth:`localize` with the query features already extracted."""
-        return localize_features(self, feats, queries, mode)
+        """Like :meth:`localize` with the query features already extracted; ``memo`` keeps
+        each picture's work for the next call on a growing scan
+        (:class:`naoloc.mapping.localizer.MatchMemo`)."""
+        return localize_features(self, feats, queries, mode, memo)
 
     def save(self, path: str | Path) -> None:
         """Write the map to one ``.npz`` file (see naoloc.mapping.mapfile)."""
