@@ -78,7 +78,11 @@ class TruthMap:
         return [None] * len(queries)
 
     def localize_features(
-        self, feats: Sequence[None], queries: Sequence[Keyframe], mode: str = "verified"
+        self,
+        feats: Sequence[None],
+        queries: Sequence[Keyframe],
+        mode: str = "verified",
+        memo: object = None,
     ) -> Estimate:
         assert len(feats) == len(queries)
         return self.localize(queries, mode)
@@ -219,6 +223,24 @@ def test_localize_never_translates_and_reports_error(strategy: str) -> None:
         assert abs(yaws[1]) - abs(yaws[0]) == pytest.approx(PAPER_SECOND_OFFSET, abs=0.02)
     summary = loc.summary()
     assert summary["error_m"] == pytest.approx(0.5, abs=1e-3) and "heading_error_deg" in summary
+    assert 0.0 <= summary["compute_s"] <= loc.wall_s  # the double's work: next to nothing
+
+
+def test_the_cpu_meter_counts_its_blocks_only() -> None:
+    """compute_s: CPU inside the timed blocks; waiting (a picture, a walk) is not counted."""
+    import time
+
+    from naoloc.behaviours.localize import CpuMeter
+
+    meter = CpuMeter()
+    with meter.timed():
+        t0 = time.process_time()
+        while time.process_time() - t0 < 0.03:
+            pass
+    time.sleep(0.05)
+    with pytest.raises(ValueError), meter.timed():
+        raise ValueError("counted all the same")
+    assert 0.03 <= meter.seconds < 0.05
 
 
 def test_localize_scan_with_a_turn_in_place() -> None:
@@ -319,7 +341,11 @@ def test_heading_after_turns_comes_from_the_last_sweep() -> None:
             self.method = method
 
         def localize_features(
-            self, feats: Sequence[None], queries: Sequence[Keyframe], mode: str = "verified"
+            self,
+            feats: Sequence[None],
+            queries: Sequence[Keyframe],
+            mode: str = "verified",
+            memo: object = None,
         ) -> Estimate:
             return Estimate(9.0, 9.0, 0.5, 0.9, mode, {"method": self.method})
 

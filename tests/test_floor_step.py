@@ -74,10 +74,10 @@ def _run(
                 out.append(0)
         return out
 
-    monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: _lines())
+    monkeypatch.setattr(loc, "measure_floor_lines", lambda *_: _lines())
     _patch(monkeypatch, support)
     vmap = SimpleNamespace(meta=META)
-    return loc._floor_fix(None, vmap, None, [], [], estimate), calls  # type: ignore[arg-type]
+    return loc._floor_fix(None, vmap, None, [], [], estimate, loc.CpuMeter()), calls  # type: ignore[arg-type]
 
 
 def test_a_clear_vote_replaces_a_fallback(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -133,7 +133,7 @@ def test_a_confirmed_pnp_pose_takes_the_best_supported_nearby_pose(
     the vote picks the one the pictures support, not the one nearer the PnP pose."""
     lines = _lines()
     furniture = dataclasses.replace(lines[0], distance=lines[0].distance - 0.15)
-    monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: [*lines, furniture])
+    monkeypatch.setattr(loc, "measure_floor_lines", lambda *_: [*lines, furniture])
 
     def support(_vmap: Any, _f: Any, _q: Any, poses: Sequence[Pose2D]) -> list[int]:
         return [50 if math.hypot(p.x - TRUTH.x, p.y - TRUTH.y) < 0.01 else 30 for p in poses]
@@ -141,7 +141,7 @@ def test_a_confirmed_pnp_pose_takes_the_best_supported_nearby_pose(
     _patch(monkeypatch, support)
     pnp = Estimate(TRUTH.x + 0.11, TRUTH.y, TRUTH.theta, 0.8, "verified", {"method": "pnp"})
     vmap = SimpleNamespace(meta=META)
-    est = loc._floor_fix(None, vmap, None, [], [], pnp)  # type: ignore[arg-type]
+    est = loc._floor_fix(None, vmap, None, [], [], pnp, loc.CpuMeter())  # type: ignore[arg-type]
     assert math.hypot(est.x - TRUTH.x, est.y - TRUTH.y) < 1e-6
     assert est.details["floor_candidates"] >= 2
 
@@ -163,7 +163,7 @@ def _hidden_y_walls() -> list[WallLine]:
 def test_a_pnp_pose_no_line_contradicts_keeps_the_axis_the_lines_do_not_pin(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: _hidden_y_walls())
+    monkeypatch.setattr(loc, "measure_floor_lines", lambda *_: _hidden_y_walls())
     est = _vote_between(monkeypatch, kept=60, bookcase=30)
     assert est.method == "pnp" and est.confidence == 0.7 and est.details["floor_consistent"]
     assert abs(est.x - TRUTH.x) < 1e-6  # pinned by the x walls' lines
@@ -177,7 +177,7 @@ def test_a_pnp_pose_no_line_contradicts_keeps_the_axis_the_lines_do_not_pin(
 def test_a_consistent_pnp_pose_that_does_not_clearly_win_the_vote_goes_to_the_vote(
     monkeypatch: pytest.MonkeyPatch, kept: int
 ) -> None:
-    monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: _hidden_y_walls())
+    monkeypatch.setattr(loc, "measure_floor_lines", lambda *_: _hidden_y_walls())
     calls: list[int] = []
     est = _vote_between(monkeypatch, kept=kept, bookcase=60, calls=calls)
     assert len(calls) == 1  # the candidates' votes are counted once, with the PnP pose's
@@ -208,7 +208,7 @@ def _vote_between(
 
     _patch(monkeypatch, support)
     vmap = SimpleNamespace(meta=META)
-    return loc._floor_fix(None, vmap, None, [], [], PNP)  # type: ignore[arg-type]
+    return loc._floor_fix(None, vmap, None, [], [], PNP, loc.CpuMeter())  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize("truth_vote", [loc.FLOOR_SWEPT_MIN_SUPPORT + 10, 40])
@@ -217,7 +217,7 @@ def test_the_landmarks_give_the_axis_no_wall_line_gave(
 ) -> None:
     """y has only the bookcase's line: the landmarks' place along y (the truth's) is a
     candidate, and wins the vote if it is clearly and well supported."""
-    monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: _hidden_y_walls())
+    monkeypatch.setattr(loc, "measure_floor_lines", lambda *_: _hidden_y_walls())
     asked: list[tuple[int, float]] = []
 
     def peaks(_frame: Any, _theta: float, axis: int, fixed: float, span: Any) -> list[Any]:
@@ -230,7 +230,7 @@ def test_the_landmarks_give_the_axis_no_wall_line_gave(
     _patch(monkeypatch, support, peaks)
     vmap = SimpleNamespace(meta=META)
     none = no_estimate("verified", "no verified match")
-    est = loc._floor_fix(None, vmap, None, [], [], none)  # type: ignore[arg-type]
+    est = loc._floor_fix(None, vmap, None, [], [], none, loc.CpuMeter())  # type: ignore[arg-type]
     assert (1, pytest.approx(TRUTH.x)) in asked  # along y, at the x walls' x
     assert est.details["floor_swept"] >= 1
     if truth_vote >= loc.FLOOR_SWEPT_MIN_SUPPORT:
@@ -243,36 +243,36 @@ def test_the_landmarks_give_the_axis_no_wall_line_gave(
 def test_only_the_lines_confirm_a_pnp_pose(monkeypatch: pytest.MonkeyPatch) -> None:
     """A landmarks' place next to the PnP pose does not confirm it (on a look-alike print
     both fit the same landmarks): the PnP pose is only checked against the lines."""
-    monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: _hidden_y_walls())
+    monkeypatch.setattr(loc, "measure_floor_lines", lambda *_: _hidden_y_walls())
 
     def support(_v: Any, _f: Any, _q: Any, poses: Sequence[Pose2D]) -> list[int]:
         return [100 if p.distance(TRUTH) < 0.1 else 10 for p in poses]
 
     _patch(monkeypatch, support, lambda _fr, _th, axis, _fx, _sp: [(TRUTH.y, 90)] * axis)
     vmap = SimpleNamespace(meta=META)
-    est = loc._floor_fix(None, vmap, None, [], [], PNP)  # type: ignore[arg-type]
+    est = loc._floor_fix(None, vmap, None, [], [], PNP, loc.CpuMeter())  # type: ignore[arg-type]
     assert est.details["floor_swept"] >= 1
     assert "floor_confirmed" not in est.details and est.details["floor_consistent"]
     assert est.y == pytest.approx(PNP.y)  # its own y: the lines do not pin it
 
 
 def test_a_pnp_pose_behind_a_seen_line_is_contradicted(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: _hidden_y_walls())
+    monkeypatch.setattr(loc, "measure_floor_lines", lambda *_: _hidden_y_walls())
     _patch(monkeypatch, lambda _v, _f, _q, poses: [0] * len(poses))
     # 0.4 m beyond the bookcase's bound (and from its candidate): the bookcase's line would
     # lie behind the +y wall.
     pnp = Estimate(TRUTH.x, TRUTH.y + 0.9, TRUTH.theta, 0.7, "verified", {"method": "pnp"})
     vmap = SimpleNamespace(meta=META)
-    est = loc._floor_fix(None, vmap, None, [], [], pnp)  # type: ignore[arg-type]
+    est = loc._floor_fix(None, vmap, None, [], [], pnp, loc.CpuMeter())  # type: ignore[arg-type]
     assert "floor_consistent" not in est.details and "floor_refined" not in est.details
     assert (est.x, est.y) == (pnp.x, pnp.y)  # no clear vote: left as it was
 
 
 def test_a_map_without_walls_is_left_alone(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(loc, "measure_floor_lines", lambda robot, cfg: pytest.fail("measured"))
+    monkeypatch.setattr(loc, "measure_floor_lines", lambda *_: pytest.fail("measured"))
     guess = Estimate(2.5, 2.0, 0.1, 0.1, "verified", {"method": "keyframes"})
     vmap = SimpleNamespace(meta={})
-    assert loc._floor_fix(None, vmap, None, [], [], guess) is guess  # type: ignore[arg-type]
+    assert loc._floor_fix(None, vmap, None, [], [], guess, loc.CpuMeter()) is guess  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize(

@@ -22,6 +22,16 @@ that). In the same process, best of ``--repeats`` CPU times:
    axes no wall line gave (:func:`naoloc.mapping.support.axis_peaks`): the features
    matched once, then 32 searches (4 headings x 2 axes x 4 coordinates, more than a
    scan's lines give).
+4. The two kernels made faster, each against its former code in the same process: the
+   Hamming matching of the vote (descriptors zero-padded to 64 bytes for OpenCV's SIMD
+   popcount, against ``BFMatcher.knnMatch`` on the 61-byte descriptors) and the planar
+   RANSAC's scoring (float32 without angles, against float64 with ``arctan2``), on this
+   scan's matches.
+5. A whole worst-case scan as the localize behaviour runs it: four sweeps of 7 pictures
+   (three quarter turns while unsure), the map asked after each, the heading again from
+   the last sweep, then the floor step's matching, vote and axis searches. Floor-line
+   detection is not in a survey's dataset; ``naoloc evaluate`` records every
+   localization's CPU time with it (``compute_ms`` in estimates.json).
 """
 
 from __future__ import annotations
@@ -46,6 +56,8 @@ from naoloc.errors import NaolocError  # noqa: E402
 from naoloc.geometry import Pose2D  # noqa: E402
 from naoloc.mapping import load_map  # noqa: E402
 from naoloc.mapping.features import FeatureExtractor  # noqa: E402
+from naoloc.mapping.landmarks import hamming_matcher  # noqa: E402
+from naoloc.mapping.planar_ransac import _score, lift  # noqa: E402
 from naoloc.mapping.support import (  # noqa: E402
     SupportMatches,
     axis_peaks,
@@ -71,6 +83,77 @@ def _axis_searches(matches: SupportMatches) -> None:
     frame = Pose2D(0.0, 0.0, 0.0)
     for i in range(AXIS_SEARCHES):
         axis_peaks(matches, frame, (i // 8) * np.pi / 2, (i // 4) % 2, float(i % 4), (-1.0, 6.0))
+
+
+def _knn_61(vmap: Any, feats: Any, k: int = 3) -> None:
+    """The baseline matching: OpenCV's knnMatch on the unpadded descriptors."""
+    points = np.asarray(vmap.kp_points, np.float64)
+    desc = np.ascontiguousarray(vmap.kp_desc[np.isfinite(points).all(axis=1)])
+    bf = cv2.BFMatcher(cv2.NORM_HAMMING)
+    for f in feats:
+        if len(f):
+            bf.knnMatch(f.descriptors, desc, k=k)
+
+
+def _score_f64(
+    poses: np.ndarray,
+    centres: np.ndarray,
+    azimuths: np.ndarray,
+    ranges: np.ndarray,
+    points: np.ndarray,
+    tol: float,
+) -> np.ndarray:
+    """The baseline scoring: float64 with arctan2 (the code before the float32 one)."""
+    cos, sin = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+    dx = points[None, :, 0] - poses[:, 0, None]
+    dy = points[None, :, 1] - poses[:, 1, None]
+    rx = cos * dx + sin * dy - centres[None, :, 0]
+    ry = -sin * dx + cos * dy - centres[None, :, 1]
+    err = np.abs((np.arctan2(ry, rx) - azimuths[None, :] + np.pi) % (2 * np.pi) - np.pi)
+    dist = np.hypot(rx, ry)
+    near = (dist < 1.6 * ranges[None, :] + 0.1) & (ranges[None, :] < 1.6 * dist + 0.1)
+    return ((err < tol) & near).sum(axis=1)
+
+
+def _kernels(vmap: Any, feats: Any, matches: SupportMatches, repeats: int) -> None:
+    """Print the two kernels' times against their baselines (module doc, item 4)."""
+    points = np.asarray(vmap.kp_points, np.float64)
+    desc = np.ascontiguousarray(vmap.kp_desc[np.isfinite(points).all(axis=1)])
+    matcher = hamming_matcher(True)
+    t_pad = _best_cpu(
+        lambda: [matcher.knn(f.descriptors, desc, 3) for f in feats if len(f)], repeats
+    )
+    t_61 = _best_cpu(lambda: _knn_61(vmap, feats), repeats)
+    n_q = sum(len(f) for f in feats)
+    print(
+        f"    Hamming 3-NN of {n_q} features over {len(desc)} landmarks: padded {t_pad * 1e3:.0f}"
+        f" ms, knnMatch on 61 bytes {t_61 * 1e3:.0f} ms = {t_61 / t_pad:.2f}x"
+    )
+    centres, az, _lifted, ranges, valid = lift(matches.mats, matches.points, matches.pixels)
+    c, a, r, p = centres[valid], az[valid], ranges[valid], matches.points[valid, :2]
+    rng = np.random.default_rng(0)
+    lo, hi = p.min(axis=0), p.max(axis=0)
+    poses = np.column_stack([rng.uniform(lo, hi, (512, 2)), rng.uniform(-np.pi, np.pi, 512)])
+    tol = 4.0 / 280.0
+    t32 = _best_cpu(lambda: _score(poses, c, a, r, p, tol), repeats)
+    t64 = _best_cpu(lambda: _score_f64(poses, c, a, r, p, tol), repeats)
+    same = int((_score(poses, c, a, r, p, tol) == _score_f64(poses, c, a, r, p, tol)).sum())
+    print(
+        f"    planar scoring of 512 poses over {len(a)} matches: float32 {t32 * 1e3:.1f} ms, "
+        f"float64 arctan2 {t64 * 1e3:.1f} ms = {t64 / t32:.2f}x; same count for {same} of 512"
+    )
+
+
+def _whole_scan(vmap: Any, queries: list[Any], cands: list[Pose2D]) -> None:
+    """Four 7-picture sweeps as the localize behaviour runs them (module doc, item 5)."""
+    feats: list[Any] = []
+    for k in range(0, len(queries), 7):
+        feats += vmap.extract(queries[k : k + 7])
+        vmap.localize_features(feats, queries[: k + 7])
+    vmap.localize_features(feats[-7:], queries[-7:])
+    matches = support_matches(vmap, feats, queries)
+    pose_support(vmap, feats, queries, cands, matches=matches)
+    _axis_searches(matches)
 
 
 def _per_threshold(ex: FeatureExtractor, gray: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -154,6 +237,13 @@ def main(argv: list[str] | None = None) -> int:
             f"    matching for the votes {t_match * 1e3:.0f} ms CPU; {AXIS_SEARCHES} axis "
             f"searches {t_axes * 1e3:.0f} ms = {t_axes / t_on:.2f}x the localization"
         )
+        _kernels(vmap, feats, matches, args.repeats)
+        if k == 28:
+            t_scan = _best_cpu(lambda q=queries, c=cands: _whole_scan(vmap, q, c), args.repeats)
+            print(
+                f"  a whole worst-case scan (4 sweeps of 7, asked after each, heading, floor "
+                f"vote and axes): {t_scan * 1e3:.0f} ms CPU"
+            )
     return 0
 
 

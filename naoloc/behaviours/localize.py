@@ -27,7 +27,8 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -42,8 +43,10 @@ from naoloc.keyframe import Keyframe
 from naoloc.robot import Robot
 
 if TYPE_CHECKING:
+    from naoloc.floorfix import Walls
     from naoloc.mapping import Estimate, VisualMap
     from naoloc.mapping.features import Features
+    from naoloc.mapping.localizer import MatchMemo
 
 # Head yaws of a scan, rad: the head turns +-2.09 rad, the camera sees +-0.53 rad more. Seven
 # (0.67 rad apart, the camera's 1.06 rad FOV overlapping): with the head tilted up toward the
@@ -129,6 +132,9 @@ class Localization:
             estimate).
         heading_error_deg: Wrapped heading difference, degrees (None without truth).
         wall_s: Wall-clock seconds spent (pictures and the map's work).
+        compute_s: CPU seconds of the map's work alone (feature extraction, the localizer,
+            floor-line detection and the floor step's votes), every thread of the process;
+            taking pictures and moving the head or body are not counted.
     """
 
     estimate: Estimate
@@ -139,6 +145,7 @@ class Localization:
     heading_error_deg: float | None
     wall_s: float
     extra_turns: int = 0
+    compute_s: float = 0.0
 
     def summary(self) -> dict[str, Any]:
         """JSON-able fields of CONTRACT.md's ``localize`` line."""
@@ -150,6 +157,7 @@ class Localization:
             "strategy": self.strategy,
             "images": len(self.queries),
             "extra_turns": self.extra_turns,
+            "compute_s": round(self.compute_s, 4),
         }
         if self.truth is not None:
             out["truth"] = [round(v, 4) for v in self.truth]
@@ -157,6 +165,27 @@ class Localization:
                 out["error_m"] = round(self.error_m, 4)
                 out["heading_error_deg"] = round(float(self.heading_error_deg or 0.0), 3)
         return out
+
+
+class CpuMeter:
+    """CPU seconds spent inside :meth:`timed` blocks (``time.process_time``: every thread of
+    the process, so OpenCV's worker threads count too).
+
+    Attributes:
+        seconds: The total so far.
+    """
+
+    def __init__(self) -> None:
+        self.seconds = 0.0
+
+    @contextmanager
+    def timed(self) -> Iterator[None]:
+        """Add the CPU time of the ``with`` block to :attr:`seconds`."""
+        t0 = time.process_time()
+        try:
+            yield
+        finally:
+            self.seconds += time.process_time() - t0
 
 
 def truth_in_map(robot: Robot, meta: dict[str, Any]) -> Pose2D | None:
@@ -282,6 +311,7 @@ def _heading_from_last_sweep(
     feats: Sequence[Features],
     combined: Estimate,
     mode: str,
+    memo: MatchMemo | None = None,
 ) -> Estimate:
     """The combined estimate's position with the heading the last sweep alone verifies.
 
@@ -291,7 +321,7 @@ def _heading_from_last_sweep(
     are exact, so the last sweep's own heading is kept: its PnP heading always, its
     keyframe-bearing heading when the combined estimate has only that too.
     """
-    tail = vmap.localize_features(feats, last, mode=mode)  # type: ignore[arg-type]
+    tail = vmap.localize_features(feats, last, mode=mode, memo=memo)  # type: ignore[arg-type]
     if not tail.found:
         return combined
     # A PnP heading beats any; the keyframes' bearings (one sweep: exact head angles) beat
@@ -302,19 +332,28 @@ def _heading_from_last_sweep(
     return dataclasses.replace(combined, theta=tail.theta, details=details)
 
 
-def measure_floor_lines(robot: Robot, cfg: Config) -> list[WallLine]:
+def measure_floor_lines(robot: Robot, cfg: Config, meter: CpuMeter | None = None) -> list[WallLine]:
     """The floor-wall lines around the robot: bottom camera at :data:`FLOOR_YAWS` x pitches.
+
+    Args:
+        robot: The robot.
+        cfg: Config (camera and lens).
+        meter: Counts the detection's CPU time (not the pictures'), when given.
 
     Returns:
         The lines, FRAME_ROBOT of the robot now (it does not move; the head does).
     """
+    meter = meter if meter is not None else CpuMeter()
     eye = FloorEye(robot, cfg.camera, "naoloc_localize_floor", lens=lens_of(cfg))
     lines: list[WallLine] = []
     try:
         for pitch in FLOOR_PITCHES:
             for yaw in FLOOR_YAWS:
                 look(robot, yaw, pitch)
-                lines += eye.lines()
+                view = eye.view()
+                if view is not None:
+                    with meter.timed():
+                        lines += eye.detect(view)
     finally:
         eye.close()
     return lines
@@ -327,6 +366,7 @@ def _floor_fix(
     queries: Sequence[Keyframe],
     feats: Sequence[Features],
     estimate: Estimate,
+    meter: CpuMeter,
 ) -> Estimate:
     """The estimate, or a better one from the floor lines (:mod:`naoloc.floorfix`).
 
@@ -351,14 +391,29 @@ def _floor_fix(
     (:func:`naoloc.mapping.support.axis_peaks`); those stand in the votes only with
     :data:`FLOOR_SWEPT_MIN_SUPPORT` (``details["floor_axis_from"]`` says when one won).
     """
-    from naoloc.floorfix import candidates, check_pose, landmark_candidates, map_walls
-    from naoloc.mapping import support as sup
-    from naoloc.mapping.localizer import Estimate as _Estimate
+    from naoloc.floorfix import map_walls
 
     walls = map_walls(vmap)
     if walls is None:
         return estimate
-    lines = measure_floor_lines(robot, cfg)
+    lines = measure_floor_lines(robot, cfg, meter)
+    with meter.timed():
+        return _floor_vote(vmap, walls, lines, queries, feats, estimate)
+
+
+def _floor_vote(
+    vmap: VisualMap,
+    walls: Walls,
+    lines: Sequence[WallLine],
+    queries: Sequence[Keyframe],
+    feats: Sequence[Features],
+    estimate: Estimate,
+) -> Estimate:
+    """:func:`_floor_fix`'s work once the lines are measured (no robot calls)."""
+    from naoloc.floorfix import candidates, check_pose, landmark_candidates
+    from naoloc.mapping import support as sup
+    from naoloc.mapping.localizer import Estimate as _Estimate
+
     matches = sup.support_matches(vmap, feats, queries)  # matched once, for every vote
 
     def pose_support(poses: Sequence[Pose2D]) -> list[int]:
@@ -496,7 +551,7 @@ def localize(
     Raises:
         MotionError: A turn in place failed (the robot is stopped).
     """
-    from naoloc.mapping.localizer import CONFIDENT
+    from naoloc.mapping.localizer import CONFIDENT, MatchMemo
 
     t0 = time.monotonic()
     mode = mode or cfg.localize.mode
@@ -508,6 +563,8 @@ def localize(
         else Camera(robot, cfg.localize.camera(cfg.camera), "naoloc_localize")
     )
     added = 0
+    meter = CpuMeter()
+    memo = MatchMemo()  # each picture's matches once, however often the map is asked
     pitch = cfg.localize.head_pitch_rad  # up toward the art; clamped per yaw by look()
     try:
         stand(robot)
@@ -524,8 +581,9 @@ def localize(
             queries = scan_queries(cam, yaws, turns=turns, pitch=pitch)
         if on_step is not None:
             on_step(f"{len(queries)} pictures")
-        feats = vmap.extract(queries)  # each picture's features once, kept across sweeps
-        estimate = vmap.localize_features(feats, queries, mode=mode)  # type: ignore[arg-type]
+        with meter.timed():
+            feats = vmap.extract(queries)  # each picture's features once, kept across sweeps
+            estimate = vmap.localize_features(feats, queries, mode=mode, memo=memo)  # type: ignore[arg-type]
         order = list(yaws) if turns % 2 == 0 else list(reversed(yaws))
         last_sweep = len(queries)
         while strategy == "scan" and estimate.confidence < CONFIDENT and added < extra_turns:
@@ -534,26 +592,29 @@ def localize(
                     raise MotionError("turning in place failed during the localization scan")
                 more = sweep(cam, order, pitch)
                 queries += more
-                feats += vmap.extract(more)
+                with meter.timed():
+                    feats += vmap.extract(more)
             finally:
                 robot.motion.stopMove()
             order.reverse()  # sweep back from where the head is
             added += 1
             if on_step is not None:
                 on_step(f"turned in place, {len(queries)} pictures")
-            estimate = vmap.localize_features(feats, queries, mode=mode)  # type: ignore[arg-type]
+            with meter.timed():
+                estimate = vmap.localize_features(feats, queries, mode=mode, memo=memo)  # type: ignore[arg-type]
             last_sweep = len(order)
         if added and estimate.found:
-            estimate = _heading_from_last_sweep(
-                vmap, queries[-last_sweep:], feats[-last_sweep:], estimate, mode
-            )
+            with meter.timed():
+                estimate = _heading_from_last_sweep(
+                    vmap, queries[-last_sweep:], feats[-last_sweep:], estimate, mode, memo
+                )
         when = cfg.localize.floor_lines if floor_lines is None else floor_lines
         if (
             strategy == "scan"
             and mode == "verified"
             and (when == "always" or (when == "unsure" and estimate.confidence < CONFIDENT))
         ):
-            estimate = _floor_fix(robot, vmap, cfg, queries, feats, estimate)
+            estimate = _floor_fix(robot, vmap, cfg, queries, feats, estimate, meter)
             if on_step is not None:
                 on_step(f"floor lines: {estimate.method}")
     finally:
@@ -565,5 +626,6 @@ def localize(
         error = math.hypot(estimate.x - truth.x, estimate.y - truth.y)
         heading = math.degrees(abs(modulo2PI(estimate.theta - truth.theta)))
     return Localization(
-        estimate, queries, strategy, truth, error, heading, time.monotonic() - t0, added
-    )
+        estimate, queries, strategy, truth, error, heading, time.monotonic() - t0, added,
+        meter.seconds,
+    )  # fmt: skip

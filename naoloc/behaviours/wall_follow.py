@@ -71,7 +71,7 @@ class FloorEye:
             expect_normal: Expected normal direction in FRAME_ROBOT, rad (``-pi/2``: right).
             tolerance: Largest accepted difference, rad.
         """
-        view = self._view()
+        view = self.view()
         if view is None:
             return None
         image, hfov, vfov, pose = view
@@ -82,13 +82,15 @@ class FloorEye:
 
     def lines(self) -> list[WallLine]:
         """Every floor-wall line in view (up to two: a corner), FRAME_ROBOT."""
-        view = self._view()
-        if view is None:
-            return []
+        view = self.view()
+        return [] if view is None else self.detect(view)
+
+    def detect(self, view: tuple[np.ndarray, float, float, np.ndarray]) -> list[WallLine]:
+        """Every floor-wall line (up to two: a corner) in a :meth:`view`, FRAME_ROBOT."""
         image, hfov, vfov, pose = view
         return detect_wall_lines(image, hfov, vfov, pose, lens=self.lens)
 
-    def _view(self) -> tuple[np.ndarray, float, float, np.ndarray] | None:
+    def view(self) -> tuple[np.ndarray, float, float, np.ndarray] | None:
         """A picture (BGR), its fields of view (rad) and the camera's pose in FRAME_ROBOT;
         None when the robot reports no usable camera pose."""
         frame = self.camera.frame()

@@ -289,6 +289,10 @@ def _variant_summary(records: Sequence[dict[str, Any]]) -> dict[str, Any]:
     }
     ms = [r["localize_ms"] for r in records]
     out["localize_ms_median"] = json_float(float(np.median(ms))) if ms else None
+    # CPU of the map's work alone (records of older runs have none).
+    cpu = [r["compute_ms"] for r in records if "compute_ms" in r]
+    for name, q in (("median", 50), ("p90", 90), ("max", 100)):
+        out[f"compute_ms_{name}"] = json_float(float(np.percentile(cpu, q))) if cpu else None
     conf = [r["confidence"] for r in records if math.isfinite(r["confidence"])]
     out["confidence_median"] = json_float(float(np.median(conf))) if conf else None
     out["no_features"] = int(sum(1 for r in records if r["confidence"] == 0.0))
@@ -325,6 +329,9 @@ def _summary(
         "median_heading_error_deg": main_stats["median_heading_error_deg"],
         "map_build_s": json_float(main_map["timings"].get("total_s", float("nan")), 3),
         "localize_ms_median": main_stats["localize_ms_median"],
+        "compute_ms_median": main_stats["compute_ms_median"],
+        "compute_ms_p90": main_stats["compute_ms_p90"],
+        "compute_ms_max": main_stats["compute_ms_max"],
         "no_estimate": main_stats["no_estimate"],
         "positions": group_rows(by_variant[main.name]),
         "seed": seed,
