@@ -17,6 +17,7 @@ import numpy as np
 from naoloc.config import LandmarkTuning
 from naoloc.geometry import planar_pose, robot_matrix
 from naoloc.keyframe import CameraInfo, Keyframe, camera_in_robot
+from naoloc.mapping.vocabulary import pad_packed
 
 __all__ = [
     "DescriptorMatcher",
@@ -65,23 +66,6 @@ def camera_poses(poses: np.ndarray, heads: np.ndarray, cam_index: Sequence[int])
     )
 
 
-# Binary descriptors are zero-padded to a multiple of this many bytes before matching: the
-# same Hamming distances, and OpenCV's SIMD popcount then covers every byte (A-KAZE's 61
-# bytes leave a 13-byte tail it counts byte by byte). Measured on room 913's map
-# (tools/bench_localize.py): 1.5-1.6x faster matching.
-PAD_BYTES = 16
-
-
-def _padded(desc: np.ndarray) -> np.ndarray:
-    """``desc`` (uint8 rows) zero-padded to a multiple of :data:`PAD_BYTES` bytes."""
-    width = desc.shape[1]
-    if width % PAD_BYTES == 0:
-        return desc
-    out = np.zeros((desc.shape[0], width + PAD_BYTES - width % PAD_BYTES), np.uint8)
-    out[:, :width] = desc
-    return out
-
-
 @dataclass(frozen=True)
 class DescriptorMatcher:
     """Brute-force nearest descriptors: Hamming for binary descriptors, L2 otherwise.
@@ -112,7 +96,7 @@ class DescriptorMatcher:
         if n == 0 or kk == 0:
             return np.zeros((n, kk)), np.zeros((n, kk), np.int64)
         if self.binary:
-            q, t = _padded(np.ascontiguousarray(query)), _padded(np.ascontiguousarray(train))
+            q, t = pad_packed(query), pad_packed(train)
             norm, dtype = cv2.NORM_HAMMING, cv2.CV_32S
         else:
             q, t = np.asarray(query, np.float32), np.asarray(train, np.float32)
