@@ -105,7 +105,8 @@ def plot_estimates(
             estimate that is None or not finite is a miss, drawn at its truth.
         title: Figure title.
         room_polygon: Wall corners in the map frame (open or closed polygon), or None.
-        survey_poses: ``(N, 3)`` survey poses to draw faintly, or None.
+        survey_poses: ``(N, 3)`` survey poses to draw faintly (map frame: the map's own
+            poses of its keyframes), or None.
         furniture: ``(name, polygon)`` footprints in the map frame, or None.
 
     Returns:
@@ -117,7 +118,7 @@ def plot_estimates(
     draw_furniture(ax, furniture)
     if survey_poses is not None and len(survey_poses):
         sp = np.asarray(survey_poses, dtype=np.float64).reshape(-1, 3)
-        ax.plot(sp[:, 0], sp[:, 1], "-", color="0.8", lw=1, label="survey path")
+        ax.plot(sp[:, 0], sp[:, 1], "-", color="0.8", lw=1, label="survey path (map)")
     hits = [r for r in records if _finite_xy(r.get("estimate"))]
     misses = [r for r in records if not _finite_xy(r.get("estimate"))]
     truth = np.array([r["truth"][:2] for r in hits], dtype=np.float64).reshape(-1, 2)

@@ -475,7 +475,9 @@ def _write_outputs(
         outdir / "estimates.png", main_recs,
         f"{protocol} protocol, {plan.main.description}\nmedian "
         f"{summary['median_error_m']} m, p90 {summary['p90_error_m']} m",
-        poly, np.array(summary["survey"]["keyframe_poses"]), furniture,
+        # the survey as the verified localizer's map has it (wall poses, pose graph), not
+        # its raw odometry, which drifts through walls in the honest world
+        poly, load_map(maps[plan.main.map_name]["map"]).refined_poses, furniture,
     )  # fmt: skip
     curves: dict[str, list[float]] = {}
     for v in plan.variants:
