@@ -433,8 +433,9 @@ def _floor_vote(
     from_lines = len(cands)  # the landmarks' places come after these
     info: dict[str, Any] = {"floor_lines": len(lines), "floor_candidates": from_lines}
     found = estimate.found
+    pnp = found and estimate.method == "pnp"
     support: list[int] | None = None  # the candidates' votes, once counted
-    if found and estimate.method == "pnp":
+    if pnp:
         # Only the lines' candidates confirm: a place from the landmarks' bearings agrees
         # with a PnP pose on a look-alike print as well (room 551152189: 5.7 m off).
         near = [c for c in cands
@@ -452,7 +453,7 @@ def _floor_vote(
             return _Estimate(p.x, p.y, p.theta, estimate.confidence, estimate.mode, details)
     cands += landmark_candidates(lines, walls, solve)
     info["floor_swept"] = len(cands) - from_lines
-    if found and estimate.method == "pnp":
+    if pnp:
         # No candidate near it, but maybe no line against it either: a wall hidden behind
         # furniture bounds that axis without giving it (fresh rooms: three correct PnP
         # poses replaced by candidates 0.43-0.49 m off, made from the furniture's line).

@@ -308,7 +308,7 @@ class MatchMemo:
 
     def __init__(self) -> None:
         self._matches: dict[tuple[int, int, int], tuple[Any, Any, _PictureMatches]] = {}
-        self._pnp: dict[tuple[int, int, int], tuple[Any, np.ndarray | None]] = {}
+        self._pnp: dict[tuple[int, int], tuple[Any, np.ndarray | None]] = {}
 
     def matches(
         self, f: Features, q: Keyframe, top_k: int, compute: Callable[[], _PictureMatches]
@@ -326,7 +326,7 @@ class MatchMemo:
     ) -> np.ndarray | None:
         """The picture's PnP camera pose (``T_map_cam``; None: no plausible pose) at index
         ``qi`` of a call, computed by ``compute`` the first time."""
-        key = (id(matches), qi, 0)
+        key = (id(matches), qi)
         held = self._pnp.get(key)
         if held is None:
             held = (matches, compute())
@@ -512,12 +512,13 @@ def _correspond(
             continue
         img = f.xy[pm.q_idx].astype(np.float64)
         c_q = q.camera_matrix()  # the robot's own kinematics at capture
-        m_q = query_projection(query_camera(q).matrix(), c_q, to_last[qi])
+        kmat = query_camera(q).matrix()
+        m_q = query_projection(kmat, c_q, to_last[qi])
         corr.points.append(pm.obj)
         corr.pixels.append(img)
         corr.query.append(np.full(len(pm.q_idx), qi))
         mats.append(np.repeat(m_q[None], len(pm.q_idx), axis=0))
-        t_map_cam = memo.pnp(pm, qi, functools.partial(_pnp, vmap, q, pm, img, qi))
+        t_map_cam = memo.pnp(pm, qi, functools.partial(_pnp, vmap, kmat, pm, img, qi))
         if t_map_cam is None:
             continue
         if abs(t_map_cam[2, 3] - c_q[2, 3]) > tun.camera_height_tolerance_m:
@@ -550,9 +551,10 @@ def _picture_matches(
 
 
 def _pnp(
-    vmap: VisualMap, q: Keyframe, pm: _PictureMatches, img: np.ndarray, qi: int
+    vmap: VisualMap, kmat: np.ndarray, pm: _PictureMatches, img: np.ndarray, qi: int
 ) -> np.ndarray | None:
-    """``T_map_cam`` of the picture by PnP RANSAC on its matches (None: no pose)."""
+    """``T_map_cam`` of the picture (intrinsics ``kmat``) by PnP RANSAC on its matches
+    (None: no pose); ``qi`` seeds OpenCV's RANSAC."""
     import cv2
 
     tun = vmap.config.tuning.localizer
@@ -563,7 +565,7 @@ def _pnp(
         ok, rvec, tvec, inl = cv2.solvePnPRansac(
             pm.obj,
             img,
-            query_camera(q).matrix(),
+            kmat,
             None,
             iterationsCount=tun.pnp_iterations,
             reprojectionError=tun.pnp_reprojection_px,

@@ -33,6 +33,7 @@ from naoloc.mapping.localizer import (
     robot_to_last,
     turn_scale_of,
 )
+from naoloc.mapping.vocabulary import pad_packed
 
 # axis_peaks: bins along the axis (m), the window a peak sums over (bins either side), the
 # narrowest angle between a feature's ray and the axis (rad; a ray along the axis says
@@ -95,6 +96,8 @@ def support_matches(
     owner: list[np.ndarray] = []
     if known.size:
         pts, desc = points[known], np.ascontiguousarray(vmap.kp_desc[known])
+        if vmap.vocabulary.binary:
+            desc = pad_packed(desc)  # once for the scan, not once per picture
         matcher = hamming_matcher(vmap.vocabulary.binary)
         to_last = robot_to_last(queries, turn_scale_of(vmap))
         first = 0
