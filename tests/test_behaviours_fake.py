@@ -333,6 +333,58 @@ def test_localize_turns_in_place_until_confident(
     assert len(bodies) == turned + 1
 
 
+@pytest.mark.parametrize(
+    ("confirms", "alternatives", "calls", "floor_calls"),
+    [(True, False, [1], 1), (False, False, [1, 2, 3, 4], 2), (True, True, [1, 2, 3, 4], 1)],
+    ids=["confirmed-stops", "not-confirmed-turns", "look-alike-turns"],
+)
+def test_floor_lines_may_settle_the_first_sweep(
+    monkeypatch: pytest.MonkeyPatch,
+    confirms: bool,
+    alternatives: bool,
+    calls: list[int],
+    floor_calls: int,
+) -> None:
+    """A PnP pose the first sweep verifies, not confidently, is checked against the floor
+    lines before the robot turns: confirmed, the scan stops there; otherwise (or with a
+    look-alike alternative) it turns as before and the floor step runs again at the end."""
+    import importlib
+
+    module = importlib.import_module("naoloc.behaviours.localize")
+    seen: list[Estimate] = []
+
+    def floor_fix(_r: Any, _v: Any, _c: Any, _q: Any, _f: Any, est: Estimate, _m: Any) -> Estimate:
+        seen.append(est)
+        if not confirms:
+            return est
+        return Estimate(est.x, est.y, est.theta, est.confidence, est.mode,
+                        {**est.details, "floor_confirmed": True})  # fmt: skip
+
+    monkeypatch.setattr(module, "_floor_fix", floor_fix)
+
+    class Unsure(UnsureMap):
+        def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> Estimate:
+            est = super().localize(queries, mode)
+            if alternatives:
+                est.details["alternatives"] = [[0.0, 0.0, 0.0, 30]]
+            return est
+
+    cfg = small_cfg()
+    with connect(cfg) as robot:
+        sim = robot.sim
+        assert sim is not None
+        origin = Pose2D.from_list(sim.true_pose())
+        sim.teleport(1.5, 1.4, 0.3)
+        vmap = Unsure(robot, origin, (0.5,))
+        loc = localize(robot, vmap, cfg)  # type: ignore[arg-type]
+        assert not robot.motion.moveIsActive()
+    sweeps = [len(SCAN_YAWS) * k for k in calls]
+    assert vmap.calls == sweeps + ([len(SCAN_YAWS)] if len(calls) > 1 else [])
+    assert loc.extra_turns == len(calls) - 1 and len(seen) == floor_calls
+    assert bool(loc.estimate.details.get("floor_confirmed")) == confirms
+    assert len(loc.queries) == sweeps[-1]
+
+
 def test_heading_after_turns_comes_from_the_last_sweep() -> None:
     from naoloc.behaviours.localize import _heading_from_last_sweep
 
