@@ -385,6 +385,44 @@ def test_floor_lines_may_settle_the_first_sweep(
     assert len(loc.queries) == sweeps[-1]
 
 
+@pytest.mark.parametrize("floor_ran", [True, False], ids=["floor-step-ran", "no-floor-step"])
+def test_an_unverified_guess_the_floor_leaves_standing_is_no_estimate(
+    monkeypatch: pytest.MonkeyPatch, floor_ran: bool
+) -> None:
+    """A keyframe-bearing guess the floor step checked but neither confirmed nor replaced
+    is reported as no estimate (kept in the details); without a floor step it stays."""
+    import importlib
+
+    module = importlib.import_module("naoloc.behaviours.localize")
+
+    def floor_fix(_r: Any, _v: Any, _c: Any, _q: Any, _f: Any, est: Estimate, _m: Any) -> Estimate:
+        if floor_ran:
+            est.details.update(floor_lines=4, floor_candidates=2, floor_support=12)
+        return est
+
+    monkeypatch.setattr(module, "_floor_fix", floor_fix)
+
+    class Guessing(TruthMap):
+        def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> Estimate:
+            est = super().localize(queries, mode)
+            return Estimate(est.x + 2.0, est.y, est.theta, 0.1, mode, {"method": "keyframes"})
+
+    cfg = small_cfg()
+    with connect(cfg) as robot:
+        sim = robot.sim
+        assert sim is not None
+        vmap = Guessing(robot, Pose2D.from_list(sim.true_pose()), (0.0, 0.0))
+        loc = localize(robot, vmap, cfg)  # type: ignore[arg-type]
+    est = loc.estimate
+    if floor_ran:
+        assert not est.found and loc.summary()["method"] == "none"
+        assert loc.summary()["x"] is None and loc.error_m is None
+        assert est.details["unverified"]["method"] == "keyframes"
+        assert len(est.details["unverified"]["pose"]) == 3
+    else:
+        assert est.found and est.method == "keyframes" and est.confidence == 0.1
+
+
 def test_heading_after_turns_comes_from_the_last_sweep() -> None:
     from naoloc.behaviours.localize import _heading_from_last_sweep
 
