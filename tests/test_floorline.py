@@ -203,3 +203,16 @@ def test_boundary_pixels_takes_the_top_of_the_lowest_floor_run() -> None:
     mask[2:6, 4] = mask[10:, 4] = True  # the lowest run counts, not the one above it
     rows, cols = boundary_pixels(mask, min_run=4)
     assert cols.tolist() == [0, 1, 4] and rows.tolist() == [12, 8, 10]
+
+
+@pytest.mark.parametrize("channels", [2, 3])
+def test_the_colour_distance_is_numpys_norm_to_the_bit(channels: int) -> None:
+    """floor_mask's norm over colour channels gives np.linalg.norm's float32 bits (the same
+    masks, so the same lines and surveys)."""
+    from naoloc.floorline import _norm_last
+
+    rng = np.random.default_rng(5)
+    v = (rng.normal(0.0, 40.0, (240, 320, channels))).astype(np.float32)
+    got = _norm_last(v)
+    assert got.dtype == np.float32
+    assert np.array_equal(got, np.linalg.norm(v, axis=-1))
