@@ -100,3 +100,17 @@ def test_executor_names_are_checked() -> None:
         make_executor("dask")
     with pytest.raises(ConfigError, match="--ray-address needs --executor ray"):
         make_executor("local", "ray://127.0.0.1:10001")
+
+
+def test_local_pool_workers_share_the_cores() -> None:
+    """Each worker of the local pool runs OpenCV on its share of the cores (not all of
+    them), so two workers on two cores do not oversubscribe them."""
+    import operator
+    import os
+
+    import cv2
+
+    from naoloc.evaluation.runner import run_tasks
+
+    got = run_tasks(operator.call, [cv2.getNumThreads] * 2, 2, "threads", progress=False)
+    assert got == [max(1, (os.cpu_count() or 1) // 2)] * 2
