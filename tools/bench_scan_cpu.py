@@ -3,7 +3,7 @@
 Usage::
 
     naoloc evaluate --protocol anywhere -n 20 -o /tmp/ev913     # or tools/eval_unseen_rooms.py
-    python tools/bench_scan_cpu.py /tmp/ev913 [-n 8]
+    python tools/bench_scan_cpu.py /tmp/ev913 [-n 8] [--early-floor off] [--json ROWS.json]
     PYTHONPATH=/path/to/an/older/checkout python tools/bench_scan_cpu.py /tmp/ev913
 
 Runs the localize behaviour (scan strategy, the config's floor step) at the first ``-n``
@@ -15,6 +15,9 @@ floor-line detection, and the floor step's votes. The stages are timed by wrappi
 functions from outside, so the same script measures any commit's code (``PYTHONPATH``):
 compare two commits' figures on the same folder, and their estimates, which should agree
 where only speed changed. Taking pictures, moving the head and turning are not counted.
+The error against the simulator's truth is printed too (median, p90, share within 0.3 m),
+so a change of behaviour (``--early-floor off``: the floor lines only after the last
+sweep) is measured on the same map and poses.
 """
 
 from __future__ import annotations
@@ -89,6 +92,14 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("outdir", type=Path, help="a naoloc evaluate output folder")
     parser.add_argument("-n", type=int, default=8, help="test poses (the first n)")
+    parser.add_argument(
+        "--early-floor",
+        choices=("on", "off"),
+        default=None,
+        help="the floor lines may settle a first sweep before the scan turns (default: the "
+        "code's own behaviour; not given to commits before the option existed)",
+    )
+    parser.add_argument("--json", type=Path, default=None, help="write the rows here too")
     args = parser.parse_args(argv)
     cv2.setNumThreads(1)
     try:
@@ -105,6 +116,10 @@ def main(argv: list[str] | None = None) -> int:
     timers = _Timers()
     loc = _install(timers)
     rows: list[dict[str, float]] = []
+    errors: list[float] = []  # m; inf where nothing was recognised
+    kwargs: dict[str, Any] = {}
+    if args.early_floor is not None:
+        kwargs["early_floor"] = args.early_floor == "on"
     with connect(cfg) as robot:
         if robot.sim is None:
             print("bench_scan_cpu: the config's backend has no simulator", file=sys.stderr)
@@ -112,21 +127,38 @@ def main(argv: list[str] | None = None) -> int:
         for pose in poses:
             robot.sim.teleport(*pose)
             timers.seconds.clear()
-            result = loc.localize(robot, vmap, cfg)
+            result = loc.localize(robot, vmap, cfg, **kwargs)
             ms = timers.stages_ms()
             ms["total"] = sum(ms.values())
+            ms["pictures"] = len(result.queries)
             rows.append(ms)
             est = result.estimate
+            off = result.error_m
+            errors.append(float("inf") if off is None else off)
             print(
                 f"{len(result.queries):2d} pictures, estimate ({est.x:.4f}, {est.y:.4f}, "
-                f"{est.theta:.4f}) {est.method}: "
-                + " ".join(f"{k} {v:.0f}" for k, v in ms.items())
+                f"{est.theta:.4f}) {est.method}, error "
+                + ("none" if off is None else f"{off:.3f} m")
+                + ": "
+                + " ".join(f"{k} {ms[k]:.0f}" for k in (*STAGES, "total"))
                 + " ms",
                 flush=True,
             )
     for key in (*STAGES, "total"):
         v = [r[key] for r in rows]
         print(f"{key}: median {np.median(v):.0f} ms, largest {np.max(v):.0f} ms")
+    e = np.asarray(errors)
+    print(
+        f"error: median {np.median(e):.3f} m, p90 {np.percentile(e, 90):.3f} m, "
+        f"{100 * np.mean(e < 0.3):.1f} % within 0.3 m, no estimate {int(np.sum(~np.isfinite(e)))}"
+        f"; one sweep (7 pictures) {sum(r['pictures'] == 7 for r in rows)} of {len(rows)}"
+    )
+    if args.json is not None:
+        out = [
+            {**r, "error_m": float(x) if np.isfinite(x) else None}
+            for r, x in zip(rows, e, strict=True)
+        ]
+        args.json.write_text(json.dumps(out), encoding="utf-8")
     return 0
 
 
