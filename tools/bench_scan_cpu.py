@@ -148,8 +148,11 @@ def main(argv: list[str] | None = None) -> int:
         v = [r[key] for r in rows]
         print(f"{key}: median {np.median(v):.0f} ms, largest {np.max(v):.0f} ms")
     e = np.asarray(errors)
+    # No estimate counts as the largest error (inf; percentiles of inf would give NaN).
+    p90 = float(np.percentile(np.where(np.isfinite(e), e, 1e9), 90))
+    p90_text = "none (no estimate)" if p90 >= 1e8 else f"{p90:.3f} m"
     print(
-        f"error: median {np.median(e):.3f} m, p90 {np.percentile(e, 90):.3f} m, "
+        f"error: median {np.median(e):.3f} m, p90 {p90_text}, "
         f"{100 * np.mean(e < 0.3):.1f} % within 0.3 m, no estimate {int(np.sum(~np.isfinite(e)))}"
         f"; one sweep (7 pictures) {sum(r['pictures'] == 7 for r in rows)} of {len(rows)}"
     )
