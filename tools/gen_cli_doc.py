@@ -58,11 +58,19 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "y": "estimate, map frame (m); null when nothing was recognised",
         "theta": "estimated heading, map frame (rad); null when nothing was recognised",
         "confidence": "0..1; 0 when nothing was recognised (exit code 3)",
-        "method": "how the estimate was made (`none` when nothing was recognised)",
+        "method": (
+            "how the estimate was made: `pnp`, `floorlines`, `keyframes` (an unverified guess, "
+            "only where the floor step did not run: `localize.floor_lines` off, or a map "
+            "without walls), `gcs` (paper mode), `none` when nothing was recognised (a "
+            "keyframe guess the floor step neither confirms nor replaces is `none` too)"
+        ),
         "mode": "`verified` or `paper` (localize.mode)",
         "strategy": "`scan` (head sweep) or `paper` (the paper's 1-2 pictures)",
         "images": "pictures used",
-        "extra_turns": "quarter turns in place made because the estimate was not confident",
+        "extra_turns": (
+            "quarter turns in place made because the estimate was not confident (0 also when "
+            "the floor lines confirmed the first sweep's pose)"
+        ),
         "error_m": "distance to the truth (m); simulator only",
         "heading_error_deg": "heading error (deg); simulator only",
         "truth": "true pose [x, y, theta], map frame; simulator only",
