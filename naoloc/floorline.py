@@ -175,12 +175,11 @@ def floor_mask(
     chroma_tol = float(np.clip(2.5 * np.percentile(chroma[sample_rows], 75), *CHROMA_TOL))
     ratio = total / max(1.0, float(np.median(total[sample_rows])))
     mask |= (chroma < chroma_tol) & (ratio > TONE_RATIO[0]) & (ratio < TONE_RATIO[1])
-    mask = mask.astype(np.uint8)
     # bands of another tone across the floor (plank rows, seams, shadows) are shorter in
     # the image than what stands on the floor: close them
     kernel = np.ones((max(7, bgr.shape[0] // 18) | 1, 3), np.uint8)
-    mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, kernel)
-    mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((5, 5), np.uint8)).astype(bool)
+    closed = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_CLOSE, kernel)
+    mask = cv2.morphologyEx(closed, cv2.MORPH_OPEN, np.ones((5, 5), np.uint8)).astype(bool)
     # Much darker than the floor is never floor, whatever closing did: a skirting of the
     # floor's wood (its blur into a lighter wall above can look like floor).
     mask &= ratio > DARKEST_FOOT
