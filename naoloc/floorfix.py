@@ -48,6 +48,8 @@ WALL_CLEARANCE_M = 0.1
 # where the map's poses err, so near a wall's line it would out-vote the truth.
 SWEEP_KEEP = 8
 SWEEP_APART_M = 0.3
+# A line this near the robot (m) is its wall's, so it fixes a coordinate from one side.
+NEAR_LINE_M = 0.6
 # A cluster of lines stays a candidate beyond a line that puts it behind a wall when it has
 # this many times as many lines as those it puts behind one (:func:`_feasible`).
 OUTVOTE = 3
@@ -158,7 +160,13 @@ def landmark_candidates(
     for theta, values, axes in _per_turn(lines, walls, heading):
         for axis in (0, 1):
             span = _span(values[axis], walls, axis)
-            for fixed in _two_sided(values[1 - axis], axes[1 - axis]):
+            other = 1 - axis
+            fixed_at = _two_sided(values[other], axes[other])
+            fixed_at += [
+                c for c in _near_sided(values[other], axes[other], walls, other)
+                if all(abs(c - f) >= COORD_AGREE_M for f in fixed_at)
+            ]  # fmt: skip
+            for fixed in fixed_at:
                 for coord, n in solve(theta, axis, fixed, span):
                     if any(abs(coord - v) < SWEEP_APART_M for v in axes[axis]):
                         continue  # a line gives it, or one near it
@@ -336,6 +344,16 @@ def _two_sided(values: Sequence[tuple[float, bool]], clusters: Sequence[float]) 
         if any(abs(v - c) < COORD_AGREE_M for v, plus in values if plus)
         and any(abs(v - c) < COORD_AGREE_M for v, plus in values if not plus)
     ]
+
+
+def _near_sided(
+    values: Sequence[tuple[float, bool]], clusters: Sequence[float], walls: Walls, axis: int
+) -> list[float]:
+    """The clusters a line within :data:`NEAR_LINE_M` of the robot gives: so near, the
+    floor ends at the wall itself (furniture stands farther out), so one side suffices."""
+    low, high = walls.bounds[2 * axis], walls.bounds[2 * axis + 1]
+    near = [v for v, plus in values if (high - v if plus else v - low) <= NEAR_LINE_M]
+    return [c for c in clusters if any(abs(v - c) < COORD_AGREE_M for v in near)]
 
 
 def _span(values: Sequence[tuple[float, bool]], walls: Walls, axis: int) -> tuple[float, float]:

@@ -190,3 +190,33 @@ def test_check_pose_pins_the_axes_the_walls_give_and_refuses_contradicted_poses(
     # heading 0.3 rad off the lines' heading
     assert check_pose(lines, WALLS, WALLS.frame * Pose2D(1.2, 0.7, 0.6), 0.3, 0.15) is None
     assert check_pose(lines[:1], WALLS, truth, 0.3, 0.15) is None  # one line: nothing to check
+
+
+def test_a_near_wall_fixes_a_coordinate_from_one_side() -> None:
+    """0.4 m from the -y wall, the x walls unseen but a chest 0.6 m in front of the -x wall:
+    x comes only from the chest. The near wall's line is its wall's (furniture stands
+    farther out), so the landmarks' place along x is searched from its y; a far one-sided
+    line (1.5 m) starts no search."""
+    pose_w = Pose2D(2.1, -0.6, 0.3)
+    truth = WALLS.frame * pose_w
+    _xp, _yp, xm, ym = _lines_at(pose_w)
+    chest = _line(xm.distance - 0.6, xm.normal)
+    asked: list[tuple[int, float]] = []
+
+    def solve(
+        theta: float, axis: int, fixed: float, span: tuple[float, float]
+    ) -> list[tuple[float, int]]:
+        asked.append((axis, fixed))
+        return [(2.1, 40)] if axis == 0 and span[0] <= 2.1 <= span[1] else []
+
+    lines = [ym, chest, _line(ym.distance, ym.normal)]
+    assert not _near(candidates(lines, WALLS, heading=truth.theta), truth, metres=0.3)
+    kept = landmark_candidates(lines, WALLS, solve, heading=truth.theta)
+    assert _near(kept, truth)
+    assert (0, pytest.approx(-0.6)) in asked
+    asked.clear()
+    far = Pose2D(2.1, 0.5, 0.3)  # 1.5 m from the -y wall
+    _xp, _yp, xm, ym = _lines_at(far)
+    far_lines = [ym, _line(xm.distance - 0.6, xm.normal), _line(ym.distance, ym.normal)]
+    landmark_candidates(far_lines, WALLS, solve, heading=(WALLS.frame * far).theta)
+    assert not [a for a in asked if a[0] == 0]
