@@ -278,6 +278,26 @@ class SurveyConfig(_Model):
         description="head pitch of the survey's pictures (rad, negative looks up; clamped to "
         "the head's limits at its yaw): up toward the art at 1.2-1.8 m",
     )
+    far_yaws_rad: tuple[float, ...] = Field(
+        (0.0, 1.3),
+        max_length=8,
+        description="head yaws of the far pictures (rad from the walking direction toward the "
+        "room's interior; 0 = the wall ahead): after each stop's wall picture the survey "
+        "also photographs the room across its interior, far_per_stop pictures at these yaws "
+        "in turn, so the map sees every wall from 1-7 m as well as from the circuit; [] = "
+        "none (the paper's survey). Only the verified localizer uses them: the paper's "
+        "vocabulary and GCS learn the wall pictures alone",
+    )
+    far_per_stop: int = Field(
+        1, ge=1, le=8, description="far pictures taken at each stop (cycling through far_yaws_rad)"
+    )
+    far_pitch_rad: float = Field(
+        -0.3,
+        ge=-0.672,
+        le=0.515,
+        description="head pitch of the far pictures (rad): the art at 1.2-1.8 m on walls 2-7 m "
+        "away sits 8-15 deg above the camera, which the wall pictures' pitch leaves out",
+    )
 
 
 # --- Map building and localizing tuning (naoloc.mapping): defaults are the tuned values. ---
@@ -485,6 +505,12 @@ class MapConfig(_Model):
         "side walls' floor lines, the farthest a side agrees with, where each side ended, "
         "odometry only for the distance along a side) instead of the odometry; surveys "
         "without floor-line records keep their odometry",
+    )
+    far_pictures: bool = Field(
+        True,
+        description="add the survey's far pictures (survey.far_yaws_rad) to the map's "
+        "keyframes for the verified localizer (features, landmarks, retrieval); the paper's "
+        "vocabulary, GCS and neuron poses use the wall pictures either way",
     )
 
 

@@ -92,6 +92,9 @@ class Dataset:
             ``reason``.
         complete: True only when the survey completed all its laps and the file was closed.
         laps: Lap number of each keyframe (0-based).
+        far: The far pictures (``survey.far_yaws_rad``: the room across its interior), each
+            with its stop: the index in ``keyframes`` of the wall picture taken at the same
+            place just before it. Poses in the map frame, as the keyframes'.
     """
 
     keyframes: list[Keyframe]
@@ -99,6 +102,7 @@ class Dataset:
     meta: dict[str, Any]
     complete: bool
     laps: list[int] = field(default_factory=list)
+    far: list[tuple[int, Keyframe]] = field(default_factory=list)
 
 
 def partial_path_for(path: str | Path) -> Path:
@@ -209,7 +213,8 @@ class DatasetWriter:
             raise DatasetError(f"image format must be jpeg or png, got {image_format!r}")
         self.path = Path(path)
         self.partial_path = partial_path_for(self.path)
-        self.frames = 0
+        self.frames = 0  # every picture written
+        self.wall_frames = 0  # those written without a stop (wall pictures)
         self.complete = False
         self._format = image_format
         self._quality = int(jpeg_quality)
@@ -306,7 +311,14 @@ class DatasetWriter:
         t = _stamp_ns(stamp)
         self._mcap.add_message(self._channels[topic], t, data, t, sequence=self.frames)
 
-    def write(self, keyframe: Keyframe, *, lap: int = 0, odometry: Pose2D | None = None) -> None:
+    def write(
+        self,
+        keyframe: Keyframe,
+        *,
+        lap: int = 0,
+        odometry: Pose2D | None = None,
+        stop: int | None = None,
+    ) -> None:
         """Append one frame (one chunk) and flush it to disk.
 
         The frame's transforms on ``/tf``: map -> base_link (odometry), base_link -> camera
@@ -318,15 +330,23 @@ class DatasetWriter:
             keyframe: Image (grey or BGR), map-frame poses, head angles, camera.
             lap: Lap number (0-based).
             odometry: The raw FRAME_WORLD odometry reading, if wanted in the file.
+            stop: For a far picture: the index among the wall pictures (frames written
+                without ``stop``) of the one taken at the same place; None for a wall
+                picture.
 
         Raises:
-            DatasetError: The writer is closed, the camera model is unusable, or the disk
-                refused the bytes.
+            DatasetError: The writer is closed, the camera model is unusable, a far
+                picture names a wall picture not written yet, or the disk refused the bytes.
         """
         from foxglove import messages as fm
 
         if self._closed:
             raise DatasetError(f"{self.partial_path}: dataset writer is closed")
+        if stop is not None and not 0 <= stop < self.wall_frames:
+            raise DatasetError(
+                f"{self.partial_path}: a far picture's stop {stop} is not one of the "
+                f"{self.wall_frames} wall pictures written"
+            )
         kf, stamp = keyframe, keyframe.stamp
         try:
             cam = check_camera(kf.camera)
@@ -368,6 +388,8 @@ class DatasetWriter:
             "camera": _camera_dict(cam),
             "camera_pose": None if kf.camera_pose is None else list(kf.camera_pose),
         }
+        if stop is not None:
+            record.update(view="far", stop=int(stop))
         try:
             self._add(IMAGE_TOPIC, stamp, bytes(image.encode()))
             self._add("/camera/calibration", stamp, bytes(calib.encode()))
@@ -385,6 +407,8 @@ class DatasetWriter:
         except OSError as err:
             raise DatasetError(f"{self.partial_path}: write failed: {err.strerror}") from None
         self.frames += 1
+        if stop is None:
+            self.wall_frames += 1
 
     def close(self, complete: bool = True, reason: str = "") -> Path | None:
         """Finish the file (status, summary, footer) and close it. Safe to call twice.
@@ -585,15 +609,19 @@ def read_dataset(path: str | Path) -> Dataset:
         meta["reason"] = (status or {}).get("reason") or "the writer died before closing the file"
     keyframes: list[Keyframe] = []
     laps: list[int] = []
+    far: list[tuple[int, Keyframe]] = []
     seen: set[int] = set()
     for k, raw in enumerate(records):
-        keyframe, lap, index = _keyframe(raw, k, images, seen, path)
+        keyframe, lap, index, stop = _keyframe(raw, k, images, seen, path, len(keyframes))
         seen.add(index)
-        keyframes.append(keyframe)
-        laps.append(lap)
+        if stop is None:
+            keyframes.append(keyframe)
+            laps.append(lap)
+        else:
+            far.append((stop, keyframe))
     if not keyframes:
         raise DatasetError(f"{path}: no frames")
-    return Dataset(keyframes, config, meta, complete, laps)
+    return Dataset(keyframes, config, meta, complete, laps, far)
 
 
 def _header(
@@ -632,9 +660,11 @@ def _camera_pose_or_none(value: Any) -> tuple[float, ...] | None:
 
 
 def _keyframe(
-    raw: bytes, k: int, images: dict[int, bytes], seen: set[int], path: Path
-) -> tuple[Keyframe, int, int]:
-    """Keyframe record number ``k`` checked field by field, with its image decoded."""
+    raw: bytes, k: int, images: dict[int, bytes], seen: set[int], path: Path, walls: int
+) -> tuple[Keyframe, int, int, int | None]:
+    """Keyframe record number ``k`` checked field by field, with its image decoded; its
+    stop (the wall picture it was taken beside, one of the ``walls`` read before it) when it
+    is a far picture, else None."""
     where = f"keyframe record {k}"
     try:
         rec = checks.parse_json(raw, "the record")
@@ -647,6 +677,14 @@ def _keyframe(
         camera = checks.camera(rec.get("camera"))
         checks.pose_or_none(rec.get("odometry"), "odometry")
         lap = checks.integer(rec.get("lap", 0), "lap", 0, 10**6)
+        view = rec.get("view", "wall")
+        if view not in ("wall", "far"):
+            raise ValueError(f"view must be 'wall' or 'far', got {str(view)[:20]!r}")
+        stop = None
+        if view == "far":
+            if walls == 0:
+                raise ValueError("a far picture before any wall picture")
+            stop = checks.integer(rec.get("stop"), "stop", 0, walls - 1)
         pitch_range = (-math.pi / 2, math.pi / 2)
         keyframe = Keyframe(
             image=np.zeros((0, 0), np.uint8),  # decoded below, once every field checks
@@ -664,7 +702,7 @@ def _keyframe(
         keyframe = dataclasses.replace(keyframe, image=_decode_image(images[index], camera))
     except ValueError as err:
         raise DatasetError(f"{path}: {where}: {err}") from None
-    return keyframe, lap, index
+    return keyframe, lap, index, stop
 
 
 def _camera_dict(cam: CameraInfo) -> dict[str, Any]:

@@ -5,6 +5,7 @@ Corrupt and hostile files are in test_dataset_corrupt.py.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -300,4 +301,58 @@ def test_nonfinite_pose_is_refused_on_read(tmp_path: Path) -> None:
     with DatasetWriter(path, config={}, meta={}) as w:
         w.write(bad)
     with pytest.raises(DatasetError):
+        read_dataset(path)
+
+
+def test_far_pictures_round_trip_beside_their_stops(tmp_path: Path) -> None:
+    """Far pictures (the room across its interior) are kept apart from the wall pictures,
+    each with the wall picture it was taken beside; the wall pictures read as before."""
+    path = tmp_path / "s.mcap"
+    rng = np.random.default_rng(1)
+    walls = [_keyframe(i, rng) for i in range(3)]
+    far = [dataclasses.replace(_keyframe(10 + i, rng), head_yaw=1.3) for i in range(2)]
+    writer = DatasetWriter(path, config={}, meta=META)
+    writer.write(walls[0])
+    writer.write(far[0], stop=0)
+    writer.write(walls[1])
+    writer.write(walls[2])
+    writer.write(far[1], stop=2)
+    with pytest.raises(DatasetError, match="stop 3 is not one of the 3 wall pictures"):
+        writer.write(far[1], stop=3)
+    writer.close()
+    data = read_dataset(path)
+    assert [kf.pose for kf in data.keyframes] == [kf.pose for kf in walls]
+    assert [(s, kf.pose, kf.head_yaw) for s, kf in data.far] == [
+        (0, far[0].pose, 1.3),
+        (2, far[1].pose, 1.3),
+    ]
+    assert data.meta["frames"] == 5 and writer.wall_frames == 3
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        ({"view": "far", "stop": 1}, r"stop is 1, outside \[0, 0\]"),
+        ({"view": "far"}, "stop must be an integer"),
+        ({"view": "sideways"}, "view must be 'wall' or 'far'"),
+    ],
+)
+def test_a_far_picture_must_name_a_wall_picture_before_it(
+    tmp_path: Path, edit: dict[str, object], message: str
+) -> None:
+    path = tmp_path / "s.mcap"
+    rng = np.random.default_rng(2)
+    writer = DatasetWriter(path, config={}, meta=META)
+    writer.write(_keyframe(0, rng))
+    real = writer._add
+
+    def tampered(topic: str, stamp: float, data: bytes) -> None:
+        if topic == "/naoloc/keyframe":
+            data = json.dumps({**json.loads(data), **edit}).encode()
+        real(topic, stamp, data)
+
+    writer._add = tampered  # type: ignore[method-assign]
+    writer.write(_keyframe(1, rng))
+    writer.close()
+    with pytest.raises(DatasetError, match=f"frame 1: {message}"):
         read_dataset(path)

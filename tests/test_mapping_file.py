@@ -166,3 +166,53 @@ def test_corrupted_files_raise_only_map_format_error(
         return
     # The only acceptable success is an unchanged map (e.g. a flip inside zip padding).
     assert map_bytes(load_map(blob)) == good
+
+
+def test_far_pictures_leave_the_papers_map_alone(small_map: VisualMap, tmp_path: Path) -> None:
+    """The survey's far pictures join the keyframes (features, landmarks, retrieval) after
+    the wall pictures, each posed at its stop; the paper's vocabulary, GCS and neuron poses,
+    and the wall pictures' refined poses, are those of the same map without them."""
+    from naoloc.mapping.localizer import featured_neuron_poses
+
+    walls = synthetic_keyframes()
+    across = _texture(7)
+    far = [
+        (s, Keyframe(across[:, 60 * s : 60 * s + 320].copy(), walls[s].pose * Pose2D(0, 0, 0.01),
+                     1.5708))
+        for s in (1, 4, 7)
+    ]  # fmt: skip
+    cfg = MapConfig(neurons=8, epochs=5, vocabulary_size=32)
+    both = build_map(walls, cfg, meta={"room_size_m": [6.0, 6.0]}, far=far)
+    n = len(walls)
+    assert both.images == n + 3 and both.wall_images == n and both.meta["far_pictures"] == 3
+    assert small_map.wall_images == n and small_map.meta["far_pictures"] == 0
+    assert np.array_equal(both.vocabulary.centres, small_map.vocabulary.centres)
+    assert np.array_equal(both.gcs.weights, small_map.gcs.weights)
+    assert np.array_equal(both.neuron_poses, small_map.neuron_poses, equal_nan=True)
+    assert np.array_equal(both.refined_poses[:n], small_map.refined_poses)
+    got, want = featured_neuron_poses(both), featured_neuron_poses(small_map)
+    for g, w in zip(got, want, strict=True):
+        assert np.array_equal(g, w, equal_nan=True)
+    # Each far picture rides with its stop: the wall picture's refined pose, turned 0.01 rad.
+    for j, (s, _kf) in enumerate(far):
+        row = both.refined_poses[n + j]
+        assert np.allclose(row, both.refined_poses[s] + [0.0, 0.0, 0.01], atol=1e-9)
+    assert both.histograms.shape[0] == n + 3 and both.kp_offsets.shape == (n + 4,)
+    back = load_map(map_bytes(both))
+    assert back.wall_images == n and np.array_equal(back.refined_poses, both.refined_poses)
+    with pytest.raises(Exception, match="stop is not one of the 12 keyframes"):
+        build_map(walls, cfg, far=[(12, far[0][1])])
+
+
+def test_a_far_picture_count_beyond_the_keyframes_is_refused(small_map: VisualMap) -> None:
+    from naoloc.mapping.mapfile import checksum
+
+    data = map_bytes(small_map)
+    arrays = dict(np.load(io.BytesIO(data)))
+    meta = json.loads(arrays["meta_json"].tobytes())
+    for bad in (small_map.images, -1, "3", True):
+        meta["meta"] = {**meta["meta"], "far_pictures": bad}
+        meta["checksum"] = checksum({k: v for k, v in arrays.items() if k != "meta_json"})
+        raw = np.frombuffer(json.dumps(meta).encode(), np.uint8)
+        with pytest.raises(MapFormatError, match="far_pictures"):
+            load_map(_rewrite(data, {"meta_json": raw}))

@@ -417,3 +417,25 @@ def test_wall_pose_priors_hold_the_adjustment(scene: Scene) -> None:
     err_held = _errors(bundle_adjust(held).poses, scene.truth[:n])
     assert err_held[1] < 0.5 * err_free[1]
     assert err_held[0] < err_free[0]
+
+
+def test_far_pictures_pair_with_far_pictures_far_apart() -> None:
+    """Wall pictures pair with their nearest wall pictures, as without far pictures; a far
+    picture (walls 2-7 m away) pairs only with far pictures 0.6-2 m off, spread over that
+    range, so its points are triangulated over long baselines."""
+    from naoloc.mapping.landmarks import FAR_BASELINE_M, select_pairs
+
+    # A walk along +x: a wall picture every 0.2 m (head right), a far picture every 0.4 m
+    # (head left, across the room), appended after the wall pictures.
+    walls = [camera_matrix_in_map((0.2 * i, 0.0, 0.0), -1.2, -0.6) for i in range(20)]
+    far = [camera_matrix_in_map((0.4 * i, 0.0, 0.0), 1.3, -0.3) for i in range(10)]
+    cams = np.stack(walls + far)
+    alone = select_pairs(np.stack(walls))
+    pairs = select_pairs(cams, far_from=20)
+    assert [p for p in pairs if p[1] < 20] == alone
+    far_pairs = [p for p in pairs if p[0] >= 20]
+    assert len(far_pairs) == len(pairs) - len(alone)  # no wall-far pair
+    lengths = [0.4 * abs(i - j) for i, j in far_pairs]
+    assert min(lengths) >= FAR_BASELINE_M[0] - 1e-9 and max(lengths) <= FAR_BASELINE_M[1] + 1e-9
+    assert max(lengths) >= 1.6  # spread: not only the nearest allowed ones
+    assert select_pairs(cams, far_from=None) != pairs  # as one kind, nearest first

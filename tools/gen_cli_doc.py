@@ -27,7 +27,8 @@ DOC = REPO / "docs" / "cli.md"
 # verb -> field -> description. Units: m, rad, deg, s, ms; frames as named.
 JSON_FIELDS: dict[str, dict[str, str]] = {
     "survey": {
-        "frames": "images written to the dataset",
+        "frames": "wall pictures written to the dataset (the paper's survey images)",
+        "far_frames": "far pictures written beside them (`survey.far_yaws_rad`; 0 = none)",
         "laps": "closed laps walked",
         "path_m": "distance walked by odometry (m)",
         "wall_s": "wall-clock time of the survey (s)",
@@ -39,7 +40,8 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "wall_follow": "how the floor-wall line steered the survey (corrections, lines seen)",
     },
     "build-map": {
-        "images": "keyframes the map was built from",
+        "images": "keyframes the map was built from (wall and far pictures)",
+        "far_images": "of those, far pictures (the verified localizer's; the GCS learns the rest)",
         "neurons": "GCS neurons",
         "distinct_poses": "distinct neuron poses (1 mm apart or more)",
         "features_s": "feature extraction time (s)",
@@ -124,8 +126,8 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
     },
     "demo": {
         "backend": "the robot's backend",
-        "frames": "survey images",
-        "images": "map keyframes",
+        "frames": "survey wall pictures",
+        "images": "map keyframes (wall and far pictures)",
         "neurons": "GCS neurons",
         "distinct_poses": "distinct neuron poses",
         "map_build_s": "map build time (s)",
@@ -152,6 +154,8 @@ def _type_name(annotation: Any) -> str:
         return " \\| ".join(f"`{a}`" for a in args)
     if origin in (typing.Union, types.UnionType):
         return " or ".join(_type_name(a) for a in args)
+    if origin is tuple and len(args) == 2 and args[1] is Ellipsis:
+        return f"list of {_type_name(args[0])}"
     if origin is tuple:
         return f"[{', '.join(_type_name(a) for a in args)}]"
     if origin is list:

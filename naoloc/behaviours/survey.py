@@ -12,6 +12,13 @@ odometry pose and a picture are recorded (the map's input), and the survey meta 
 vision measurements per frame (``vision``) and the metric scale of the odometry
 (``metric_scale``, metres per odometry metre, from the front wall's distances), which
 build-map applies. :func:`circuit` gives the nominal waypoints of that rectangle.
+
+Beyond the paper, each stop also photographs the room across its interior
+(``survey.far_yaws_rad``, ``survey.far_per_stop``, at ``survey.far_pitch_rad``): the wall
+ahead and the far walls, 1-7 m away. The wall pictures alone show every wall from the
+circuit's 1 m, so a robot near a wall, looking across the room at walls 5 m off, matched
+nothing; the far pictures go to a separate sink and build-map gives them to the verified
+localizer only (docs/RESULTS.md, "Issue 12, eleventh step").
 """
 
 from __future__ import annotations
@@ -24,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from naoloc.behaviours.camera import Camera, lens_of, look, stand
+from naoloc.behaviours.camera import Camera, clamp_head, lens_of, look, stand
 from naoloc.behaviours.nearest_wall import (
     FloorLineWall,
     ParallaxWall,
@@ -56,6 +63,10 @@ MAX_EXTRA_STEPS = 8  # steps a side may take beyond its planned count (odometry 
 FrameSink = Callable[[Keyframe, int, Pose2D], None]
 """Called with (keyframe, lap, raw FRAME_WORLD odometry) right after each picture."""
 
+FarSink = Callable[[Keyframe, int, int, Pose2D], None]
+"""Called with (far keyframe, lap, its stop: the number of wall pictures before the stop's
+own, raw FRAME_WORLD odometry) right after the stop's wall picture went to the frame sink."""
+
 StartHook = Callable[[dict[str, Any]], None]
 """Called once with the survey meta (JSON-able) before the first step."""
 
@@ -86,6 +97,7 @@ class SurveyResult:
         laps: Laps completed.
         path_m: Distance walked according to odometry, m.
         wall_s: Wall-clock seconds of the survey.
+        far_frames: Far pictures taken (``survey.far_yaws_rad``), not counted in ``frames``.
         head_yaw: HeadYaw kept while walking, rad.
         wall: The paper's nearest-wall detection (always run and recorded; not steered by).
         parallax: The parallax detection that chose the side, when the floor lines did not.
@@ -96,6 +108,7 @@ class SurveyResult:
     """
 
     frames: int = 0
+    far_frames: int = 0
     laps: int = 0
     path_m: float = 0.0
     wall_s: float = 0.0
@@ -171,6 +184,7 @@ def survey(
     progress: Callable[[int], None] | None = None,
     head_pitch: float | None = None,
     head_yaw: float | None = None,
+    on_far: FarSink | None = None,
 ) -> SurveyResult:
     """Walk ``cfg.survey.laps`` closed laps and record a picture after each step.
 
@@ -196,6 +210,9 @@ def survey(
         head_pitch: Head pitch while walking, rad; None = ``cfg.survey.head_pitch_rad``.
         head_yaw: Head yaw to use instead of the detector's (rad), e.g. known from the
             room's layout; ``cfg.survey.head_yaw_rad`` still wins.
+        on_far: Receives each far picture (``survey.far_yaws_rad``: the room across its
+            interior, taken at each stop after the wall picture) with its lap and stop;
+            None takes no far pictures.
 
     Returns:
         The survey's summary.
@@ -241,7 +258,7 @@ def survey(
             eye = FloorEye(robot, cfg.camera, lens=lens_of(cfg))
             try:
                 _walk_laps(robot, cfg, camera, eye, origin, command_origin, yaw, pitch, turn,
-                           result, on_frame, progress)  # fmt: skip
+                           result, on_frame, progress, on_far)  # fmt: skip
             finally:
                 eye.close()
     finally:
@@ -280,6 +297,7 @@ def _walk_laps(
     result: SurveyResult,
     on_frame: FrameSink,
     progress: Callable[[int], None] | None,
+    on_far: FarSink | None = None,
 ) -> None:
     """The laps, steered by the floor-wall lines of the side and front walls.
 
@@ -289,7 +307,8 @@ def _walk_laps(
     the next step goes back to ``survey.wall_offset_m`` and parallel to the wall. Near the
     side's end (by odometry), the head turns forward and the front wall's line sets where
     the corner is. With no line in view the step goes straight and the side ends by
-    odometry. Vision and scale facts go to ``result.meta``.
+    odometry. Vision and scale facts go to ``result.meta``. With ``on_far``, each stop also
+    takes ``survey.far_per_stop`` far pictures (:func:`far_yaws`) after its wall picture.
     """
     sides = cfg.survey_sides()
     offset, step = cfg.survey.wall_offset_m, cfg.survey.step_m
@@ -297,6 +316,9 @@ def _walk_laps(
     picture_yaw = yaw - math.copysign(ahead, yaw) if yaw != 0 and ahead > 0 else yaw
     result.meta["picture_yaw"] = picture_yaw
     side_normal = math.copysign(math.pi / 2, yaw) if yaw != 0 else -math.pi / 2
+    fars = far_yaws(cfg, yaw) if on_far is not None else []
+    if fars:
+        result.meta["far_views"] = {"yaws": fars, "pitch": cfg.survey.far_pitch_rad}
     vision: list[dict[str, Any]] = []
     fronts: list[FrontSample] = []
     deviations: list[float] = []
@@ -339,7 +361,12 @@ def _walk_laps(
                 if picture_yaw != yaw:
                     look(robot, picture_yaw, pitch)
                 keyframe, odometry = camera.keyframe(origin, command_origin)
-                if picture_yaw != yaw:
+                far: list[tuple[Keyframe, Pose2D]] = []
+                for _ in range(cfg.survey.far_per_stop if fars else 0):
+                    look(robot, fars[result.far_frames % len(fars)], cfg.survey.far_pitch_rad)
+                    far.append(camera.keyframe(origin, command_origin))
+                    result.far_frames += 1
+                if picture_yaw != yaw or far:
                     look(robot, yaw, pitch)
                 result.path_m += here.distance(keyframe.pose)
                 here = keyframe.pose
@@ -359,6 +386,9 @@ def _walk_laps(
                     }
                 )
                 on_frame(keyframe, lap, odometry)
+                for far_keyframe, far_odometry in far:
+                    assert on_far is not None  # far pictures are taken only for it
+                    on_far(far_keyframe, lap, result.frames, far_odometry)
                 result.frames += 1
                 if progress is not None:
                     progress(1)
@@ -381,6 +411,14 @@ def _walk_laps(
     }
     result.meta["metric_scale"] = scale
     result.meta["metric_scale_samples"] = ratios
+
+
+def far_yaws(cfg: Config, wall_yaw: float) -> list[float]:
+    """The far pictures' head yaws (rad, FRAME_ROBOT) for a survey whose head faces the
+    wall at ``wall_yaw``: ``survey.far_yaws_rad`` turned toward the room's interior (away
+    from the wall's side), clamped to the head's range."""
+    inward = -math.copysign(1.0, wall_yaw) if wall_yaw != 0 else 1.0
+    return [clamp_head(inward * r, cfg.survey.far_pitch_rad)[0] for r in cfg.survey.far_yaws_rad]
 
 
 def trusted_front(

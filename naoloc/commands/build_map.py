@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from naoloc.config import Config, MapConfig
 from naoloc.dataset import read_dataset
 from naoloc.errors import DatasetError
-from naoloc.geometry import Pose2D
+from naoloc.geometry import Pose2D, relative_pose
 from naoloc.keyframe import Keyframe
 from naoloc.outputs import staged
 from naoloc.progress import Progress
@@ -96,6 +97,24 @@ def survey_keyframes(
     return list(data.keyframes), facts
 
 
+def far_keyframes(data: Any, keyframes: Sequence[Keyframe]) -> list[tuple[int, Keyframe]]:
+    """The dataset's far pictures with their stops, posed as the map's keyframes are.
+
+    A far picture is taken where its stop's wall picture was, the head turned: it takes
+    that keyframe's pose (from the walls or the scaled odometry, :func:`survey_keyframes`)
+    composed with the raw odometry from the wall picture to it.
+
+    Args:
+        data: The :class:`naoloc.dataset.Dataset`.
+        keyframes: Its wall pictures as :func:`survey_keyframes` posed them.
+    """
+    out = []
+    for stop, kf in data.far:
+        step = relative_pose(data.keyframes[stop].pose, kf.pose)
+        out.append((stop, dataclasses.replace(kf, pose=(keyframes[stop].pose * step).normalized())))
+    return out
+
+
 def build_from_dataset(
     dataset: Path,
     cfg: Config,
@@ -151,7 +170,8 @@ def build_from_dataset(
         bar.update(done - bar.count)
 
     try:
-        vmap = build_map(keyframes, cfg.map, meta=meta, progress=progress)
+        far = far_keyframes(data, keyframes) if cfg.map.far_pictures else []
+        vmap = build_map(keyframes, cfg.map, meta=meta, progress=progress, far=far)
     finally:
         for bar in bars.values():
             bar.close()
@@ -165,6 +185,7 @@ def build_from_dataset(
     timings = vmap.timings
     summary = {
         "images": int(vmap.images),
+        "far_images": int(vmap.images - vmap.wall_images),
         "neurons": len(vmap.neuron_poses),
         "distinct_poses": int(vmap.distinct_poses),
         "features_s": round(float(timings.get("features_s", 0.0)), 3),

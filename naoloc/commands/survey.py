@@ -58,7 +58,8 @@ def record_survey(
         live: Shows the keyframe poses as they are taken (``--live``).
 
     Returns:
-        The survey summary and the number of frames written.
+        The survey summary and the number of wall pictures written (the far pictures,
+        ``result.far_frames``, come beside them).
     """
     holder: dict[str, DatasetWriter] = {}
     taken: list[tuple[float, float, float]] = []
@@ -72,10 +73,13 @@ def record_survey(
             taken.append((keyframe.pose.x, keyframe.pose.y, keyframe.pose.theta))
             live.map(np.asarray(taken))
 
+    def on_far(keyframe: Keyframe, lap: int, stop: int, odometry: Pose2D) -> None:
+        holder["w"].write(keyframe, lap=lap, odometry=odometry, stop=stop)
+
     try:
         result = survey(
             robot, cfg, on_frame, on_start=on_start,
-            progress=None if progress is None else progress.update,
+            progress=None if progress is None else progress.update, on_far=on_far,
         )  # fmt: skip
     except BaseException as err:
         writer = holder.get("w")
@@ -96,7 +100,7 @@ def record_survey(
         writer.close(complete=False, reason=f"{result.laps} of {cfg.survey.laps} laps")
     else:
         writer.close(complete=True)
-    return result, writer.frames
+    return result, writer.wall_frames
 
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
@@ -125,12 +129,14 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     if follow:
         detected += f"{follow.get('steered_steps', 0)} steps steered by the floor line, "
     print(
-        f"survey: {frames} frames in {result.laps} laps of {sides[0]:.2f} x {sides[1]:.2f} m, "
+        f"survey: {frames} frames (and {result.far_frames} far) in {result.laps} laps of "
+        f"{sides[0]:.2f} x {sides[1]:.2f} m, "
         f"{detected}{result.meta.get('direction', '?')} circuit, {result.path_m:.1f} m walked, "
         f"{result.wall_s:.1f} s -> {output}"
     )
     return {
         "frames": frames,
+        "far_frames": result.far_frames,
         "laps": result.laps,
         "path_m": round(result.path_m, 3),
         "wall_s": round(result.wall_s, 3),

@@ -46,6 +46,7 @@ def nearest_neighbour(vmap: Any, queries: Sequence[Keyframe]) -> Any:
     has_kp = np.diff(np.asarray(vmap.kp_offsets)) > 0
     if not has_kp.any():
         has_kp[:] = True
+    has_kp[vmap.wall_images :] = False  # the paper's training images: the wall pictures
     hists = np.where(has_kp[:, None], hists, np.inf)
     last = queries[-1].pose
     xs, ys, sin_sum, cos_sum, closeness, images = [], [], 0.0, 0.0, [], []

@@ -361,10 +361,10 @@ def map_task(task: MapTask) -> dict[str, Any]:
     """Build a map from a dataset and save it (runs in a worker).
 
     Returns:
-        ``{"name", "map", "images", "neurons", "epochs", "features", "distinct_poses",
-        "timings"}``.
+        ``{"name", "map", "images", "far_images", "neurons", "epochs", "features",
+        "distinct_poses", "timings"}`` (``images``: the wall pictures the GCS learned).
     """
-    from naoloc.commands.build_map import survey_keyframes
+    from naoloc.commands.build_map import far_keyframes, survey_keyframes
     from naoloc.config import MapConfig
     from naoloc.dataset import read_dataset
     from naoloc.mapping import build_map
@@ -375,13 +375,15 @@ def map_task(task: MapTask) -> dict[str, Any]:
     meta = dict(data.meta)
     meta.pop("vision", None)  # per-frame survey measurements stay in the dataset
     meta.update(facts)
-    vmap = build_map(keyframes, cfg, meta=meta)
+    far = far_keyframes(data, keyframes) if cfg.far_pictures else []
+    vmap = build_map(keyframes, cfg, meta=meta, far=far)
     Path(task.map_path).parent.mkdir(parents=True, exist_ok=True)
     vmap.save(task.map_path)
     return {
         "name": task.name,
         "map": task.map_path,
-        "images": int(vmap.images),
+        "images": int(vmap.wall_images),  # the GCS's training images (Table 2)
+        "far_images": int(vmap.images - vmap.wall_images),
         "neurons": cfg.neurons,
         "epochs": cfg.epochs,
         "features": cfg.features,

@@ -21,7 +21,7 @@ import numpy as np
 
 from naoloc.config import MapConfig
 from naoloc.errors import DatasetError
-from naoloc.geometry import circular_mean
+from naoloc.geometry import Pose2D, circular_mean, relative_pose
 from naoloc.keyframe import CameraInfo, Keyframe
 from naoloc.lens import Lens
 from naoloc.mapping.bundle import BundleProblem, bundle_adjust, tracks_from_links
@@ -49,6 +49,26 @@ def _neuron_poses(
     return out, view
 
 
+def ride_with_stops(walls: np.ndarray, given: np.ndarray, stops: Sequence[int]) -> np.ndarray:
+    """Every keyframe's pose once the wall pictures' poses are refined: the far pictures
+    (rows after the walls) move with the wall picture of their stop.
+
+    Args:
+        walls: ``(W, 3)`` refined poses of the wall pictures (map frame: m, m, rad).
+        given: ``(W + F, 3)`` poses every keyframe came with, walls first.
+        stops: Per far picture, the index of its stop's wall picture.
+
+    Returns:
+        ``(W + F, 3)``: the refined walls, then each far picture at its stop's refined pose
+        composed with the given odometry from that wall picture to it.
+    """
+    rows = [walls]
+    for j, s in enumerate(stops):
+        step = relative_pose(Pose2D(*given[s]), Pose2D(*given[walls.shape[0] + j]))
+        rows.append(np.array([(Pose2D(*walls[s]) * step).normalized().to_list()]))
+    return np.concatenate(rows, axis=0)
+
+
 def pinhole_features(
     extractor: FeatureExtractor, kf: Keyframe, cam: CameraInfo, lens: Lens | None
 ) -> Features:
@@ -71,8 +91,17 @@ def build_map_data(
     meta: dict[str, Any] | None = None,
     progress: ProgressFn | None = None,
     extractor: FeatureExtractor | None = None,
+    far: Sequence[tuple[int, Keyframe]] = (),
 ) -> MapData:
     """Algorithm 4: features -> vocabulary -> histograms -> GCS -> neuron poses; landmarks.
+
+    The far pictures (``survey.far_yaws_rad``) join the map's keyframes after the wall
+    pictures, for the verified localizer: their features, histograms and landmarks. The
+    paper's part is the wall pictures' alone (vocabulary, GCS and neuron poses are the
+    same with or without far pictures), and so are the pose graph and bundle adjustment: a
+    far picture rides with the wall picture of its stop (the same place, another head
+    yaw), carried by the odometry between the two. The map's meta counts them
+    (``far_pictures``).
 
     Args:
         keyframes: Survey images; ``pose`` is the odometry pose in the map frame, head angles
@@ -81,16 +110,23 @@ def build_map_data(
         meta: JSON-able metadata stored in the map file.
         progress: Called as ``progress(stage, done, total)``.
         extractor: The feature extractor to use (default: one for ``cfg.features``).
+        far: Far pictures, each with its stop (an index into ``keyframes``); poses in the
+            frame of the keyframes' poses.
 
     Returns:
         The map.
 
     Raises:
-        DatasetError: When there are no keyframes.
+        DatasetError: When there are no keyframes, or a far picture's stop is not one.
     """
     if not keyframes:
         raise DatasetError("no keyframes to build a map from")
+    stops = [int(s) for s, _ in far]
+    if any(not 0 <= s < len(keyframes) for s in stops):
+        raise DatasetError(f"a far picture's stop is not one of the {len(keyframes)} keyframes")
     report = progress or (lambda _s, _d, _t: None)
+    walls = len(keyframes)
+    keyframes = [*keyframes, *(kf for _, kf in far)]
     n = len(keyframes)
     t0 = time.perf_counter()
     extractor = extractor or FeatureExtractor(
@@ -105,12 +141,12 @@ def build_map_data(
         report("features", i + 1, n)
     t1 = time.perf_counter()
     vocab = train_vocabulary(
-        [f.descriptors for f in feats], cfg.vocabulary_size, extractor.binary, cfg.seed
+        [f.descriptors for f in feats[:walls]], cfg.vocabulary_size, extractor.binary, cfg.seed
     )
     hists = vocab.histograms([f.descriptors for f in feats])
     report("vocabulary", 1, 1)
     t2 = time.perf_counter()
-    gcs = train_gcs(hists, cfg.neurons, cfg.epochs, cfg.seed)
+    gcs = train_gcs(hists[:walls], cfg.neurons, cfg.epochs, cfg.seed)
     report("gcs", 1, 1)
     t3 = time.perf_counter()
     poses = np.array([[kf.pose.x, kf.pose.y, kf.pose.theta] for kf in keyframes], np.float64)
@@ -119,21 +155,25 @@ def build_map_data(
         [[c.width, c.height, c.hfov, c.vfov, c.index] for c in cams_info], np.float64
     )
     winners = gcs.winners(hists)
-    neuron_poses, neuron_views = _neuron_poses(winners, poses, poses[:, 2] + heads[:, 0], gcs.size)
+    w = slice(0, walls)  # the wall pictures: the paper's images, the pose graph's nodes
+    neuron_poses, neuron_views = _neuron_poses(
+        winners[w], poses[w], poses[w, 2] + heads[w, 0], gcs.size
+    )
     xys, descs = [f.xy for f in feats], [f.descriptors for f in feats]
     kmats = [c.matrix() for c in cams_info]
     cam_index = [c.index for c in cams_info]
     refined = refine_poses(
-        poses, heads, xys, descs, kmats, cam_index, hists, extractor.binary, tune.pose_graph
-    )
+        poses[w], heads[w], xys[w], descs[w], kmats[w], cam_index[w], hists[w],
+        extractor.binary, tune.pose_graph,
+    )  # fmt: skip
     report("poses", 1, 1)
     # Landmarks from the pose-graph poses link keypoints into tracks; bundle adjustment
     # refines the poses with them; the landmarks are then triangulated from those poses.
     binary = extractor.binary
-    cams = camera_poses(refined.poses, heads, cam_index)
-    lm = triangulate(xys, descs, cams, kmats, binary, tuning=tune.landmarks)
-    kp_xy = np.concatenate(xys)
-    kp_frame = np.repeat(np.arange(n), [len(f) for f in feats])
+    cams = camera_poses(refined.poses, heads[w], cam_index[w])
+    lm = triangulate(xys[w], descs[w], cams, kmats[w], binary, tuning=tune.landmarks)
+    kp_xy = np.concatenate(xys[w])
+    kp_frame = np.repeat(np.arange(walls), [len(f) for f in feats[w]])
     tracks = tracks_from_links(kp_xy.shape[0], lm.matches)
     odometry = [e for e in refined.edges if e.odometry]
     # Wall-referenced poses (map.wall_poses) are each good to a few centimetres and
@@ -141,12 +181,12 @@ def build_map_data(
     # sides (six surveys, tools/map_pose_accuracy.py: heading median 0.004-0.037 rad
     # without the prior, 0.002-0.011 rad with it).
     problem = BundleProblem(
-        refined.poses, heads, cam_index, kmats, kp_xy, kp_frame, tracks, lm.points, odometry,
-        tune.pose_graph,
+        refined.poses, heads[w], cam_index[w], kmats[w], kp_xy, kp_frame, tracks, lm.points,
+        odometry, tune.pose_graph,
     )  # fmt: skip
     sigma = tune.bundle.wall_prior_sigma
     if (meta or {}).get("wall_poses") is not None and sigma is not None:
-        problem = dataclasses.replace(problem, priors=poses.copy(), prior_sigma=sigma)
+        problem = dataclasses.replace(problem, priors=poses[w].copy(), prior_sigma=sigma)
     # Odometry edges only: the loop closures' relative poses carry the errors of their
     # odometry-triangulated landmarks (measured: they make the result worse), and tracks
     # seen from both laps (spanning half the loop-closure gap) tie the laps. Without
@@ -158,9 +198,9 @@ def build_map_data(
     if adjusted.long_tracks < tune.bundle.min_long_tracks and loop_gaps:
         problem = dataclasses.replace(problem, edges=list(refined.edges))
         adjusted = bundle_adjust(problem, tune.bundle, heading_bias=bias, long_gap=gap)
-    final_poses = adjusted.poses
+    final_poses = ride_with_stops(adjusted.poses, poses, stops)
     cams = camera_poses(final_poses, heads, cam_index)
-    lm = triangulate(xys, descs, cams, kmats, binary, tuning=tune.landmarks)
+    lm = triangulate(xys, descs, cams, kmats, binary, tuning=tune.landmarks, far_from=walls)
     report("landmarks", 1, 1)
     t4 = time.perf_counter()
     offsets = np.concatenate([[0], np.cumsum([len(f) for f in feats])]).astype(np.int64)
@@ -175,6 +215,7 @@ def build_map_data(
         config=cfg,
         meta={
             **dict(meta or {}),
+            "far_pictures": n - walls,
             "loop_closures": refined.loops,
             "heading_bias_rad_per_m": round(adjusted.heading_bias, 6),
             "bundle_tracks": adjusted.tracks,

@@ -77,6 +77,13 @@ class MapData:
         return int(self.keyframe_poses.shape[0])
 
     @property
+    def wall_images(self) -> int:
+        """Number of wall pictures: the first keyframes, the paper's training images. The
+        survey's far pictures (meta ``far_pictures``) follow them."""
+        far = self.meta.get("far_pictures", 0)
+        return self.images - (far if isinstance(far, int) and 0 <= far < self.images else 0)
+
+    @property
     def distinct_poses(self) -> int:
         """Number of distinct neuron poses (positions equal to 1 mm count once)."""
         p = self.neuron_poses[np.isfinite(self.neuron_poses[:, 0]), :2]

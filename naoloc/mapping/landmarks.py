@@ -155,12 +155,26 @@ class LandmarkSet:
     matches: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
 
 
-def select_pairs(cams: np.ndarray, tuning: LandmarkTuning = DEFAULT) -> list[tuple[int, int]]:
+# Pairs of far pictures (the survey's views across the room, walls 2-7 m away): baselines
+# 0.6-2 m, views within 30 deg. The wall pictures' nearest neighbours (0.2-0.4 m) would
+# place a point 5 m away to +-0.4 m per pixel of error; spread up to 2 m apart, to a few cm.
+FAR_BASELINE_M = (0.6, 2.0)
+FAR_VIEW_DEG = 30.0
+
+
+def select_pairs(
+    cams: np.ndarray, tuning: LandmarkTuning = DEFAULT, far_from: int | None = None
+) -> list[tuple[int, int]]:
     """Keyframe pairs with a usable baseline and overlapping views.
+
+    A wall picture pairs with its nearest wall pictures; a far picture (index ``far_from``
+    on) with far pictures :data:`FAR_BASELINE_M` apart, spread over that range.
 
     Args:
         cams: ``(N, 4, 4)`` camera poses ``T_map_cam``.
-        tuning: Baseline and view-angle limits.
+        tuning: Baseline and view-angle limits (wall pictures).
+        far_from: Index of the first far picture (they follow the wall pictures); None:
+            none.
 
     Returns:
         Sorted unique pairs ``(i, j)``, i < j; up to ``pairs_per_keyframe`` per keyframe.
@@ -175,9 +189,24 @@ def select_pairs(cams: np.ndarray, tuning: LandmarkTuning = DEFAULT) -> list[tup
         & (cosang >= math.cos(math.radians(tuning.pair_max_view_angle_deg)))
     )
     pairs: set[tuple[int, int]] = set()
-    for i in range(cams.shape[0]):
-        cand = np.flatnonzero(ok[i])
+    n = cams.shape[0]
+    first_far = n if far_from is None else far_from
+    for i in range(first_far):
+        cand = np.flatnonzero(ok[i, :first_far])
         for j in cand[np.argsort(dist[i, cand], kind="stable")][: tuning.pairs_per_keyframe]:
+            pairs.add((min(i, int(j)), max(i, int(j))))
+    far_ok = (
+        (dist >= FAR_BASELINE_M[0])
+        & (dist <= FAR_BASELINE_M[1])
+        & (cosang >= math.cos(math.radians(FAR_VIEW_DEG)))
+    )
+    for i in range(first_far, n):
+        cand = np.flatnonzero(far_ok[i, first_far:]) + first_far
+        if cand.size == 0:
+            continue
+        order = cand[np.argsort(dist[i, cand], kind="stable")]
+        k = min(tuning.pairs_per_keyframe, order.size)
+        for j in order[np.linspace(0, order.size - 1, k).round().astype(int)]:
             pairs.add((min(i, int(j)), max(i, int(j))))
     return sorted(pairs)
 
@@ -200,6 +229,7 @@ def triangulate(
     binary: bool,
     pairs: Sequence[tuple[int, int]] | None = None,
     tuning: LandmarkTuning = DEFAULT,
+    far_from: int | None = None,
 ) -> LandmarkSet:
     """Triangulate landmarks from features matched between nearby keyframes.
 
@@ -215,6 +245,7 @@ def triangulate(
         binary: Hamming (True) or L2 matching.
         pairs: Keyframe pairs to match; default: :func:`select_pairs` of the cameras.
         tuning: Matching and triangulation thresholds.
+        far_from: Index of the first far picture, for :func:`select_pairs`.
 
     Returns:
         The landmarks, one row per keypoint of every keyframe.
@@ -226,7 +257,7 @@ def triangulate(
     counts = np.zeros(int(offsets[-1]))
     linked: list[np.ndarray] = []
     matcher = hamming_matcher(binary)
-    pairs = select_pairs(cams, tuning) if pairs is None else list(pairs)
+    pairs = select_pairs(cams, tuning, far_from) if pairs is None else list(pairs)
     lo_m, hi_m = tuning.depth_range_m
     projs = [_projection(intrinsics[i], cams[i]) for i in range(cams.shape[0])]
     for i, j in pairs:

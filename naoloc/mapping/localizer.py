@@ -209,13 +209,15 @@ def featured_neuron_poses(vmap: VisualMap) -> tuple[np.ndarray, np.ndarray, np.n
     """Neuron poses (Algorithm 4, line 7) from the keyframes that have keypoints.
 
     A keyframe without keypoints has an empty histogram that carries no place; a neuron that
-    wins only such keyframes carries no pose and must not win a query.
+    wins only such keyframes carries no pose and must not win a query. Only the wall
+    pictures count (the paper's images; the survey's far pictures are not).
 
     Returns:
         ``posed`` (P,) neuron indices, their ``(P, 3)`` mean poses (map frame: m, m, rad)
         and ``(P,)`` mean camera headings (rad).
     """
     has = np.diff(vmap.kp_offsets) > 0
+    has[vmap.wall_images :] = False
     win = vmap.winners[has]
     k = vmap.gcs.size
     count = np.bincount(win, minlength=k).astype(np.float64)

@@ -107,16 +107,21 @@ def build_map(
     *,
     meta: dict[str, Any] | None = None,
     progress: ProgressFn | None = None,
+    far: Sequence[tuple[int, Keyframe]] = (),
 ) -> VisualMap:
     """Algorithm 4 (see :func:`naoloc.mapping.builder.build_map_data`) as a :class:`VisualMap`.
 
+    ``far``: the survey's far pictures with their stops (indices into ``keyframes``).
+
     Raises:
-        DatasetError: When there are no keyframes.
+        DatasetError: When there are no keyframes, or a far picture's stop is not one.
     """
     extractor = FeatureExtractor(
         cfg.features, akaze_threshold=cfg.akaze_threshold, min_keypoints=cfg.min_keypoints
     )
-    data = build_map_data(keyframes, cfg, meta=meta, progress=progress, extractor=extractor)
+    data = build_map_data(
+        keyframes, cfg, meta=meta, progress=progress, extractor=extractor, far=far
+    )
     return VisualMap.of(data, extractor)
 
 

@@ -211,6 +211,9 @@ def read_map(source: str | Path | bytes) -> MapData:
     ):
         raise _fail(name, "bad timings in the metadata")
     timings = {str(k): float(t) for k, t in timings_raw.items()}
+    far = user_meta.get("far_pictures", 0)
+    if isinstance(far, bool) or not isinstance(far, int) or not 0 <= far < len(arrays["winners"]):
+        raise _fail(name, f"far_pictures {str(far)[:20]!r} is not a count below the keyframes'")
     binary = kind != "sift"
     gcs = GCSNetwork(
         arrays["gcs_weights"], arrays["gcs_triangles"], int(counts[0]), int(counts[1]),
