@@ -291,7 +291,8 @@ def show_map(view: LiveView, vmap: Any) -> None:
     poses = getattr(vmap, "refined_poses", None)
     if poses is None:
         poses = vmap.keyframe_poses
-    view.map(np.asarray(poses), getattr(vmap, "kp_points", None))
+    walls = getattr(vmap, "wall_images", len(poses))  # the walk; the far pictures follow
+    view.map(np.asarray(poses)[:walls], getattr(vmap, "kp_points", None))
 
 
 def estimate_pose(estimate: Any) -> tuple[float, float, float] | None:

@@ -121,7 +121,7 @@ def _draw_map(
     if outline is not None:
         ax.plot(outline[:, 0], outline[:, 1], "-", color="0.3", lw=2, label="room walls")
     draw_furniture(ax, furniture)
-    path = np.asarray(vmap.keyframe_poses, dtype=float)
+    path = np.asarray(vmap.keyframe_poses, dtype=float)[: vmap.wall_images]  # no far pictures
     if len(path):
         ax.plot(path[:, 0], path[:, 1], "-", color="tab:blue", lw=0.8, alpha=0.6)
         ax.plot(path[:, 0], path[:, 1], ".", color="tab:blue", ms=3, label="survey poses")

@@ -67,8 +67,16 @@ def test_survey_writes_dataset_and_json(
 ) -> None:
     _, out = surveyed
     data = read_dataset(out)
-    # 1.5 m square in 0.25 m steps: 4 * 6 = 24 frames per lap.
+    # 1.5 m square in 0.25 m steps: 4 * 6 = 24 frames per lap, and a far picture at each
+    # stop, across the room: the wall ahead and toward the interior in turn.
     assert len(data.keyframes) == 24 and data.complete
+    assert [stop for stop, _ in data.far] == list(range(24))
+    left = data.meta["direction"] == "cw"  # the wall on the left: the interior is right
+    yaws = [round(kf.head_yaw * (-1 if left else 1), 1) for _, kf in data.far]
+    assert yaws == [0.0, 1.3] * 12
+    assert all(abs(kf.head_pitch - (-0.3)) < 0.05 for _, kf in data.far)
+    for stop, kf in data.far:  # taken where the stop's wall picture was
+        assert kf.pose.distance(data.keyframes[stop].pose) < 0.02
     assert data.config["survey"]["step_m"] == 0.25
     assert data.meta["room_size_m"] == [3.0, 3.0]
     assert (out.parent / "survey.config.yaml").is_file()
@@ -83,7 +91,7 @@ def test_survey_is_chunked_indexed_and_has_room_to_map(surveyed: tuple[Path, Pat
     with open(out, "rb") as f:
         reader = make_reader(f)
         summary = reader.get_summary()
-        assert summary is not None and len(summary.chunk_indexes) == 24  # one per frame
+        assert summary is not None and len(summary.chunk_indexes) == 48  # one per picture
         frames = {(tf[2][0], tf[3][0]) for tf in (
             _protobuf_fields(m.data) for _, _, m in reader.iter_messages(topics=["/tf"])
         )}  # fmt: skip
@@ -95,7 +103,7 @@ def test_survey_json_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) ->
     out = tmp_path / "s.mcap"
     assert main(["survey", "-c", str(cfg), "-o", str(out)]) == 0
     result = _last_json(capsys.readouterr().out)
-    assert result["frames"] == 12 and result["laps"] == 1
+    assert result["frames"] == 12 and result["far_frames"] == 12 and result["laps"] == 1
     assert result["path_m"] == pytest.approx(6.0, rel=0.05)
     assert result["wall_s"] > 0 and result["dataset"] == str(out)
 
@@ -134,7 +142,7 @@ def test_build_map_localize_go_home(
         "map",
     ):
         assert key in built
-    assert built["images"] == 24 and map_path.is_file()
+    assert built["images"] == 48 and built["far_images"] == 24 and map_path.is_file()
     assert (tmp_path / "map.png").stat().st_size > 10_000
     assert (tmp_path / "map.config.yaml").is_file()
 

@@ -23,6 +23,7 @@ def _map(n_words: int = 3) -> SimpleNamespace:
         keyframe_poses=np.array([[0, 0, 0], [2, 0, 0], [2, 2, math.pi / 2], [9, 9, 0]], float),
         keyframe_heads=np.array([[-math.pi / 2, 0.0]] * 4),
         kp_offsets=np.array([0, 5, 10, 15, 15]),
+        wall_images=4,  # no far pictures
     )
 
 
@@ -67,3 +68,14 @@ def test_images_without_keypoints_never_win_and_no_features_gives_zero_confidenc
     vmap.extract = lambda qs: [_Empty() for _ in qs]
     est = nearest_neighbour(vmap, [_query(0, Pose2D(), 0.0)])
     assert est.confidence == 0.0 and est.details["method"] == "none"
+
+
+def test_far_pictures_are_never_the_nearest_training_image() -> None:
+    """The survey's far pictures (after the wall pictures) are not the paper's training
+    images: the nearest-image baseline never picks one, however close its histogram."""
+    vmap = _map()
+    vmap.extract = lambda qs: [_Len(descriptors=int(q.image[0, 0])) for q in qs]
+    assert nearest_neighbour(vmap, [_query(2, Pose2D(), -math.pi / 2)]).details["images"] == [2]
+    vmap.wall_images = 2  # image 2 (and the empty one) as far pictures
+    est = nearest_neighbour(vmap, [_query(2, Pose2D(), -math.pi / 2)])
+    assert est.details["images"] != [2] and est.details["images"][0] < 2

@@ -465,7 +465,7 @@ def _write_outputs(
         panels.append(
             (
                 f"{name}: {vmap.distinct_poses} distinct poses",
-                vmap.keyframe_poses,
+                vmap.keyframe_poses[: vmap.wall_images],  # the walk (far pictures follow)
                 vmap.neuron_poses,
             )
         )
@@ -477,7 +477,7 @@ def _write_outputs(
         f"{summary['median_error_m']} m, p90 {summary['p90_error_m']} m",
         # the survey as the verified localizer's map has it (wall poses, pose graph), not
         # its raw odometry, which drifts through walls in the honest world
-        poly, load_map(maps[plan.main.map_name]["map"]).refined_poses, furniture,
+        poly, _walk(load_map(maps[plan.main.map_name]["map"])), furniture,
     )  # fmt: skip
     curves: dict[str, list[float]] = {}
     for v in plan.variants:
@@ -499,3 +499,9 @@ def _write_outputs(
     atomic_write_text(outdir / "estimates.json", json.dumps(jsonable(list(records))))
     atomic_write_text(outdir / "report.md", report.render(summary))
     atomic_write_text(outdir / "summary.json", json.dumps(jsonable(summary), indent=1))
+
+
+def _walk(vmap: Any) -> np.ndarray:
+    """The survey's walk as the map has it: the wall pictures' refined poses (map frame;
+    the far pictures, taken at the same stops, follow them in the map's keyframes)."""
+    return np.asarray(vmap.refined_poses)[: vmap.wall_images]
