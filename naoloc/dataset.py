@@ -88,7 +88,8 @@ class Dataset:
         keyframes: Frames in the order taken; poses in the map frame.
         config: The resolved config the survey ran with (plain dict, no secrets).
         meta: Survey facts: camera info, origin_room_pose, room_size_m, backend, ...,
-            and how the survey ended: ``complete``, ``frames`` and (if incomplete)
+            and how the survey ended: ``complete``, ``frames`` (wall pictures; ``far_frames``
+            when there were far pictures) and (if incomplete)
             ``reason``.
         complete: True only when the survey completed all its laps and the file was closed.
         laps: Lap number of each keyframe (0-based).
@@ -430,7 +431,9 @@ class DatasetWriter:
             return None if self.frames == 0 else (self.path if self.complete else self.partial_path)
         self._closed = True
         ok = complete and self.frames > 0
-        status = {"complete": "true" if ok else "false", "frames": str(self.frames)}
+        status = {"complete": "true" if ok else "false", "frames": str(self.wall_frames)}
+        if self.frames > self.wall_frames:
+            status["far_frames"] = str(self.frames - self.wall_frames)
         if not ok:
             status["reason"] = reason or "the survey did not complete"
         finished = False
@@ -605,6 +608,9 @@ def read_dataset(path: str | Path) -> Dataset:
     meta["complete"] = complete
     if status is not None and status.get("frames", "").isdigit() and len(status["frames"]) < 10:
         meta["frames"] = int(status["frames"])
+    far_count = (status or {}).get("far_frames", "")
+    if far_count.isdigit() and len(far_count) < 10:
+        meta["far_frames"] = int(far_count)
     if not complete:
         meta["reason"] = (status or {}).get("reason") or "the writer died before closing the file"
     keyframes: list[Keyframe] = []

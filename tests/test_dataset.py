@@ -326,7 +326,7 @@ def test_far_pictures_round_trip_beside_their_stops(tmp_path: Path) -> None:
         (0, far[0].pose, 1.3),
         (2, far[1].pose, 1.3),
     ]
-    assert data.meta["frames"] == 5 and writer.wall_frames == 3
+    assert data.meta["frames"] == 3 and data.meta["far_frames"] == 2 and writer.frames == 5
 
 
 @pytest.mark.parametrize(

@@ -90,7 +90,7 @@ def record_survey(
                 err.add_note(f"the partial dataset could not be finished: {failed}")
             else:
                 if kept is not None:
-                    err.add_note(f"partial dataset ({writer.frames} frames) kept in {kept}")
+                    err.add_note(f"partial dataset ({writer.wall_frames} frames) kept in {kept}")
         raise
     writer = holder.get("w")
     if writer is None:
