@@ -137,7 +137,7 @@ def main(argv: list[str] | None = None) -> int:
             from naoloc.mapping import load_map
 
             vmap = load_map(args.map)
-            refined = [Pose2D(*p) for p in vmap.refined_poses]
+            refined = [Pose2D(*p) for p in vmap.refined_poses[: vmap.wall_images]]
             if len(refined) == len(truth):
                 pos, head = pose_errors(refined, truth)
                 print(f"{path}: map      median {np.median(pos):.3f} m"
