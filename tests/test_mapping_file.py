@@ -185,6 +185,7 @@ def test_far_pictures_leave_the_papers_map_alone(small_map: VisualMap, tmp_path:
     both = build_map(walls, cfg, meta={"room_size_m": [6.0, 6.0]}, far=far)
     n = len(walls)
     assert both.images == n + 3 and both.wall_images == n and both.meta["far_pictures"] == 3
+    assert both.far_images == 3 and small_map.far_images == 0
     assert small_map.wall_images == n and small_map.meta["far_pictures"] == 0
     assert np.array_equal(both.vocabulary.centres, small_map.vocabulary.centres)
     assert np.array_equal(both.gcs.weights, small_map.gcs.weights)

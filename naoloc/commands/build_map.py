@@ -17,7 +17,7 @@ from typing import Any
 from naoloc.config import Config, MapConfig
 from naoloc.dataset import read_dataset
 from naoloc.errors import DatasetError
-from naoloc.geometry import Pose2D, relative_pose
+from naoloc.geometry import Pose2D
 from naoloc.keyframe import Keyframe
 from naoloc.outputs import staged
 from naoloc.progress import Progress
@@ -108,10 +108,12 @@ def far_keyframes(data: Any, keyframes: Sequence[Keyframe]) -> list[tuple[int, K
         data: The :class:`naoloc.dataset.Dataset`.
         keyframes: Its wall pictures as :func:`survey_keyframes` posed them.
     """
+    from naoloc.mapping.builder import carried
+
     out = []
     for stop, kf in data.far:
-        step = relative_pose(data.keyframes[stop].pose, kf.pose)
-        out.append((stop, dataclasses.replace(kf, pose=(keyframes[stop].pose * step).normalized())))
+        pose = carried(keyframes[stop].pose, data.keyframes[stop].pose, kf.pose)
+        out.append((stop, dataclasses.replace(kf, pose=pose)))
     return out
 
 
@@ -185,7 +187,7 @@ def build_from_dataset(
     timings = vmap.timings
     summary = {
         "images": int(vmap.images),
-        "far_images": int(vmap.images - vmap.wall_images),
+        "far_images": int(vmap.far_images),
         "neurons": len(vmap.neuron_poses),
         "distinct_poses": int(vmap.distinct_poses),
         "features_s": round(float(timings.get("features_s", 0.0)), 3),

@@ -383,7 +383,7 @@ def map_task(task: MapTask) -> dict[str, Any]:
         "name": task.name,
         "map": task.map_path,
         "images": int(vmap.wall_images),  # the GCS's training images (Table 2)
-        "far_images": int(vmap.images - vmap.wall_images),
+        "far_images": int(vmap.far_images),
         "neurons": cfg.neurons,
         "epochs": cfg.epochs,
         "features": cfg.features,

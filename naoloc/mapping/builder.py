@@ -49,6 +49,12 @@ def _neuron_poses(
     return out, view
 
 
+def carried(stop_now: Pose2D, stop_then: Pose2D, far_then: Pose2D) -> Pose2D:
+    """A far picture's pose once its stop's wall picture moved from ``stop_then`` to
+    ``stop_now``: the same odometry step from the wall picture to it (map frame)."""
+    return (stop_now * relative_pose(stop_then, far_then)).normalized()
+
+
 def ride_with_stops(walls: np.ndarray, given: np.ndarray, stops: Sequence[int]) -> np.ndarray:
     """Every keyframe's pose once the wall pictures' poses are refined: the far pictures
     (rows after the walls) move with the wall picture of their stop.
@@ -64,8 +70,8 @@ def ride_with_stops(walls: np.ndarray, given: np.ndarray, stops: Sequence[int]) 
     """
     rows = [walls]
     for j, s in enumerate(stops):
-        step = relative_pose(Pose2D(*given[s]), Pose2D(*given[walls.shape[0] + j]))
-        rows.append(np.array([(Pose2D(*walls[s]) * step).normalized().to_list()]))
+        pose = carried(Pose2D(*walls[s]), Pose2D(*given[s]), Pose2D(*given[walls.shape[0] + j]))
+        rows.append(np.array([pose.to_list()]))
     return np.concatenate(rows, axis=0)
 
 

@@ -77,11 +77,15 @@ class MapData:
         return int(self.keyframe_poses.shape[0])
 
     @property
-    def wall_images(self) -> int:
-        """Number of wall pictures: the first keyframes, the paper's training images. The
-        survey's far pictures (meta ``far_pictures``) follow them."""
+    def far_images(self) -> int:
+        """Number of the survey's far pictures (meta ``far_pictures``): the last keyframes."""
         far = self.meta.get("far_pictures", 0)
-        return self.images - (far if isinstance(far, int) and 0 <= far < self.images else 0)
+        return far if isinstance(far, int) and 0 <= far < self.images else 0
+
+    @property
+    def wall_images(self) -> int:
+        """Number of wall pictures: the first keyframes, the paper's training images."""
+        return self.images - self.far_images
 
     @property
     def distinct_poses(self) -> int:
