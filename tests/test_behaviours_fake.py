@@ -334,20 +334,34 @@ def test_localize_turns_in_place_until_confident(
 
 
 @pytest.mark.parametrize(
-    ("confirms", "alternatives", "calls", "floor_calls"),
-    [(True, False, [1], 1), (False, False, [1, 2, 3, 4], 2), (True, True, [1, 2, 3, 4], 1)],
-    ids=["confirmed-stops", "not-confirmed-turns", "look-alike-turns"],
+    ("outcome", "alternatives", "calls", "floor_calls"),
+    [
+        ("floor_confirmed", False, [1], 1),
+        ("floor_consistent", False, [1], 1),
+        ("floorlines", False, [1], 1),
+        ("undecided", False, [1, 2, 3, 4], 2),
+        ("floor_confirmed", True, [1], 1),
+    ],
+    ids=[
+        "confirmed-stops",
+        "consistent-stops",
+        "vote-winner-stops",
+        "undecided-turns",
+        "look-alike-confirmed-stops",
+    ],
 )
 def test_floor_lines_may_settle_the_first_sweep(
     monkeypatch: pytest.MonkeyPatch,
-    confirms: bool,
+    outcome: str,
     alternatives: bool,
     calls: list[int],
     floor_calls: int,
 ) -> None:
-    """A PnP pose the first sweep verifies, not confidently, is checked against the floor
-    lines before the robot turns: confirmed, the scan stops there; otherwise (or with a
-    look-alike alternative) it turns as before and the floor step runs again at the end."""
+    """A first sweep that is not confident goes to the floor step before the robot turns:
+    when the step decides (it confirms the PnP pose, keeps it by a clear margin, or a floor
+    candidate wins the vote) the scan stops there, whatever look-alike the pictures saw;
+    when it leaves the estimate as it was, the robot turns as before and the floor step
+    runs again at the end, with lines measured where the robot then stands."""
     import importlib
 
     module = importlib.import_module("naoloc.behaviours.localize")
@@ -355,10 +369,13 @@ def test_floor_lines_may_settle_the_first_sweep(
 
     def floor_fix(_r: Any, _v: Any, _c: Any, _q: Any, _f: Any, est: Estimate, _m: Any) -> Estimate:
         seen.append(est)
-        if not confirms:
+        if outcome == "undecided":
             return est
+        if outcome == "floorlines":
+            return Estimate(est.x, est.y, est.theta, 0.3, est.mode,
+                            {**est.details, "method": "floorlines"})  # fmt: skip
         return Estimate(est.x, est.y, est.theta, est.confidence, est.mode,
-                        {**est.details, "floor_confirmed": True})  # fmt: skip
+                        {**est.details, outcome: True})  # fmt: skip
 
     monkeypatch.setattr(module, "_floor_fix", floor_fix)
 
@@ -381,8 +398,38 @@ def test_floor_lines_may_settle_the_first_sweep(
     sweeps = [len(SCAN_YAWS) * k for k in calls]
     assert vmap.calls == sweeps + ([len(SCAN_YAWS)] if len(calls) > 1 else [])
     assert loc.extra_turns == len(calls) - 1 and len(seen) == floor_calls
-    assert bool(loc.estimate.details.get("floor_confirmed")) == confirms
+    if outcome == "floorlines":
+        assert loc.estimate.method == "floorlines"
+    elif outcome != "undecided":
+        assert loc.estimate.details.get(outcome) is True
     assert len(loc.queries) == sweeps[-1]
+
+
+def test_a_first_sweep_that_recognised_nothing_goes_to_the_floor_step(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """No estimate from the first sweep: the floor step still runs before any turn, and a
+    candidate that clearly wins its vote ends the scan there."""
+    import importlib
+
+    module = importlib.import_module("naoloc.behaviours.localize")
+    seen: list[Estimate] = []
+
+    def floor_fix(_r: Any, _v: Any, _c: Any, _q: Any, _f: Any, est: Estimate, _m: Any) -> Estimate:
+        seen.append(est)
+        return Estimate(1.0, 2.0, 0.5, 0.3, "verified", {"method": "floorlines"})
+
+    monkeypatch.setattr(module, "_floor_fix", floor_fix)
+    cfg = small_cfg()
+    with connect(cfg) as robot:
+        sim = robot.sim
+        assert sim is not None
+        vmap = UnsureMap(robot, Pose2D.from_list(sim.true_pose()), (0.0,))
+        loc = localize(robot, vmap, cfg)  # type: ignore[arg-type]
+        assert not robot.motion.moveIsActive()
+    assert len(seen) == 1 and not seen[0].found
+    assert loc.extra_turns == 0 and len(loc.queries) == len(SCAN_YAWS)
+    assert loc.estimate.method == "floorlines" and loc.estimate.found
 
 
 @pytest.mark.parametrize("floor_ran", [True, False], ids=["floor-step-ran", "no-floor-step"])

@@ -71,7 +71,7 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "images": "pictures used",
         "extra_turns": (
             "quarter turns in place made because the estimate was not confident (0 also when "
-            "the floor lines confirmed the first sweep's pose)"
+            "the floor lines settled the first sweep)"
         ),
         "error_m": "distance to the truth (m); simulator only",
         "heading_error_deg": "heading error (deg); simulator only",
