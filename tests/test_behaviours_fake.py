@@ -334,17 +334,19 @@ def test_localize_turns_in_place_until_confident(
 
 
 @pytest.mark.parametrize(
-    ("outcome", "alternatives", "calls", "floor_calls"),
+    ("outcome", "support", "alternatives", "calls", "floor_calls"),
     [
-        ("floor_confirmed", False, [1], 1),
-        ("floor_consistent", False, [1], 1),
-        ("floorlines", False, [1], 1),
-        ("undecided", False, [1, 2, 3, 4], 2),
-        ("floor_confirmed", True, [1], 1),
+        ("floor_confirmed", 5, False, [1], 1),
+        ("floor_consistent", 33, False, [1], 1),
+        ("floor_consistent", 6, False, [1, 2, 3, 4], 2),
+        ("floorlines", 40, False, [1], 1),
+        ("undecided", 0, False, [1, 2, 3, 4], 2),
+        ("floor_confirmed", 5, True, [1], 1),
     ],
     ids=[
         "confirmed-stops",
         "consistent-stops",
+        "consistent-but-weak-turns",
         "vote-winner-stops",
         "undecided-turns",
         "look-alike-confirmed-stops",
@@ -353,13 +355,15 @@ def test_localize_turns_in_place_until_confident(
 def test_floor_lines_may_settle_the_first_sweep(
     monkeypatch: pytest.MonkeyPatch,
     outcome: str,
+    support: int,
     alternatives: bool,
     calls: list[int],
     floor_calls: int,
 ) -> None:
     """A first sweep that is not confident goes to the floor step before the robot turns:
-    when the step decides (it confirms the PnP pose, keeps it by a clear margin, or a floor
-    candidate wins the vote) the scan stops there, whatever look-alike the pictures saw;
+    when the step decides (it confirms the PnP pose, keeps it by a clear margin and enough
+    support, or a floor candidate wins the vote) the scan stops there, whatever look-alike
+    the pictures saw;
     when it leaves the estimate as it was, the robot turns as before and the floor step
     runs again at the end, with lines measured where the robot then stands."""
     import importlib
@@ -375,7 +379,7 @@ def test_floor_lines_may_settle_the_first_sweep(
             return Estimate(est.x, est.y, est.theta, 0.3, est.mode,
                             {**est.details, "method": "floorlines"})  # fmt: skip
         return Estimate(est.x, est.y, est.theta, est.confidence, est.mode,
-                        {**est.details, outcome: True})  # fmt: skip
+                        {**est.details, outcome: True, "floor_support": support})  # fmt: skip
 
     monkeypatch.setattr(module, "_floor_fix", floor_fix)
 
@@ -401,7 +405,7 @@ def test_floor_lines_may_settle_the_first_sweep(
     if outcome == "floorlines":
         assert loc.estimate.method == "floorlines"
     elif outcome != "undecided":
-        assert loc.estimate.details.get(outcome) is True
+        assert loc.estimate.details.get(outcome) is True  # the last floor step's word
     assert len(loc.queries) == sweeps[-1]
 
 

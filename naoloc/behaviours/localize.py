@@ -543,8 +543,10 @@ def _worth_early_floor(estimate: Estimate) -> bool:
 
 def _floor_decided(estimate: Estimate) -> bool:
     """Whether the floor step decided an estimate: it confirmed the PnP pose, kept it by a
-    clear margin (``floor_consistent``), or a candidate clearly won the vote (method
-    ``floorlines``). Otherwise it left the estimate as it was.
+    clear margin (``floor_consistent``, here also with :data:`FLOOR_MIN_SUPPORT`: one
+    sweep's pictures are few, and a pose kept with 6 against 4 was 0.57 m off), or a
+    candidate clearly won the vote (method ``floorlines``). Otherwise it left the estimate
+    as it was.
 
     A first sweep settled so (twelve rooms, 240 poses, `tools/bench_scan_cpu.py`) was as
     right as one that turned on (97.1 % within 0.3 m both, p90 0.055 against 0.073 m),
@@ -552,9 +554,9 @@ def _floor_decided(estimate: Estimate) -> bool:
     (68 % of the scans, now 97 %).
     """
     d = estimate.details
-    return bool(d.get("floor_confirmed") or d.get("floor_consistent")) or (
-        estimate.method == "floorlines"
-    )
+    if d.get("floor_consistent"):  # one sweep's features: the margin alone is not enough
+        return int(d.get("floor_support", 0)) >= FLOOR_MIN_SUPPORT
+    return bool(d.get("floor_confirmed")) or estimate.method == "floorlines"
 
 
 def _standing(support: Sequence[int], from_lines: int) -> list[int]:
