@@ -19,6 +19,7 @@ W inside.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -53,6 +54,10 @@ NEAR_LINE_M = 0.6
 # A cluster of lines stays a candidate beyond a line that puts it behind a wall when it has
 # this many times as many lines as those it puts behind one (:func:`_feasible`).
 OUTVOTE = 3
+# Lines measured before a turn in place are carried to the robot now only when the lines
+# now set the turn's error modulo a quarter turn to at most this (rad): a NAO's turns err
+# about 6 % of the angle, 16 deg after three quarter turns (:func:`carry_lines`).
+CARRY_MAX_RAD = 0.35
 
 #: Where along one axis of W the landmarks put the robot: ``(theta, axis, fixed, span)`` ->
 #: ``[(coordinate, agreeing features), ...]`` for heading ``theta`` (W, rad), solving axis
@@ -174,6 +179,49 @@ def landmark_candidates(
                     swept.append((n, walls.frame * Pose2D(*xy, modulo2PI(theta))))
     swept.sort(key=lambda t: -t[0])
     return [p for _n, p in swept[:SWEEP_KEEP]]
+
+
+def carry_lines(
+    earlier: Sequence[WallLine], moved: Pose2D, now: Sequence[WallLine]
+) -> list[WallLine]:
+    """Lines measured at an earlier pose, as the robot now would see them.
+
+    A line ``{p : p . n = d}`` in the earlier FRAME_ROBOT is, for a robot that moved by
+    ``moved`` (its pose now in the earlier frame), at normal ``n - theta`` and distance
+    ``d - t . n``. The odometry's turn errs (6 % of the angle on a NAO), so the turn is
+    corrected by the lines measured now: both sets agree on the robot's heading modulo a
+    quarter turn (:func:`_line_heading`), and the earlier set is turned by the difference.
+    Carried lines give a wall the robot saw before turning but cannot see now (behind it,
+    or behind furniture from here).
+
+    Args:
+        earlier: Lines measured at the earlier pose, its FRAME_ROBOT.
+        moved: The robot's pose now in the earlier FRAME_ROBOT (odometry), m and rad.
+        now: Lines measured now, FRAME_ROBOT now.
+
+    Returns:
+        The earlier lines in FRAME_ROBOT now; none when either set agrees on no heading or
+        the correction exceeds :data:`CARRY_MAX_RAD`.
+    """
+    turned = [
+        dataclasses.replace(
+            ln,
+            normal=modulo2PI(ln.normal - moved.theta),
+            distance=ln.distance - moved.x * math.cos(ln.normal) - moved.y * math.sin(ln.normal),
+        )
+        for ln in earlier
+    ]
+    here, before = _line_heading(now), _line_heading(turned)
+    if here is None or before is None:
+        return []
+    error = math.remainder(here[1] - before[1], math.pi / 2)
+    if abs(error) > CARRY_MAX_RAD:
+        return []
+    return [
+        dataclasses.replace(ln, normal=modulo2PI(ln.normal - error))
+        for ln in turned
+        if ln.distance > 0.0
+    ]
 
 
 def _per_turn(

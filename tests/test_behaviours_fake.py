@@ -370,9 +370,13 @@ def test_floor_lines_may_settle_the_first_sweep(
 
     module = importlib.import_module("naoloc.behaviours.localize")
     seen: list[Estimate] = []
+    logs: list[Any] = []
 
-    def floor_fix(_r: Any, _v: Any, _c: Any, _q: Any, _f: Any, est: Estimate, _m: Any) -> Estimate:
+    def floor_fix(
+        _r: Any, _v: Any, _c: Any, _q: Any, _f: Any, est: Estimate, _m: Any, log: Any
+    ) -> Estimate:
         seen.append(est)
+        logs.append(log)
         if outcome == "undecided":
             return est
         if outcome == "floorlines":
@@ -407,6 +411,8 @@ def test_floor_lines_may_settle_the_first_sweep(
     elif outcome != "undecided":
         assert loc.estimate.details.get(outcome) is True  # the last floor step's word
     assert len(loc.queries) == sweeps[-1]
+    # One log per localization: the lines of the first floor step reach the last one.
+    assert all(log is logs[0] for log in logs) and logs[0] is not None
 
 
 def test_a_first_sweep_that_recognised_nothing_goes_to_the_floor_step(
@@ -419,7 +425,9 @@ def test_a_first_sweep_that_recognised_nothing_goes_to_the_floor_step(
     module = importlib.import_module("naoloc.behaviours.localize")
     seen: list[Estimate] = []
 
-    def floor_fix(_r: Any, _v: Any, _c: Any, _q: Any, _f: Any, est: Estimate, _m: Any) -> Estimate:
+    def floor_fix(
+        _r: Any, _v: Any, _c: Any, _q: Any, _f: Any, est: Estimate, _m: Any, *_: Any
+    ) -> Estimate:
         seen.append(est)
         return Estimate(1.0, 2.0, 0.5, 0.3, "verified", {"method": "floorlines"})
 
@@ -446,7 +454,9 @@ def test_an_unverified_guess_the_floor_leaves_standing_is_no_estimate(
 
     module = importlib.import_module("naoloc.behaviours.localize")
 
-    def floor_fix(_r: Any, _v: Any, _c: Any, _q: Any, _f: Any, est: Estimate, _m: Any) -> Estimate:
+    def floor_fix(
+        _r: Any, _v: Any, _c: Any, _q: Any, _f: Any, est: Estimate, _m: Any, *_: Any
+    ) -> Estimate:
         if floor_ran:
             est.details.update(floor_lines=4, floor_candidates=2, floor_support=12)
         return est

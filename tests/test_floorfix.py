@@ -8,7 +8,14 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from naoloc.floorfix import Walls, candidates, check_pose, landmark_candidates, map_walls
+from naoloc.floorfix import (
+    Walls,
+    candidates,
+    carry_lines,
+    check_pose,
+    landmark_candidates,
+    map_walls,
+)
 from naoloc.floorline import WallLine
 from naoloc.geometry import Pose2D, modulo2PI
 
@@ -220,3 +227,39 @@ def test_a_near_wall_fixes_a_coordinate_from_one_side() -> None:
     far_lines = [ym, _line(xm.distance - 0.6, xm.normal), _line(ym.distance, ym.normal)]
     landmark_candidates(far_lines, WALLS, solve, heading=(WALLS.frame * far).theta)
     assert not [a for a in asked if a[0] == 0]
+
+
+def _same_lines(a: list[WallLine], b: list[WallLine]) -> bool:
+    key = sorted((round(ln.distance, 6), round(modulo2PI(ln.normal), 6)) for ln in a)
+    return key == sorted((round(ln.distance, 6), round(modulo2PI(ln.normal), 6)) for ln in b)
+
+
+def test_lines_carried_across_a_turn_are_the_lines_now_despite_the_odometrys_turn_error() -> None:
+    """Room 377961639, pose 0: the first sweep's lines saw the wall 1 m to one side, which
+    after three quarter turns was behind the robot, so the vote had only the bookcase in
+    front of it and chose a pose 0.45 m off. Carried across the turn (odometry 6 % short
+    in angle, 3 cm of drift in place), the earlier lines are the lines the robot would
+    see now, to a micrometre."""
+    before = Pose2D(1.2, 0.7, 0.3)
+    true_move = Pose2D(0.03, -0.02, 3 * math.pi / 2)  # in the frame of ``before``
+    after = before * true_move
+    odometry = Pose2D(true_move.x, true_move.y, true_move.theta * 0.94)
+    earlier = _lines_at(before)
+    every = _lines_at(after)
+    now = [every[0], every[2]]  # the x walls seen now, the y walls in the blind spot
+    carried = carry_lines(earlier, odometry, now)
+    assert _same_lines(carried, every)
+    truth = WALLS.frame * after
+    assert candidates(now, WALLS) == []  # no y coordinate
+    assert _near(candidates([*now, *carried], WALLS), truth)
+
+
+def test_lines_are_not_carried_without_a_heading_now_or_past_the_largest_turn_error() -> None:
+    before = Pose2D(1.2, 0.7, 0.3)
+    earlier = _lines_at(before)
+    moved = Pose2D(0.0, 0.0, math.pi / 2)
+    after = before * moved
+    assert carry_lines(earlier, moved, _lines_at(after)[:1]) == []  # one line: no heading
+    # The odometry 0.5 rad off: the lines now cannot say which way to correct.
+    off = Pose2D(0.0, 0.0, math.pi / 2 + 0.5)
+    assert carry_lines(earlier, off, _lines_at(after)) == []

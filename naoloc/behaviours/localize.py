@@ -45,7 +45,7 @@ from naoloc.errors import MotionError
 from naoloc.floorline import WallLine
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
 from naoloc.keyframe import Keyframe
-from naoloc.robot import Robot
+from naoloc.robot import Robot, pose_of
 
 if TYPE_CHECKING:
     from naoloc.floorfix import Walls
@@ -364,6 +364,14 @@ def measure_floor_lines(robot: Robot, cfg: Config, meter: CpuMeter | None = None
     return lines
 
 
+@dataclass
+class FloorLog:
+    """The floor lines one localization measured so far, each set with the robot's
+    odometry pose (map-independent, the odometry frame) when it was measured."""
+
+    taken: list[tuple[Pose2D, list[WallLine]]] = dataclasses.field(default_factory=list)
+
+
 def _floor_fix(
     robot: Robot,
     vmap: VisualMap,
@@ -372,6 +380,7 @@ def _floor_fix(
     feats: Sequence[Features],
     estimate: Estimate,
     meter: CpuMeter,
+    log: FloorLog | None = None,
 ) -> Estimate:
     """The estimate, or a better one from the floor lines (:mod:`naoloc.floorfix`).
 
@@ -395,15 +404,30 @@ def _floor_fix(
     candidates take that coordinate from where the landmarks' bearings agree
     (:func:`naoloc.mapping.support.axis_peaks`); those stand in the votes only with
     :data:`FLOOR_SWEPT_MIN_SUPPORT` (``details["floor_axis_from"]`` says when one won).
+
+    With ``log``, the lines measured before a turn in place join those measured now,
+    carried by the odometry and turned to agree with them
+    (:func:`naoloc.floorfix.carry_lines`; ``details["floor_carried"]`` counts them): the
+    head sees about 290 deg around the robot, so after a turn a wall seen before may be in
+    the blind spot behind it, or hidden behind furniture from the new heading.
     """
-    from naoloc.floorfix import map_walls
+    from naoloc.floorfix import carry_lines, map_walls
 
     walls = map_walls(vmap)
     if walls is None:
         return estimate
+    here = pose_of(robot.motion) if log is not None else None
     lines = measure_floor_lines(robot, cfg, meter)
     with meter.timed():
-        return _floor_vote(vmap, walls, lines, queries, feats, estimate)
+        carried: list[WallLine] = []
+        if log is not None and here is not None:
+            for at, earlier in log.taken:
+                carried += carry_lines(earlier, relative_pose(at, here), lines)
+            log.taken.append((here, lines))
+        result = _floor_vote(vmap, walls, [*lines, *carried], queries, feats, estimate)
+        if carried:
+            result.details["floor_carried"] = len(carried)
+        return result
 
 
 def _floor_vote(
@@ -629,6 +653,7 @@ def localize(
     added = 0
     meter = CpuMeter()
     memo = MatchMemo()  # each picture's matches once, however often the map is asked
+    floor_log = FloorLog()  # lines measured before a turn join those after it
     pitch = cfg.localize.head_pitch_rad  # up toward the art; clamped per yaw by look()
     try:
         stand(robot)
@@ -654,7 +679,7 @@ def localize(
         floor = strategy == "scan" and mode == "verified" and when in ("always", "unsure")
         floored = False  # the floor step has given the estimate
         if floor and early_floor and extra_turns > 0 and _worth_early_floor(estimate):
-            checked = _floor_fix(robot, vmap, cfg, queries, feats, estimate, meter)
+            checked = _floor_fix(robot, vmap, cfg, queries, feats, estimate, meter, floor_log)
             if _floor_decided(checked):
                 estimate, floored = checked, True
                 if on_step is not None:
@@ -687,7 +712,7 @@ def localize(
                     vmap, queries[-last_sweep:], feats[-last_sweep:], estimate, mode, memo
                 )
         if floor and not floored and (when == "always" or estimate.confidence < CONFIDENT):
-            estimate = _floor_fix(robot, vmap, cfg, queries, feats, estimate, meter)
+            estimate = _floor_fix(robot, vmap, cfg, queries, feats, estimate, meter, floor_log)
             if on_step is not None:
                 on_step(f"floor lines: {estimate.method}")
         estimate = _unverified_as_none(estimate)
