@@ -97,3 +97,18 @@ def test_truncate_route_keeps_the_first_metres() -> None:
     bent = [Pose2D(1.0, 0.0), Pose2D(1.0, 1.0), Pose2D(0.0, 1.0)]
     cut = truncate_route(Pose2D(), bent, 1.5)
     assert (cut[-1].x, cut[-1].y) == pytest.approx((1.0, 0.5))
+
+
+def test_go_home_is_not_home_while_a_verified_fix_says_otherwise() -> None:
+    """A belief within the tolerance is not enough when the last fix, verified by the floor
+    lines, puts the robot farther: go-home said "reached" 0.42 m from home that way."""
+    from naoloc.behaviours.go_home import _fix_says_away
+    from naoloc.mapping import Estimate
+
+    confirmed = {"method": "pnp", "inliers": 62, "floor_confirmed": True}
+    away = Estimate(-0.40, 0.17, -0.1, 0.72, "verified", confirmed)
+    near = Estimate(-0.05, 0.03, -0.1, 0.72, "verified", confirmed)
+    unverified = Estimate(-0.40, 0.17, -0.1, 0.72, "verified", {"method": "pnp", "inliers": 62})
+    assert _fix_says_away(away, 0.15)
+    assert not _fix_says_away(near, 0.15)
+    assert not _fix_says_away(unverified, 0.15)  # the filter's belief decides then

@@ -165,6 +165,41 @@ def test_a_look_alike_seen_again_from_the_same_spot_does_not_take_over() -> None
     assert pf.belief().pose.distance(copy) < 0.1
 
 
+def test_two_floor_verified_fixes_in_a_row_move_a_wrong_belief_without_a_walk() -> None:
+    """Room 1995159885's go-home: the belief 0.4 m off, the robot side-stepping 0.2 m at a
+    time, every fix verified by the floor lines (PnP and the lines agree). Two such fixes
+    in a row that agree with each other take over, without the 0.3 m walk unverified ones
+    need; the pose-graph estimate's own verified flag comes from ``floor_confirmed``."""
+    from naoloc.fusion import fix_from_estimate
+    from naoloc.mapping import Estimate
+
+    belief, truth = Pose2D(0.15, 0.0, -0.2), Pose2D(-0.22, 0.22, -0.27)
+    details = {"method": "pnp", "inliers": 78, "floor_confirmed": True}
+    fix = fix_from_estimate(Estimate(truth.x, truth.y, truth.theta, 0.72, "verified", details))
+    assert (
+        fix.verified
+        and not fix_from_estimate(
+            Estimate(
+                truth.x, truth.y, truth.theta, 0.72, "verified", {"method": "pnp", "inliers": 78}
+            )
+        ).verified
+    )
+    pf = ParticleFilter(2000, seed=14, bounds=BOUNDS)
+    pf.reset_to(Fix(belief, 0.05, 0.05))
+    pf.update(fix)
+    assert pf.belief().pose.distance(belief) < 0.1  # one disagreement: a look-alike, maybe
+    pf.predict(Pose2D())
+    pf.update(fix)
+    assert pf.belief().pose.distance(truth) < 0.05
+    # The same two fixes without the lines' word: the belief holds (a print's copy).
+    held = ParticleFilter(2000, seed=14, bounds=BOUNDS)
+    held.reset_to(Fix(belief, 0.05, 0.05))
+    for _ in range(2):
+        held.predict(Pose2D())
+        held.update(Fix(truth, fix.sigma_xy_m, fix.sigma_theta_rad))
+    assert held.belief().pose.distance(belief) < 0.1
+
+
 def test_a_fix_with_an_alternative_keeps_the_mode_odometry_supports() -> None:
     """The pictures fit two copies of a print 0.5 m apart about equally: the fix carries both
     poses, and the belief stays on the one the odometry carried it to."""

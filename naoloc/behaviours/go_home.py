@@ -34,6 +34,7 @@ from naoloc.robot import Robot, pose_of
 
 if TYPE_CHECKING:
     from naoloc.mapping import VisualMap
+    from naoloc.mapping.localizer import Estimate
 
 
 @dataclass
@@ -237,7 +238,12 @@ def go_home(
                 here = belief.pose
                 trail.append(here)
                 confident = belief.spread_m <= CONFIDENT_SPREAD_M
-                if est.found and confident and math.hypot(here.x, here.y) <= tolerance:
+                if (
+                    est.found
+                    and confident
+                    and math.hypot(here.x, here.y) <= tolerance
+                    and not _fix_says_away(est, tolerance)
+                ):
                     if math.hypot(here.x, here.y) <= RESIDUAL_M or settles >= SETTLES:
                         reached = True
                         break
@@ -275,6 +281,15 @@ def go_home(
     return GoHomeResult(
         rounds[-1], tries, reached, rounds, truth, error, walked, trail, beliefs, bumps, reason
     )
+
+
+def _fix_says_away(estimate: Estimate, tolerance: float) -> bool:
+    """Whether a fix the floor lines verified puts the robot farther than ``tolerance``
+    (m) from home: then the robot is not home, whatever the belief says (it walks on, and
+    the filter takes such fixes in a row as a wrong belief, :class:`ParticleFilter`)."""
+    if not fix_from_estimate(estimate).verified:
+        return False
+    return math.hypot(estimate.x, estimate.y) > tolerance
 
 
 def _leg_length(here: Pose2D, route: list[Pose2D], longest_m: float) -> float:

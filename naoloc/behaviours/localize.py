@@ -472,6 +472,16 @@ def _floor_vote(
         if near:
             details = dict(estimate.details)
             details.update(info, floor_confirmed=True)
+            alternatives = details.get("alternatives") or []
+            if alternatives:
+                # A look-alike place the lines allow no pose near is ruled out: a filter
+                # fed this fix no longer weighs it (fusion.Fix.verified).
+                allowed = [a for a in alternatives if any(
+                    _close(c, Pose2D(a[0], a[1], a[2]), FLOOR_CONFIRM_M, FLOOR_CONFIRM_RAD)
+                    for c in cands
+                )]  # fmt: skip
+                details["alternatives"] = allowed
+                details["floor_ruled_out"] = len(alternatives) - len(allowed)
             pick = 0
             if len(near) > 1:  # a vote only when there is a choice (matching: 0.1-0.2 s)
                 votes = pose_support(near)
