@@ -30,6 +30,15 @@ class NoPath(NaolocError):
     """No passable path between two places of the grid."""
 
 
+# A start inside an inflated obstacle tries this many of the nearest passable cells the goal
+# can be reached from for a straight step that crosses no blocked cell (:meth:`FloorGrid.plan`).
+ESCAPE_TRIES = 400
+# Failing that, the nearest such cell within this (m), across blocked cells: near a wall the
+# landmarks of a skirting or a radiator block cells the robot stands among (room
+# 1995159885: a start 0.3 m from a wall fenced in by them, 0.36 m from open floor).
+ESCAPE_M = 0.6
+
+
 @dataclass
 class FloorGrid:
     """An occupancy grid of the floor in the map frame.
@@ -139,7 +148,13 @@ class FloorGrid:
     def plan(self, start: Pose2D, goal: Pose2D) -> list[Pose2D]:
         """The cheapest passable path from ``start`` to ``goal`` (map frame).
 
-        A start or goal inside an inflated obstacle is moved to the nearest passable cell.
+        A goal inside an inflated obstacle is moved to the nearest passable cell. So is a
+        start, but to the nearest one the goal can be reached from and that a straight step
+        reaches without crossing a blocked cell, or else the nearest one the goal can be
+        reached from within :data:`ESCAPE_M`: the nearest passable cell may lie in a pocket
+        that only the inflation closes (room 1995159885: a start 0.3 m from a wall, its
+        nearest passable cells five cells fenced in, and go-home gave up there). The path
+        then steps to that cell first.
 
         Returns:
             Waypoints after ``start``, ending at ``goal`` (positions; headings 0).
@@ -150,8 +165,8 @@ class FloorGrid:
         ok = self.passable()
         if not ok.any():
             raise NoPath("the floor grid has no passable cell")
-        s = self._nearest_ok(ok, *self.index(start.x, start.y))
         g = self._nearest_ok(ok, *self.index(goal.x, goal.y))
+        s = self._start_cell(ok, g, start)
         cost = np.where(self.cells == FREE, FREE_COST, UNKNOWN_COST) * self.resolution
         cells = _astar(ok, cost, s, g)
         if cells is None:
@@ -161,7 +176,37 @@ class FloorGrid:
             )
         pts = [self.centre(r, c) for r, c in _shortcut(ok, cost, cells)]
         pts[-1] = (goal.x, goal.y) if ok[self.index(goal.x, goal.y)] else pts[-1]
-        return [Pose2D(x, y) for x, y in pts[1:]] or [Pose2D(goal.x, goal.y)]
+        # A start moved out of an inflated obstacle steps to its cell first (a straight step
+        # that crosses nothing blocked), then on.
+        moved = s != self.index(start.x, start.y) and len(pts) > 1
+        return [Pose2D(x, y) for x, y in pts[0 if moved else 1 :]] or [Pose2D(goal.x, goal.y)]
+
+    def _start_cell(self, ok: np.ndarray, goal: tuple[int, int], start: Pose2D) -> tuple[int, int]:
+        """Where a path from ``start`` begins (see :meth:`plan`)."""
+        r, c = self.index(start.x, start.y)
+        if ok[r, c]:
+            return r, c
+        rows, cols = np.nonzero(_reachable(ok, goal))
+        order = np.argsort((rows - r) ** 2 + (cols - c) ** 2, kind="stable")
+        for k in order[:ESCAPE_TRIES]:
+            cell = (int(rows[k]), int(cols[k]))
+            if self._clear_step(start, self.centre(*cell)):
+                return cell
+        if len(order):  # blocked cells on every step: maybe landmarks, not furniture
+            cell = (int(rows[order[0]]), int(cols[order[0]]))
+            if math.dist(self.centre(*cell), (start.x, start.y)) <= ESCAPE_M:
+                return cell  # a walk that meets something stops, marks it and re-plans
+        return self._nearest_ok(ok, r, c)
+
+    def _clear_step(self, start: Pose2D, end: tuple[float, float]) -> bool:
+        """Whether the straight step from ``start`` to ``end`` (map frame) crosses no
+        blocked cell (inflated ones are crossed: the robot already stands in one)."""
+        n = max(2, math.ceil(math.dist((start.x, start.y), end) / (0.5 * self.resolution)) + 1)
+        for f in np.linspace(0.0, 1.0, n):
+            x, y = start.x + f * (end[0] - start.x), start.y + f * (end[1] - start.y)
+            if self.cells[self.index(x, y)] == BLOCKED:
+                return False
+        return True
 
     def _nearest_ok(self, ok: np.ndarray, r: int, c: int) -> tuple[int, int]:
         if ok[r, c]:
@@ -169,6 +214,15 @@ class FloorGrid:
         rows, cols = np.nonzero(ok)
         k = int(np.argmin((rows - r) ** 2 + (cols - c) ** 2))
         return int(rows[k]), int(cols[k])
+
+
+def _reachable(ok: np.ndarray, cell: tuple[int, int]) -> np.ndarray:
+    """The passable cells 8-connected to ``cell`` (itself passable), as A* moves."""
+    import cv2
+
+    _n, labels = cv2.connectedComponents(ok.astype(np.uint8), connectivity=8)
+    out: np.ndarray = labels == labels[cell]
+    return out
 
 
 def _astar(

@@ -37,6 +37,34 @@ def test_path_goes_around_a_chair() -> None:
     assert straight < path_length(start, path) < straight + 1.5
 
 
+def test_a_start_beside_a_pocket_the_inflation_closes_leaves_toward_the_goal() -> None:
+    """Room 1995159885: a start 0.3 m from a wall, inside the inflated band; its nearest
+    passable cells were a pocket that only the inflation of a wall and furniture closes, and
+    go-home gave up there (no path). The path now begins at the nearest cell the goal can be
+    reached from by a step that crosses nothing blocked; a start truly walled in (blocked
+    cells between it and every such cell) still has no path."""
+    grid = FloorGrid.empty((0.0, 0.0, 4.0, 4.0), 0.05, robot_radius=0.15)
+    box = [(x, y) for x in np.arange(2.0, 2.61, 0.05) for y in (2.6,)]  # a U of furniture
+    box += [(x, y) for x in (2.0, 2.6) for y in np.arange(2.0, 2.61, 0.05)]
+    box += [(x, 2.0) for x in np.arange(2.0, 2.61, 0.05) if not 2.22 < x < 2.38]  # a gap
+    for x, y in box:
+        grid.cells[grid.index(float(x) + 0.01, float(y) + 0.01)] = BLOCKED
+    ok = grid.passable()
+    start, goal = Pose2D(2.3, 2.07), Pose2D(0.5, 0.5)
+    r, c = grid.index(start.x, start.y)
+    assert not ok[r, c]  # in the gap, inside the inflation
+    pocket = grid._nearest_ok(ok, r, c)
+    assert grid.centre(*pocket)[1] > 2.1  # the nearest passable cell is inside the U
+    path = grid.plan(start, goal)
+    assert path[-1].distance(goal) < 1e-9
+    assert _clear(grid, path, start)
+    # Close the gap with blocked cells: the start is walled in, nothing to escape to.
+    for x in np.arange(2.2, 2.41, 0.05):
+        grid.cells[grid.index(float(x) + 0.01, 2.01)] = BLOCKED
+    with pytest.raises(NoPath):
+        grid.plan(Pose2D(2.3, 2.3), goal)
+
+
 def test_walls_are_never_crossed() -> None:
     grid = FloorGrid.empty((0.0, 0.0, 4.0, 2.0), 0.1, robot_radius=0.1)
     grid.cells[:, 19:21] = BLOCKED  # a wall across the room...
