@@ -33,11 +33,12 @@ from naoloc.geometry import Pose2D, modulo2PI, wrap_angles
 MISSES_TO_RECOVER = 2
 MISSES_STILL = 4
 RECOVER_WALK_M = 0.3
-# Fixes the floor lines verified (:attr:`Fix.verified`) recover after MISSES_TO_RECOVER
-# however little the robot walked: the lines and the landmarks agree on them, which a
-# look-alike print alone does not make happen. Room 1995159885 (two copies of a print): a
-# go-home belief 0.4 m off ignored six verified fixes (1-2 cm from the truth) during its
-# last 0.2 m side-steps, and declared the robot home 0.42 m from it.
+# A fix the floor lines verified (:attr:`Fix.verified`) that no particle explains recovers
+# the belief at once: the lines and the landmarks agree on it, which a look-alike print
+# alone does not make happen (of 420 anywhere localizations, 2 verified poses were wrong).
+# Room 1995159885's go-home: beliefs 0.4-0.6 m off after a walk (the odometry's error)
+# ignored verified fixes 1-10 cm from the truth, declared the robot home 0.42 m from it,
+# or ran out of walks creeping on 0.5 m legs.
 # Gate of a fix, in standard deviations (position and heading together).
 GATE_SIGMAS = 4.0
 # The belief's pose is the mean of the particles within this radius (m) of the densest place,
@@ -217,7 +218,6 @@ class ParticleFilter:
         # The last fix no particle explained, carried by odometry since, with its sigmas.
         self._missed: tuple[Pose2D, float, float] | None = None
         self._walked_since_miss = 0.0  # odometry distance since the first of those fixes, m
-        self._misses_verified = False  # every fix of the current run of misses was verified
         self.states = self._uniform(particles)
         self.weights = np.full(particles, 1.0 / particles)
         self.fixes = 0
@@ -315,11 +315,11 @@ class ParticleFilter:
         is a disagreement; one alone is taken for a look-alike place and only re-weights.
         When :data:`MISSES_TO_RECOVER` disagreements in a row agree with each other (the
         earlier one carried by the odometry since, its uncertainty grown by the motion
-        noise) and the robot walked :data:`RECOVER_WALK_M` between them or all of them were
-        verified by the floor lines (else :data:`MISSES_STILL` of them), the belief is
-        taken to be wrong (a kidnapped robot, a wrong start): half the particles are drawn
-        afresh, around the fix and over the whole floor, and all are weighed by the fix, so
-        the belief moves to it in this update.
+        noise) and the robot walked :data:`RECOVER_WALK_M` between them (else
+        :data:`MISSES_STILL` of them), or at once when the fix was verified by the floor
+        lines, the belief is taken to be wrong (a kidnapped robot, a wrong start): half the
+        particles are drawn afresh, around the fix and over the whole floor, and all are
+        weighed by the fix, so the belief moves to it in this update.
 
         Args:
             fix: The map's pose and its uncertainty, map frame.
@@ -335,11 +335,10 @@ class ParticleFilter:
             self.misses = self.misses + 1 if agrees else 1
             if self.misses == 1:
                 self._walked_since_miss = 0.0
-                self._misses_verified = fix.verified
-            self._misses_verified = self._misses_verified and fix.verified
             self._missed = (fix.pose, fix.sigma_xy_m, fix.sigma_theta_rad)
-            walked = self._walked_since_miss >= RECOVER_WALK_M or self._misses_verified
-            if self.misses >= (MISSES_TO_RECOVER if walked else MISSES_STILL):
+            walked = self._walked_since_miss >= RECOVER_WALK_M
+            needed = MISSES_TO_RECOVER if walked else MISSES_STILL
+            if fix.verified or self.misses >= needed:
                 recover = True
                 self.misses, self._missed = 0, None
         like = self._likelihood(fix)
