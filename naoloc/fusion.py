@@ -33,12 +33,6 @@ from naoloc.geometry import Pose2D, modulo2PI, wrap_angles
 MISSES_TO_RECOVER = 2
 MISSES_STILL = 4
 RECOVER_WALK_M = 0.3
-# A fix the floor lines verified (:attr:`Fix.verified`) that no particle explains recovers
-# the belief at once: the lines and the landmarks agree on it, which a look-alike print
-# alone does not make happen (of 420 anywhere localizations, 2 verified poses were wrong).
-# Room 1995159885's go-home: beliefs 0.4-0.6 m off after a walk (the odometry's error)
-# ignored verified fixes 1-10 cm from the truth, declared the robot home 0.42 m from it,
-# or ran out of walks creeping on 0.5 m legs.
 # Gate of a fix, in standard deviations (position and heading together).
 GATE_SIGMAS = 4.0
 # The belief's pose is the mean of the particles within this radius (m) of the densest place,
@@ -338,6 +332,11 @@ class ParticleFilter:
             self._missed = (fix.pose, fix.sigma_xy_m, fix.sigma_theta_rad)
             walked = self._walked_since_miss >= RECOVER_WALK_M
             needed = MISSES_TO_RECOVER if walked else MISSES_STILL
+            # A fix the floor lines verified recovers at once: the lines and the landmarks
+            # agree on it, which a look-alike print alone does not make happen (of 420
+            # anywhere localizations, 2 verified poses were wrong). Room 1995159885's
+            # go-home: beliefs 0.4-0.6 m off after a walk ignored verified fixes 1-10 cm
+            # from the truth, declared the robot home 0.42 m from it, or ran out of walks.
             if fix.verified or self.misses >= needed:
                 recover = True
                 self.misses, self._missed = 0, None

@@ -103,12 +103,15 @@ def test_go_home_is_not_home_while_a_verified_fix_says_otherwise() -> None:
     """A belief within the tolerance is not enough when the last fix, verified by the floor
     lines, puts the robot farther: go-home said "reached" 0.42 m from home that way."""
     from naoloc.behaviours.go_home import _fix_says_away
+    from naoloc.fusion import fix_from_estimate
     from naoloc.mapping import Estimate
 
     confirmed = {"method": "pnp", "inliers": 62, "floor_confirmed": True}
     away = Estimate(-0.40, 0.17, -0.1, 0.72, "verified", confirmed)
     near = Estimate(-0.05, 0.03, -0.1, 0.72, "verified", confirmed)
     unverified = Estimate(-0.40, 0.17, -0.1, 0.72, "verified", {"method": "pnp", "inliers": 62})
-    assert _fix_says_away(away, 0.15)
-    assert not _fix_says_away(near, 0.15)
-    assert not _fix_says_away(unverified, 0.15)  # the filter's belief decides then
+    assert _fix_says_away(fix_from_estimate(away), 0.15)
+    assert not _fix_says_away(fix_from_estimate(near), 0.15)
+    assert not _fix_says_away(
+        fix_from_estimate(unverified), 0.15
+    )  # the filter's belief decides then

@@ -27,14 +27,13 @@ import numpy as np
 from naoloc.behaviours.camera import Camera
 from naoloc.behaviours.localize import Localization, estimate_fields, localize, truth_in_map
 from naoloc.config import Config
-from naoloc.fusion import Belief, ParticleFilter, fix_from_estimate
+from naoloc.fusion import Belief, Fix, ParticleFilter, fix_from_estimate
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
 from naoloc.planning import BLOCKED, FloorGrid, NoPath, grid_from_map
 from naoloc.robot import Robot, pose_of
 
 if TYPE_CHECKING:
     from naoloc.mapping import VisualMap
-    from naoloc.mapping.localizer import Estimate
 
 
 @dataclass
@@ -216,8 +215,8 @@ def go_home(
                         bumps.append(stalled)
                         grid.mark(stalled.x, stalled.y, BUMP_RADIUS_M, BLOCKED)
                 last_leg = None
-                if est.found:
-                    fix = fix_from_estimate(est)
+                fix = fix_from_estimate(est) if est.found else None
+                if fix is not None:
                     if pf is None:
                         pf = ParticleFilter(
                             PARTICLES, seed=cfg.map.seed, bounds=grid.bounds(),
@@ -239,10 +238,10 @@ def go_home(
                 trail.append(here)
                 confident = belief.spread_m <= CONFIDENT_SPREAD_M
                 if (
-                    est.found
+                    fix is not None
                     and confident
                     and math.hypot(here.x, here.y) <= tolerance
-                    and not _fix_says_away(est, tolerance)
+                    and not _fix_says_away(fix, tolerance)
                 ):
                     if math.hypot(here.x, here.y) <= RESIDUAL_M or settles >= SETTLES:
                         reached = True
@@ -283,13 +282,11 @@ def go_home(
     )
 
 
-def _fix_says_away(estimate: Estimate, tolerance: float) -> bool:
+def _fix_says_away(fix: Fix, tolerance: float) -> bool:
     """Whether a fix the floor lines verified puts the robot farther than ``tolerance``
     (m) from home: then the robot is not home, whatever the belief says (it walks on, and
-    the filter takes such fixes in a row as a wrong belief, :class:`ParticleFilter`)."""
-    if not fix_from_estimate(estimate).verified:
-        return False
-    return math.hypot(estimate.x, estimate.y) > tolerance
+    the filter moves to such a fix, :class:`ParticleFilter`)."""
+    return fix.verified and math.hypot(fix.pose.x, fix.pose.y) > tolerance
 
 
 def _leg_length(here: Pose2D, route: list[Pose2D], longest_m: float) -> float:
