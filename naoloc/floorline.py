@@ -360,7 +360,7 @@ def fit_line(points: np.ndarray, seed: int = 0) -> tuple[np.ndarray, np.ndarray]
     for _ in range(2):
         p = points[inl]
         centre = p.mean(axis=0)
-        _, _, vt = np.linalg.svd(p - centre)
+        _, _, vt = np.linalg.svd(p - centre, full_matrices=False)  # not the n x n U
         direction = vt[0]
         normal = np.array([-direction[1], direction[0]])
         inl = np.abs((points - centre) @ normal) < RANSAC_TOLERANCE_M
