@@ -214,3 +214,23 @@ def test_a_fix_with_an_alternative_keeps_the_mode_odometry_supports() -> None:
         pf.predict(Pose2D())
         pf.update(fix)
     assert pf.belief().pose.distance(here) < 0.05 and pf.misses == 0
+
+
+def test_a_clear_floor_line_vote_gives_a_tighter_fix() -> None:
+    """A floor-line pose that won its vote clearly (142 against 6) is trusted to a few
+    centimetres; a narrow win (21 against 15), or one whose second coordinate came from
+    the landmarks' bearings, keeps the wide sigma."""
+    from naoloc.fusion import FLOOR_SIGMA_M, FLOOR_SURE_SIGMA_M, fix_from_estimate
+    from naoloc.mapping import Estimate
+
+    def fix(**details: object) -> float:
+        est = Estimate(1.0, 2.0, 0.5, 0.6, "verified", {"method": "floorlines", **details})
+        return fix_from_estimate(est).sigma_xy_m
+
+    assert fix(floor_support=142, floor_rival=6) == FLOOR_SURE_SIGMA_M
+    assert fix(floor_support=142, floor_rival=0) == FLOOR_SURE_SIGMA_M
+    assert fix(floor_support=21, floor_rival=15) == FLOOR_SIGMA_M
+    assert fix(floor_support=39, floor_rival=1) == FLOOR_SIGMA_M
+    assert fix(floor_support=142, floor_rival=40) == FLOOR_SIGMA_M
+    assert fix(floor_support=148, floor_rival=6, floor_axis_from="landmarks") == FLOOR_SIGMA_M
+    assert fix() == FLOOR_SIGMA_M
