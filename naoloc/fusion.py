@@ -35,6 +35,12 @@ MISSES_STILL = 4
 RECOVER_WALK_M = 0.3
 # Gate of a fix, in standard deviations (position and heading together).
 GATE_SIGMAS = 4.0
+# A fix explains the belief when at least this share of its weight lies within the gate;
+# less is a disagreement. A belief that drifted off (room 1995159885's go-home: spread
+# 0.6-1.4 m, 0.8-1.0 m from fixes that agreed with each other and with the truth to 0.1 m)
+# kept 0.1-0.5 % of its weight near them: such a fix re-weighted it a little, did not move
+# it, and reset the count of disagreements, so it never recovered.
+EXPLAINED_MIN = 0.05
 # The belief's pose is the mean of the particles within this radius (m) of the densest place,
 # so particles elsewhere (injected, or on a look-alike place) do not drag it between modes.
 MODE_RADIUS_M = 0.5
@@ -329,8 +335,9 @@ class ParticleFilter:
     def update(self, fix: Fix) -> None:
         """Weigh the particles by a visual fix, then resample (with recovery injection).
 
-        A fix that no particle explains (no weight within a :data:`GATE_SIGMAS` gate of it)
-        is a disagreement; one alone is taken for a look-alike place and only re-weights.
+        A fix the belief does not explain (less than :data:`EXPLAINED_MIN` of its weight
+        within a :data:`GATE_SIGMAS` gate of it) is a disagreement; one alone is taken for a
+        look-alike place and only re-weights.
         When :data:`MISSES_TO_RECOVER` disagreements in a row agree with each other (the
         earlier one carried by the odometry since, its uncertainty grown by the motion
         noise) and the robot walked :data:`RECOVER_WALK_M` between them (else
@@ -346,7 +353,7 @@ class ParticleFilter:
         explained = float(np.sum(self.weights * gate))
         self.fixes += 1
         recover = False
-        if explained >= 1e-3:
+        if explained >= EXPLAINED_MIN:
             self.misses, self._missed = 0, None
         else:
             agrees = self._missed is None or self._agrees(fix, self._missed)
