@@ -128,9 +128,18 @@ class FloorGrid:
         x0, y0 = self.origin
         return (x0, y0, x0 + nx * self.resolution, y0 + ny * self.resolution)
 
-    def free_test(self) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-        """A vectorised ``free(xs, ys)``: passable cells (as of now), False off the grid."""
-        ok = self.passable()
+    def free_test(
+        self, *, clearance: bool = True
+    ) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+        """A vectorised ``free(xs, ys)`` (as of now), False off the grid.
+
+        Args:
+            clearance: Passable cells, robot_radius from every blocked one (where a path
+                may lead); False: every cell not blocked itself (where the robot may stand:
+                a particle filter's test, since furniture's landmarks are placed to a
+                decimetre or two and a robot stands closer to a table than a path keeps).
+        """
+        ok = self.passable() if clearance else self.cells != BLOCKED
         ny, nx = ok.shape
         x0, y0, res = self.origin[0], self.origin[1], self.resolution
 
@@ -316,7 +325,8 @@ def grid_from_map(
       the landmarks' x and y the floor is blocked.
     - Landmarks between ``obstacle_heights`` (m above the floor) and more than
       ``wall_margin`` inside the walls are furniture or clutter: blocked.
-    - Every survey keyframe pose marks a disc of ``walked_radius`` free (it was walked).
+    - Every survey keyframe pose, and the map origin where the survey started, marks a disc
+      of ``walked_radius`` free (it was walked).
 
     Args:
         keyframe_poses: ``(N, 3)`` survey poses, map frame.
@@ -363,7 +373,8 @@ def grid_from_map(
     )
     for x, y, _z in pts[inner]:
         grid.mark(float(x), float(y), resolution, BLOCKED)
-    # Where the survey walked is free, whatever a stray landmark said.
-    for x, y, _t in poses:
+    # Where the survey walked is free, whatever a stray landmark said; it started at the
+    # map origin (the odometry's origin), where no keyframe may have been taken.
+    for x, y, _t in np.vstack([poses, np.zeros((1, 3))]):
         grid.mark(float(x), float(y), walked_radius, FREE, force=True)
     return grid

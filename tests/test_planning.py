@@ -107,3 +107,24 @@ def test_grid_from_map_blocks_furniture_and_frees_the_circuit() -> None:
     assert grid.cells[grid.index(1.0, 3.0)] != BLOCKED  # floor features are not obstacles
     path = grid.plan(Pose2D(3.0, 3.0), Pose2D(0.0, 0.0))
     assert _clear(grid, path, Pose2D(3.0, 3.0)) and math.isfinite(path_length(Pose2D(3, 3), path))
+
+
+def test_the_survey_start_is_free_and_the_filter_may_stand_by_furniture() -> None:
+    """Room 1789164527: a bench's landmarks 0.1-0.8 m beside the survey start, whose first
+    keyframe was taken 0.27 m on (here 0.4 m). The start (the map origin, home) was blocked by the
+    bench's clearance, and the particle filter, given the passable cells, dropped every
+    particle that stood where the robot truly stood: go-home ended 0.13-0.55 m from home.
+    The origin is walked floor; the filter's test keeps no clearance."""
+    circuit = np.array([[0.35, 0.2, 0.0], [0.56, 0.3, 0.0], [0.8, 0.4, 0.0]])
+    walls = [[x, y, 0.5] for x in np.linspace(-1.0, 2.0, 31) for y in (-1.0, 2.0)]
+    walls += [[x, y, 0.5] for y in np.linspace(-1.0, 2.0, 31) for x in (-1.0, 2.0)]
+    bench = [[x, y, 0.4] for x in np.linspace(-0.4, 0.6, 11) for y in (-0.2, -0.5, -0.8)]
+    grid = grid_from_map(circuit, np.array(walls + bench))
+    assert grid.cells[grid.index(0.0, 0.0)] == FREE  # where the survey started
+    assert grid.cells[grid.index(0.0, -0.5)] == BLOCKED  # the bench
+    standing = grid.free_test(clearance=False)
+    passing = grid.free_test()
+    at = (np.array([0.0, 0.0, 0.0]), np.array([0.0, -0.1, -0.5]))
+    assert standing(*at).tolist() == [True, True, False]
+    assert not passing(np.array([0.0]), np.array([-0.3]))[0]  # a path keeps its clearance
+    assert standing(np.array([0.0]), np.array([-0.3]))[0]

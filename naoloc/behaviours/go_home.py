@@ -220,7 +220,7 @@ def go_home(
                     if pf is None:
                         pf = ParticleFilter(
                             PARTICLES, seed=cfg.map.seed, bounds=grid.bounds(),
-                            free=grid.free_test(),
+                            free=grid.free_test(clearance=False),
                         )  # fmt: skip
                         pf.reset_to(fix)
                     pf.update(fix)
