@@ -124,6 +124,7 @@ class Simulation:
             np.array(self.model.vis.headlight.ambient),
             np.array(self.model.vis.headlight.diffuse),
         )
+        self.radiance = 1.0  # scene radiance over the rendered frame's (set_light_scale)
         self.set_light_scale(1.0)  # applies world.sim.light
         self._poster0 = {p.name: p for p in self.layout.posters}
         self._poster_pos0 = {
@@ -474,14 +475,25 @@ class Simulation:
 
     # ----------------------------------------------------------------------------- extras
     def set_light_scale(self, scale: float) -> None:
-        """Scale every room light and the ambient light by ``scale`` (1 = as configured)."""
+        """Scale every room light and the ambient light by ``scale`` (1 = as configured).
+
+        Up to 1 (with ``world.sim.light``) the lights themselves are scaled. Beyond 1 the
+        scene is rendered at 1 and :attr:`radiance` (the excess) multiplies what reaches
+        the camera model, before its exposure: MuJoCo clamps each surface's lighting at 1,
+        so brighter lights would wash out the contrast between floor and walls (a floor
+        lit from above saturates first) where a real room's radiances only scale, and a
+        camera's auto exposure gives back the same picture. Windows' daylight (emission)
+        scales with it too.
+        """
         if not (math.isfinite(scale) and scale >= 0):
             raise RobotError(f"light scale must be a finite number >= 0, got {scale}")
         k = scale * self.cfg.world.sim.light
-        self.model.light_diffuse[:] = self._light0[0] * k
-        self.model.light_ambient[:] = self._light0[1] * k
-        self.model.vis.headlight.ambient[:] = self._head0[0] * k
-        self.model.vis.headlight.diffuse[:] = self._head0[1] * k
+        shade = min(k, 1.0)
+        self.radiance = max(k, 1.0)
+        self.model.light_diffuse[:] = self._light0[0] * shade
+        self.model.light_ambient[:] = self._light0[1] * shade
+        self.model.vis.headlight.ambient[:] = self._head0[0] * shade
+        self.model.vis.headlight.diffuse[:] = self._head0[1] * shade
 
     def poster_names(self) -> list[str]:
         """Names of all posters, ``poster_<wall>_<k>`` with wall in x0, x1, y0, y1."""

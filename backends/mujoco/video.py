@@ -220,6 +220,7 @@ class MujocoVideo:
         rgb = self._cameras[sub.camera].process(
             self.render_rgb(sub.camera, width, height),
             time_s=stamp, fps=sub.fps, hfov=hfov, vfov=vfov, motion=self._camera_motion(sub.camera),
+            radiance=self._sim.radiance,
         )  # fmt: skip
         pixels = from_rgb(rgb, sub.colorspace)
         sec = math.floor(stamp)

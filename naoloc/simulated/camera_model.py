@@ -320,6 +320,7 @@ class CameraModel:
         hfov: float,
         vfov: float,
         motion: Motion | None = None,
+        radiance: float = 1.0,
     ) -> np.ndarray:
         """Turn a clean rendered frame into the camera's frame.
 
@@ -330,21 +331,25 @@ class CameraModel:
             hfov: Horizontal field of view of the render (rad).
             vfov: Vertical field of view of the render (rad).
             motion: The camera's velocity during the exposure (optical frame), or None.
+            radiance: The scene's radiance over the render's (>= 1: a room lit brighter
+                than the renderer can shade); the exposure sees ``rgb`` times this.
 
         Returns:
             ``(h, w, 3)`` uint8 RGB: the input itself under the ``ideal`` profile, else a new
             array.
         """
         s = self.settings
-        if s.identity:
-            return rgb
+        if s.identity:  # a fixed exposure: a brighter room is a brighter picture
+            return rgb if radiance == 1.0 else cv2.convertScaleAbs(rgb, alpha=radiance)
         height, width = rgb.shape[:2]
         geo = self._geometry_for(width, height, hfov, vfov)
         frames = self._frames_since(time_s, fps)
         self._last_time = time_s
         small = cv2.resize(rgb, (40, 30), interpolation=cv2.INTER_AREA).astype(np.float32)
         luma_small = (small @ _LUMA) * geo.vignette_small
-        total = self._update_exposure(luma_small, frames, fps)
+        if radiance != 1.0:
+            luma_small = luma_small * np.float32(radiance)
+        total = self._update_exposure(luma_small, frames, fps) * radiance
         awb = self._update_white_balance(small, frames)
 
         # Image velocity of the scene at the image centre (px/s), from the camera's motion.
