@@ -6,12 +6,16 @@ particle filter (:mod:`naoloc.fusion`). From the filter's pose it plans a path h
 floor grid the map implies (:mod:`naoloc.planning`: the floor the survey walked is free,
 walls and furniture seen as landmarks near the floor are blocked), walks the first leg of it
 (at most ``leg_m``; a leg that would arrive from farther than ``FINAL_LEG_M`` stops short)
-open-loop on odometry with ``moveTo``, and localizes again. A blocked walk (``moveTo``
-returns False, or the fixes before and after a leg show the robot went nowhere while its
-odometry counted steps) marks the place ahead of the robot blocked and the next plan goes
-around it. When a fresh fix puts the robot within ``go_home.tolerance_m`` of the origin it
-side-steps the residual, turns to face map +x and localizes again (up to ``SETTLES``
-times); it stops there, or after ``go_home.max_tries`` walks.
+open-loop on odometry with ``moveTo``, and localizes again. A leg that ends within
+``FINAL_LEG_M`` of home ends facing map +x, as the survey started: there the pictures see
+what the survey's first pictures saw, not whatever stands beside home (room 1789164527:
+facing a bench beside home, fixes erred 0.36-0.55 m and go-home gave up 0.49 m off). A
+blocked walk (``moveTo`` returns False, or the fixes before and after a leg show the robot
+went nowhere while its odometry counted steps) marks the place ahead of the robot blocked
+and the next plan goes around it. When a fresh fix puts the robot within
+``go_home.tolerance_m`` of the origin it side-steps the residual, turns to face map +x and
+localizes again (up to ``SETTLES`` times); it stops there, or after ``go_home.max_tries``
+walks.
 """
 
 from __future__ import annotations
@@ -263,7 +267,10 @@ def go_home(
                 leg = _densify(here, truncate_route(here, route, _leg_length(
                     here, route, leg_m if confident else UNSURE_LEG_M
                 )))  # fmt: skip
-                ok, dist, end = _follow(robot, here, leg, moves, ends_home=leg[-1] == route[-1])
+                near = math.hypot(leg[-1].x, leg[-1].y) <= FINAL_LEG_M
+                ok, dist, end = _follow(
+                    robot, here, leg, moves, ends_home=leg[-1] == route[-1] or near
+                )
                 walked += dist
                 trail.append(end)
                 if est.found and est.method == "pnp":
