@@ -296,3 +296,35 @@ def test_floor_lines_reads_yaml_words(text: str, value: str) -> None:
 def test_floor_lines_refuses_other_words() -> None:
     with pytest.raises(ConfigError, match="floor_lines"):
         load_config({"localize": {"floor_lines": "sometimes"}})
+
+
+def test_another_map_gets_the_floor_step_from_the_lines_already_measured(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """An evaluation re-scores a scan's pictures with other maps (features, neurons, drift
+    levels): each gets the floor step with the lines the localization measured there,
+    carried from before a turn in place, without the robot; a keyframe guess the vote
+    cannot settle is no estimate, as in a localization; no lines, no step."""
+
+    def support(_vmap: Any, _f: Any, _q: Any, poses: Sequence[Pose2D]) -> list[int]:
+        return [60 if math.hypot(p.x - TRUTH.x, p.y - TRUTH.y) < 0.01 else 0 for p in poses]
+
+    _patch(monkeypatch, support)
+    vmap = SimpleNamespace(meta=META, extract=lambda queries: [[] for _ in queries])
+    cfg = load_config({"localize": {"floor_lines": "unsure"}})
+    guess = Estimate(2.5, 2.0, 0.1, 0.1, "verified", {"method": "keyframes"})
+    # Half the lines measured before a quarter turn in place (odometry: +pi/2), half after.
+    lines = _lines()
+    before = [dataclasses.replace(ln, normal=modulo2PI(ln.normal + math.pi / 2))
+              for ln in lines[:2]]  # fmt: skip
+    turned = Pose2D(0.0, 0.0, math.pi / 2)
+    log = loc.FloorLog([(Pose2D(0.0, 0.0, 0.0), before), (turned, lines[2:])])
+    est = loc.floor_step_again(vmap, cfg, [], guess, log)  # type: ignore[arg-type]
+    assert est.method == "floorlines" and est.details["floor_carried"] == 2
+    assert math.hypot(est.x - TRUTH.x, est.y - TRUTH.y) < 1e-6
+    _patch(monkeypatch, lambda *_a: [10] * len(_a[3]))  # an even vote: nothing settles
+    none = loc.floor_step_again(vmap, cfg, [], guess, log)  # type: ignore[arg-type]
+    assert not none.found and none.details["unverified"]["method"] == "keyframes"
+    assert loc.floor_step_again(vmap, cfg, [], guess, None) is guess  # type: ignore[arg-type]
+    sure = Estimate(TRUTH.x, TRUTH.y, TRUTH.theta, 0.95, "verified", {"method": "pnp"})
+    assert loc.floor_step_again(vmap, cfg, [], sure, log) is sure  # type: ignore[arg-type]

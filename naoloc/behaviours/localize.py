@@ -140,6 +140,9 @@ class Localization:
         compute_s: CPU seconds of the map's work alone (feature extraction, the localizer,
             floor-line detection and the floor step's votes), every thread of the process;
             taking pictures and moving the head or body are not counted.
+        floor_log: The floor lines the floor step measured (None when it did not run):
+            they do not depend on the map, so other maps can be scored with them
+            (:func:`floor_step_again`).
     """
 
     estimate: Estimate
@@ -151,6 +154,7 @@ class Localization:
     wall_s: float
     extra_turns: int = 0
     compute_s: float = 0.0
+    floor_log: FloorLog | None = None
 
     def summary(self) -> dict[str, Any]:
         """JSON-able fields of CONTRACT.md's ``localize`` line."""
@@ -428,6 +432,50 @@ def _floor_fix(
         if carried:
             result.details["floor_carried"] = len(carried)
         return result
+
+
+def floor_step_again(
+    vmap: VisualMap,
+    cfg: Config,
+    queries: Sequence[Keyframe],
+    estimate: Estimate,
+    log: FloorLog | None,
+) -> Estimate:
+    """The floor step for another map's (or mode's) estimate from the same pictures, with
+    the floor lines a localization already measured there (:attr:`Localization.floor_log`).
+
+    The lines do not depend on the map: the last floor step's lines, with the earlier ones
+    carried to where the robot stood then (:func:`naoloc.floorfix.carry_lines`), are voted
+    on with this map's walls and landmarks as the localization's last floor step would
+    have, under ``cfg.localize.floor_lines``; a keyframe guess neither confirmed nor
+    replaced becomes no estimate. An evaluation re-scores its pictures so, and other maps
+    get the floor step their own localization would have had.
+
+    Args:
+        vmap: The map to score with.
+        cfg: Config (``localize.floor_lines``).
+        queries: The pictures, as taken.
+        estimate: ``vmap``'s estimate from ``queries`` (map frame).
+        log: The lines measured and the odometry poses they were measured at, or None.
+    """
+    from naoloc.floorfix import carry_lines, map_walls
+    from naoloc.mapping.localizer import CONFIDENT
+
+    when = cfg.localize.floor_lines
+    walls = map_walls(vmap)
+    if log is None or not log.taken or walls is None or when == "off":
+        return estimate
+    if estimate.mode != "verified" or (when == "unsure" and estimate.confidence >= CONFIDENT):
+        return estimate
+    here, lines = log.taken[-1]
+    carried: list[WallLine] = []
+    for at, earlier in log.taken[:-1]:
+        carried += carry_lines(earlier, relative_pose(at, here), lines)
+    feats = vmap.extract(list(queries))
+    result = _floor_vote(vmap, walls, [*lines, *carried], queries, feats, estimate)
+    if carried:
+        result.details["floor_carried"] = len(carried)
+    return _unverified_as_none(result)
 
 
 def _floor_vote(
@@ -736,5 +784,5 @@ def localize(
         heading = math.degrees(abs(modulo2PI(estimate.theta - truth.theta)))
     return Localization(
         estimate, queries, strategy, truth, error, heading, time.monotonic() - t0, added,
-        meter.seconds,
+        meter.seconds, floor_log if floor_log.taken else None,
     )  # fmt: skip

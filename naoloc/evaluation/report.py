@@ -236,10 +236,10 @@ def render(summary: dict[str, Any]) -> str:
             "Same survey, same test poses; variants with the same strategy re-score the very "
             "same pictures (scan: the localize scan's pictures; paper: nearest wall, 2 "
             "pictures). ms/estimate of re-scored variants counts the map's work only. "
-            "Re-scored variants get no floor step (the floor-wall lines need the robot's "
-            "bottom camera at the pose): they measure the map and mode alone, and the "
-            "variant that ran the localize behaviour (the first of its strategy) is not "
-            "their equal.",
+            "Re-scored scans get the floor step with the floor-wall lines the localization "
+            "measured at the pose (they do not depend on the map), as their own "
+            "localization's last floor step would have; the scan cannot turn in place "
+            "again for them.",
             "",
             variants_table(summary, ("compare",)),
             "",
@@ -249,8 +249,8 @@ def render(summary: dict[str, Any]) -> str:
             "## Robustness",
             "",
             "Drift levels re-survey and re-map, then re-score the main variant's pictures "
-            "with their own map (no floor step: drift-x1, the main variant, has it); the "
-            "others localize with the base map in a robot changed after mapping.",
+            "(and its floor lines) with their own map; the others localize with the base "
+            "map in a robot changed after mapping.",
             "",
             variants_table(summary, ("robustness",)),
             "",

@@ -11,8 +11,10 @@ A localization chunk creates one robot from its config, optionally changes the w
 robot there and, for each way of taking pictures (a head scan, or the paper's two
 pictures of the nearest wall), runs the localize behaviour once with the first scorer of
 that strategy and re-scores the very same pictures with every other (map, mode) pair, so
-comparisons see exactly the same images. A world change the simulator lacks makes the
-chunk's variants "skipped" (with the reason), never silently measured without it.
+comparisons see exactly the same images; a re-scored scan gets the floor step with the
+floor lines the localization measured there (they do not depend on the map). A world
+change the simulator lacks makes the chunk's variants "skipped" (with the reason), never
+silently measured without it.
 """
 
 from __future__ import annotations
@@ -401,6 +403,7 @@ def localize_chunk(chunk: LocalizeChunk) -> list[dict[str, Any]]:
         (map frame; ``localize_ms`` wall time of pictures and map, ``compute_ms`` CPU time of
         the map's work alone).
     """
+    from naoloc.behaviours.localize import floor_step_again
     from naoloc.mapping import load_map
     from naoloc.registry import connect
 
@@ -416,7 +419,7 @@ def localize_chunk(chunk: LocalizeChunk) -> list[dict[str, Any]]:
             change(*_resolve_posters(sim, method, args))
         maps = {s.map_path: load_map(s.map_path) for s in chunk.scorers}
         for pose in chunk.poses:
-            taken: dict[str, tuple[list[Any], Pose2D]] = {}
+            taken: dict[str, tuple[list[Any], Pose2D, Any]] = {}  # queries, truth, lines
             done: dict[tuple[str, str, str], tuple[Any, float, float]] = {}
             for scorer in chunk.scorers:
                 key = (scorer.map_path, scorer.mode, scorer.strategy)
@@ -428,15 +431,20 @@ def localize_chunk(chunk: LocalizeChunk) -> list[dict[str, Any]]:
                     except RobotError as err:  # furniture there: not the localizer's fault
                         records.append({"variant": scorer.variant, "skipped": str(err)})
                         break
-                    est, queries, ms, cpu = _localize(robot, maps[scorer.map_path], cfg, scorer)
-                    taken[scorer.strategy] = (queries, _truth(chunk, sim, queries))
+                    est, queries, ms, cpu, log = _localize(
+                        robot, maps[scorer.map_path], cfg, scorer
+                    )
+                    taken[scorer.strategy] = (queries, _truth(chunk, sim, queries), log)
                 else:
                     t1, c1 = time.perf_counter(), time.process_time()
-                    est = _score(maps[scorer.map_path], taken[scorer.strategy][0], scorer.mode)
+                    queries, _, log = taken[scorer.strategy]
+                    est = _score(maps[scorer.map_path], queries, scorer.mode)
+                    if scorer.strategy == "scan":
+                        est = floor_step_again(maps[scorer.map_path], cfg, queries, est, log)
                     ms = (time.perf_counter() - t1) * 1e3
                     cpu = (time.process_time() - c1) * 1e3
                 done[key] = (est, ms, cpu)
-                queries, truth = taken[scorer.strategy]
+                queries, truth, _ = taken[scorer.strategy]
                 records.append(_record(scorer, pose, truth, est, (ms, cpu), len(queries)))
     return records
 
@@ -515,20 +523,21 @@ def _require_sim(robot: Any) -> Any:
 
 def _localize(
     robot: Any, vmap: Any, cfg: Any, scorer: Scorer
-) -> tuple[Any, list[Any], float, float]:
-    """Run the localize behaviour; returns the estimate, its queries, its wall time (ms) and
-    the CPU time of its map work (ms)."""
+) -> tuple[Any, list[Any], float, float, Any]:
+    """Run the localize behaviour; returns the estimate, its queries, its wall time (ms),
+    the CPU time of its map work (ms) and the floor lines it measured (or None)."""
     from naoloc.behaviours.localize import localize
 
     mode = "paper" if scorer.mode == "nearest" else scorer.mode
     result = localize(robot, vmap, cfg, mode=mode, strategy=scorer.strategy)
     queries = list(result.queries)
+    log = result.floor_log
     if scorer.mode == "nearest":
         c1 = time.process_time()
         est = _score(vmap, queries, "nearest")
-        return est, queries, float(result.wall_s) * 1e3, (time.process_time() - c1) * 1e3
+        return est, queries, float(result.wall_s) * 1e3, (time.process_time() - c1) * 1e3, log
     est = result.estimate
-    return est, queries, float(result.wall_s) * 1e3, float(result.compute_s) * 1e3
+    return est, queries, float(result.wall_s) * 1e3, float(result.compute_s) * 1e3, log
 
 
 def _truth(chunk: LocalizeChunk, sim: Any, queries: Sequence[Any]) -> Pose2D:
