@@ -25,7 +25,7 @@ import numpy as np
 
 from naoloc.geometry import Pose2D, modulo2PI, wrap_angles
 
-# Fixes in a row that no particle explains (and that agree with each other) before the
+# Fixes in a row the belief does not explain (and that agree with each other) before the
 # belief is drawn afresh: MISSES_TO_RECOVER when the robot walked at least RECOVER_WALK_M
 # between the first and the last of them, else MISSES_STILL. From one spot a look-alike
 # (two copies of a print 0.5 m apart) answers the same wrong way every time; a wrong belief
@@ -239,7 +239,7 @@ class ParticleFilter:
         self._noise = noise
         self._outlier = outlier
         self.misses = 0
-        # The last fix no particle explained, carried by odometry since, with its sigmas.
+        # The last fix the belief did not explain, carried by odometry since, and its sigmas.
         self._missed: tuple[Pose2D, float, float] | None = None
         self._walked_since_miss = 0.0  # odometry distance since the first of those fixes, m
         self.states = self._uniform(particles)

@@ -415,23 +415,42 @@ def _floor_fix(
     head sees about 290 deg around the robot, so after a turn a wall seen before may be in
     the blind spot behind it, or hidden behind furniture from the new heading.
     """
-    from naoloc.floorfix import carry_lines, map_walls
+    from naoloc.floorfix import map_walls
 
     walls = map_walls(vmap)
     if walls is None:
         return estimate
-    here = pose_of(robot.motion) if log is not None else None
+    here = pose_of(robot.motion) if log is not None else Pose2D()
     lines = measure_floor_lines(robot, cfg, meter)
+    earlier = list(log.taken) if log is not None else []
+    if log is not None:
+        log.taken.append((here, lines))
     with meter.timed():
-        carried: list[WallLine] = []
-        if log is not None and here is not None:
-            for at, earlier in log.taken:
-                carried += carry_lines(earlier, relative_pose(at, here), lines)
-            log.taken.append((here, lines))
-        result = _floor_vote(vmap, walls, [*lines, *carried], queries, feats, estimate)
-        if carried:
-            result.details["floor_carried"] = len(carried)
-        return result
+        return _vote_carried(vmap, walls, earlier, here, lines, queries, feats, estimate)
+
+
+def _vote_carried(
+    vmap: VisualMap,
+    walls: Walls,
+    earlier: Sequence[tuple[Pose2D, list[WallLine]]],
+    here: Pose2D,
+    lines: list[WallLine],
+    queries: Sequence[Keyframe],
+    feats: Sequence[Features],
+    estimate: Estimate,
+) -> Estimate:
+    """:func:`_floor_vote` on the lines measured at ``here`` (odometry) and the ``earlier``
+    ones carried there (:func:`naoloc.floorfix.carry_lines`; ``details["floor_carried"]``
+    counts them)."""
+    from naoloc.floorfix import carry_lines
+
+    carried: list[WallLine] = []
+    for at, seen in earlier:
+        carried += carry_lines(seen, relative_pose(at, here), lines)
+    result = _floor_vote(vmap, walls, [*lines, *carried], queries, feats, estimate)
+    if carried:
+        result.details["floor_carried"] = len(carried)
+    return result
 
 
 def floor_step_again(
@@ -458,7 +477,7 @@ def floor_step_again(
         estimate: ``vmap``'s estimate from ``queries`` (map frame).
         log: The lines measured and the odometry poses they were measured at, or None.
     """
-    from naoloc.floorfix import carry_lines, map_walls
+    from naoloc.floorfix import map_walls
     from naoloc.mapping.localizer import CONFIDENT
 
     when = cfg.localize.floor_lines
@@ -468,13 +487,8 @@ def floor_step_again(
     if estimate.mode != "verified" or (when == "unsure" and estimate.confidence >= CONFIDENT):
         return estimate
     here, lines = log.taken[-1]
-    carried: list[WallLine] = []
-    for at, earlier in log.taken[:-1]:
-        carried += carry_lines(earlier, relative_pose(at, here), lines)
     feats = vmap.extract(list(queries))
-    result = _floor_vote(vmap, walls, [*lines, *carried], queries, feats, estimate)
-    if carried:
-        result.details["floor_carried"] = len(carried)
+    result = _vote_carried(vmap, walls, log.taken[:-1], here, lines, queries, feats, estimate)
     return _unverified_as_none(result)
 
 
