@@ -310,7 +310,7 @@ def test_another_map_gets_the_floor_step_from_the_lines_already_measured(
         return [60 if math.hypot(p.x - TRUTH.x, p.y - TRUTH.y) < 0.01 else 0 for p in poses]
 
     _patch(monkeypatch, support)
-    vmap = SimpleNamespace(meta=META, extract=lambda queries: [[] for _ in queries])
+    vmap = SimpleNamespace(meta=META)
     cfg = load_config({"localize": {"floor_lines": "unsure"}})
     guess = Estimate(2.5, 2.0, 0.1, 0.1, "verified", {"method": "keyframes"})
     # Half the lines measured before a quarter turn in place (odometry: +pi/2), half after.
@@ -319,12 +319,12 @@ def test_another_map_gets_the_floor_step_from_the_lines_already_measured(
               for ln in lines[:2]]  # fmt: skip
     turned = Pose2D(0.0, 0.0, math.pi / 2)
     log = loc.FloorLog([(Pose2D(0.0, 0.0, 0.0), before), (turned, lines[2:])])
-    est = loc.floor_step_again(vmap, cfg, [], guess, log)  # type: ignore[arg-type]
+    est = loc.floor_step_again(vmap, cfg, [], [], guess, log)  # type: ignore[arg-type]
     assert est.method == "floorlines" and est.details["floor_carried"] == 2
     assert math.hypot(est.x - TRUTH.x, est.y - TRUTH.y) < 1e-6
     _patch(monkeypatch, lambda *_a: [10] * len(_a[3]))  # an even vote: nothing settles
-    none = loc.floor_step_again(vmap, cfg, [], guess, log)  # type: ignore[arg-type]
+    none = loc.floor_step_again(vmap, cfg, [], [], guess, log)  # type: ignore[arg-type]
     assert not none.found and none.details["unverified"]["method"] == "keyframes"
-    assert loc.floor_step_again(vmap, cfg, [], guess, None) is guess  # type: ignore[arg-type]
+    assert loc.floor_step_again(vmap, cfg, [], [], guess, None) is guess  # type: ignore[arg-type]
     sure = Estimate(TRUTH.x, TRUTH.y, TRUTH.theta, 0.95, "verified", {"method": "pnp"})
-    assert loc.floor_step_again(vmap, cfg, [], sure, log) is sure  # type: ignore[arg-type]
+    assert loc.floor_step_again(vmap, cfg, [], [], sure, log) is sure  # type: ignore[arg-type]

@@ -457,6 +457,7 @@ def floor_step_again(
     vmap: VisualMap,
     cfg: Config,
     queries: Sequence[Keyframe],
+    feats: Sequence[Features],
     estimate: Estimate,
     log: FloorLog | None,
 ) -> Estimate:
@@ -474,7 +475,8 @@ def floor_step_again(
         vmap: The map to score with.
         cfg: Config (``localize.floor_lines``).
         queries: The pictures, as taken.
-        estimate: ``vmap``'s estimate from ``queries`` (map frame).
+        feats: Their features, extracted with ``vmap``'s extractor (``vmap.extract``).
+        estimate: ``vmap``'s estimate from ``feats`` (map frame).
         log: The lines measured and the odometry poses they were measured at, or None.
     """
     from naoloc.floorfix import map_walls
@@ -487,7 +489,6 @@ def floor_step_again(
     if estimate.mode != "verified" or (when == "unsure" and estimate.confidence >= CONFIDENT):
         return estimate
     here, lines = log.taken[-1]
-    feats = vmap.extract(list(queries))
     result = _vote_carried(vmap, walls, log.taken[:-1], here, lines, queries, feats, estimate)
     return _unverified_as_none(result)
 

@@ -438,9 +438,13 @@ def localize_chunk(chunk: LocalizeChunk) -> list[dict[str, Any]]:
                 else:
                     t1, c1 = time.perf_counter(), time.process_time()
                     queries, _, log = taken[scorer.strategy]
-                    est = _score(maps[scorer.map_path], queries, scorer.mode)
-                    if scorer.strategy == "scan":
-                        est = floor_step_again(maps[scorer.map_path], cfg, queries, est, log)
+                    vmap = maps[scorer.map_path]
+                    if scorer.strategy == "scan" and scorer.mode != "nearest":
+                        feats = vmap.extract(queries)  # once, for the map and the floor step
+                        est = vmap.localize_features(feats, queries, scorer.mode)
+                        est = floor_step_again(vmap, cfg, queries, feats, est, log)
+                    else:
+                        est = _score(vmap, queries, scorer.mode)
                     ms = (time.perf_counter() - t1) * 1e3
                     cpu = (time.process_time() - c1) * 1e3
                 done[key] = (est, ms, cpu)
