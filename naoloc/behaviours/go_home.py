@@ -410,8 +410,9 @@ def _follow(
 ) -> tuple[bool, float, Pose2D]:
     """Walk through map-frame waypoints by odometry from ``start``.
 
-    Each waypoint is approached facing it; when ``ends_home``, the robot then turns in place
-    to face map +x at the last one (the origin). Turning apart from walking keeps a NAO's
+    Each waypoint is approached facing it; when ``ends_home`` (the leg ends at home, or
+    within ``FINAL_LEG_M`` of it), the robot then turns in place to face map +x at the last
+    one, as the survey started. Turning apart from walking keeps a NAO's
     turn error (~6 % of the angle) out of where it arrives. The odometry pose after each
     move is appended to ``moves``.
 
