@@ -1,6 +1,7 @@
 # naoloc: two commands set everything up.
 #   make demo   install into .venv, then survey -> build map -> localize in the default simulated room
 #   make test   install into .venv, then the whole test suite (what .ci/run calls)
+#   make test-fast  the unit and integration layers without slow tests, in under a minute
 SHELL := /bin/bash
 PYTHON ?= python3
 VENV := .venv
@@ -9,10 +10,9 @@ STAMP := $(VENV)/.installed
 export MUJOCO_GL ?= egl
 export PYOPENGL_PLATFORM ?= egl
 
-.PHONY: demo test lint typecheck venv sysdeps clean bench wheel check-wheel
+.PHONY: demo test test-fast lint typecheck venv sysdeps clean bench wheel check-wheel
 
-# Editable (setuptools' meta path finder: only naoloc.* is importable, never a top-level
-# "backends"). PYTHONWARNINGS hides exactly setuptools' notice that an editable install is one;
+# Editable (setuptools' meta path finder: only naoloc.* is importable). PYTHONWARNINGS hides exactly setuptools' notice that an editable install is one;
 # a real packaging warning still shows (and tools/check_wheel.sh fails on one).
 $(STAMP): pyproject.toml setup.py constraints.txt
 	@tools/check_python.sh $(PYTHON)
@@ -32,14 +32,20 @@ demo: venv
 	$(VENV)/bin/naoloc demo -o runs/demo
 
 lint: venv
-	$(VENV)/bin/ruff check naoloc backends tests tools setup.py
-	$(VENV)/bin/ruff format --check naoloc backends tests tools setup.py
+	$(VENV)/bin/ruff check naoloc tests tools setup.py
+	$(VENV)/bin/ruff format --check naoloc tests tools setup.py
 
 typecheck: venv
-	$(VENV)/bin/mypy naoloc backends
+	$(VENV)/bin/mypy naoloc
 
+# Every layer: tests/unit (pure), tests/integration (fake backend, CLI processes),
+# tests/sim (MuJoCo), tests/net (servers on loopback), tests/conformance (every backend).
 test: venv lint typecheck
 	$(PY) -m pytest -q -p no:cacheprovider tests
+
+# While working: the pure and fake-backend layers without the tests marked slow (< 1 min).
+test-fast: venv
+	$(PY) -m pytest -q -p no:cacheprovider -m "not slow" tests/unit tests/integration
 
 bench: venv
 	$(PY) tools/bench_map.py

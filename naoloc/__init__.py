@@ -25,9 +25,9 @@ from naoloc.errors import (
     RobotError,
 )
 from naoloc.geometry import Pose2D, modulo2PI, pose2DInverse
-from naoloc.image import Frame, frame_from_naoqi
-from naoloc.registry import backend_names, connect
 from naoloc.robot import Motion, Posture, Robot, SimControl, VideoDevice
+from naoloc.robot.image import Frame, frame_from_naoqi
+from naoloc.robot.registry import backend_names, connect
 
 __version__ = "0.1.0"
 

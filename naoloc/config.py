@@ -86,7 +86,7 @@ class OdometryConfig(_Model):
     """Odometry error of simulated backends: how far the true walk strays from odometry.
 
     ``profile: nao`` draws per-run systematic errors from ``seed`` at the magnitudes of
-    published NAO figures (see ``naoloc/simulated/odometry.py`` for the sources);
+    published NAO figures (see ``naoloc/backends/simulated/odometry.py`` for the sources);
     ``profile: ideal`` is exact. Any key set here overrides the profile's value (a set
     ``scale_error`` or ``turn_scale_error`` is used as is instead of being drawn).
     """
@@ -122,7 +122,7 @@ class OdometryConfig(_Model):
 
 
 class CameraRealismConfig(_Model):
-    """Image formation of simulated cameras (``naoloc/simulated/camera_model.py``).
+    """Image formation of simulated cameras (``naoloc/backends/simulated/camera_model.py``).
 
     ``profile: nao`` models a NAO's camera: sensor noise (SNR at most 37 dB, more at high
     gain), auto exposure and auto white balance, vignetting, YUV422 chroma, NAO's lens
@@ -169,6 +169,15 @@ class CameraRealismConfig(_Model):
         110.0, gt=10, lt=245, description="auto exposure's target mean luma, 0-255"
     )
     seed: int = Field(0, ge=0, description="seed of the noise")
+
+    def pick(self, value: bool | None) -> bool:
+        """A switch of this block: its explicit value, or the profile's (on for ``nao``)."""
+        return self.profile == "nao" if value is None else bool(value)
+
+    @property
+    def lens_distortion(self) -> bool:
+        """Whether simulated pictures carry NAO's lens distortion (``distortion`` or profile)."""
+        return self.pick(self.distortion)
 
 
 class SimConfig(_Model):

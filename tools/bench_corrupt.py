@@ -31,7 +31,7 @@ from corrupt_datasets import corpus  # noqa: E402
 
 def run_one(path: Path, cfg: Path, out: Path) -> tuple[int, float, float, str]:
     """Exit code, wall seconds, peak MB and stderr of one ``build-map`` process."""
-    argv = [sys.executable, "-m", "naoloc.cli", "build-map", "-c", str(cfg), "-d", str(path),
+    argv = [sys.executable, "-m", "naoloc.app.cli", "build-map", "-c", str(cfg), "-d", str(path),
             "-o", str(out)]  # fmt: skip
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     t0 = time.perf_counter()

@@ -4,10 +4,11 @@ Usage::
 
     .venv/bin/python tools/bench_dataset.py [--frames 300] [--repeats 3]
 
-Writes the same seeded frames (320 x 240 BGR, JPEG 95) with :class:`naoloc.dataset.DatasetWriter`
+Writes the same seeded frames (320 x 240 BGR, JPEG 95) with
+:class:`naoloc.data.dataset.DatasetWriter`
 (a zstd chunk per frame, indexes, CRCs, fsync on close) and, as the baseline in the same
 process, with the same writer and messages in version 1's layout (unchunked, no data-section
-CRC), then reads both with :func:`naoloc.dataset.read_dataset` (which checks CRCs, sizes and
+CRC), then reads both with :func:`naoloc.data.dataset.read_dataset` (which checks CRCs, sizes and
 image headers). Prints file size (MB) and best-of-N write and read times (s).
 """
 
@@ -24,9 +25,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from naoloc.dataset import DatasetWriter, read_dataset  # noqa: E402
+from naoloc.data.dataset import DatasetWriter, read_dataset  # noqa: E402
 from naoloc.geometry import Pose2D  # noqa: E402
-from naoloc.keyframe import CameraInfo, Keyframe  # noqa: E402
+from naoloc.robot.keyframe import CameraInfo, Keyframe  # noqa: E402
 
 
 def frames(n: int) -> list[Keyframe]:

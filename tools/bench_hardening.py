@@ -19,7 +19,6 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from naoloc.backends.naoqi.testing import served  # noqa: E402
-
 from tests.fuzz.libqi_fuzzer import fuzz_libqi  # noqa: E402
 from tests.fuzz.proc import rss_mb  # noqa: E402
 from tests.fuzz.zmq_fuzzer import fuzz_zmq  # noqa: E402

@@ -10,7 +10,7 @@ where they were taken; their answers are not scored here, tools/eval_unseen_room
 that). In the same process, best of ``--repeats`` CPU times:
 
 1. A-KAZE extraction per picture: the adaptive threshold in one pass (the current
-   :class:`naoloc.mapping.features.FeatureExtractor`) against a pass per threshold (the
+   :class:`naoloc.perception.features.FeatureExtractor`) against a pass per threshold (the
    code before it, kept here as the baseline), with the ratio and how many pictures give
    the same keypoints.
 2. One localization of ``--pictures`` pictures (a 7-yaw sweep, and four of them after
@@ -52,11 +52,10 @@ from typing import Any  # noqa: E402
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
-from naoloc.dataset import read_dataset  # noqa: E402
+from naoloc.data.dataset import read_dataset  # noqa: E402
 from naoloc.errors import NaolocError  # noqa: E402
 from naoloc.geometry import Pose2D  # noqa: E402
 from naoloc.mapping import load_map  # noqa: E402
-from naoloc.mapping.features import FeatureExtractor  # noqa: E402
 from naoloc.mapping.landmarks import hamming_matcher  # noqa: E402
 from naoloc.mapping.localizer import MatchMemo  # noqa: E402
 from naoloc.mapping.planar_ransac import _score, lift  # noqa: E402
@@ -66,6 +65,7 @@ from naoloc.mapping.support import (  # noqa: E402
     pose_support,
     support_matches,
 )
+from naoloc.perception.features import FeatureExtractor  # noqa: E402
 
 
 def _best_cpu(fn: Callable[[], Any], repeats: int) -> float:

@@ -45,16 +45,16 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 import naoloc  # noqa: E402
-from naoloc.behaviours.camera import Camera, look  # noqa: E402
 from naoloc.config import CameraConfig, MapConfig, load_config  # noqa: E402
-from naoloc.dataset import read_dataset  # noqa: E402
+from naoloc.data.dataset import read_dataset  # noqa: E402
 from naoloc.geometry import Pose2D, relative_pose  # noqa: E402
-from naoloc.keyframe import Keyframe  # noqa: E402
 from naoloc.mapping import build_map, load_map  # noqa: E402
-from naoloc.mapping.features import FeatureExtractor  # noqa: E402
 from naoloc.mapping.gcs import train_gcs  # noqa: E402
 from naoloc.mapping.mapfile import map_bytes  # noqa: E402
 from naoloc.mapping.vocabulary import train_vocabulary  # noqa: E402
+from naoloc.perception.features import FeatureExtractor  # noqa: E402
+from naoloc.robot.camera import Camera, look  # noqa: E402
+from naoloc.robot.keyframe import Keyframe  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 OLD_VOCAB_REV = "670fda5d215446d16c5736d5a718c3f651a35f44"  # before the packed-Hamming speed-up
@@ -140,7 +140,7 @@ def _old_map_checksum(folder: Path, keyframes_from: str, cfg: MapConfig, out: Pa
     """Build the map of a dataset with the old package in a subprocess; write it to ``out``."""
     code = (
         "import sys, numpy as np\n"
-        "from naoloc.dataset import read_dataset\n"
+        "from naoloc.data.dataset import read_dataset\n"
         "from naoloc.config import MapConfig\n"
         "from naoloc.mapping import build_map\n"
         "from naoloc.mapping.mapfile import map_bytes\n"
@@ -172,7 +172,7 @@ def bench_vocabulary(args: argparse.Namespace) -> None:
             f"survey: {{laps: 2, step_m: {32.0 / args.images}, wall_offset_m: 1.0}}\n"
         )
         subprocess.run(
-            [sys.executable, "-m", "naoloc.cli", "survey", "-c", str(survey_cfg), "-o",
+            [sys.executable, "-m", "naoloc.app.cli", "survey", "-c", str(survey_cfg), "-o",
              str(dataset)],
             check=True,
             capture_output=True,

@@ -31,10 +31,9 @@ import yaml
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
+import naoloc
 from naoloc.backends.naoqi.session import qi_available
 from naoloc.backends.naoqi.testing import served
-
-import naoloc
 from naoloc.robot import Robot
 
 RESOLUTIONS = {"QVGA": 1, "VGA": 2}
@@ -89,7 +88,7 @@ def _cached_rows(
 def _survey_s(config: dict[str, Any], out: Path) -> float:
     path = out.with_suffix(".yaml")
     path.write_text(yaml.safe_dump(config), encoding="utf-8")
-    cmd = [sys.executable, "-m", "naoloc.cli", "survey", "-c", str(path), "-o", str(out)]
+    cmd = [sys.executable, "-m", "naoloc.app.cli", "survey", "-c", str(path), "-o", str(out)]
     result = subprocess.run(cmd, capture_output=True, text=True, check=False)
     if result.returncode != 0:
         raise SystemExit(f"bench_qim: survey failed: {result.stderr.strip()[-300:]}")

@@ -44,7 +44,7 @@ from naoloc.config import load_config  # noqa: E402
 from naoloc.errors import NaolocError  # noqa: E402
 from naoloc.mapping import load_map  # noqa: E402
 from naoloc.mapping.map import VisualMap  # noqa: E402
-from naoloc.registry import connect  # noqa: E402
+from naoloc.robot.registry import connect  # noqa: E402
 
 STAGES = ("extract", "localize", "detect", "vote")
 

@@ -7,7 +7,7 @@ Prints, for the same scene in the same run:
   and scene options, at the same sizes;
 - their ratio (getImageRemote time per frame / raw time per frame);
 - all of that twice, with ``world.camera_realism.profile`` ``ideal`` and ``nao``, and the
-  time of the camera model alone (``naoloc/simulated/camera_model.py``) per frame;
+  time of the camera model alone (``naoloc/backends/simulated/camera_model.py``) per frame;
 - the simulated-time / wall-time ratio while walking with the camera off (moveTo legs of a
   survey-like square: 1 m forward, a quarter turn, repeated).
 
@@ -31,13 +31,12 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+import naoloc
 from naoloc.backends.mujoco.sim import Simulation, mujoco
 from naoloc.backends.mujoco.video import HIDDEN_GROUPS, MujocoVideo
-
-import naoloc
+from naoloc.backends.simulated.camera_model import CameraModel, Motion
 from naoloc.config import load_config
 from naoloc.constants import kQVGA, kRGBColorSpace, kVGA
-from naoloc.simulated.camera_model import CameraModel, Motion
 
 
 def _time_get_image(video: MujocoVideo, resolution: int, frames: int) -> float:

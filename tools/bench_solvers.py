@@ -40,8 +40,8 @@ from types import ModuleType  # noqa: E402
 import numpy as np  # noqa: E402
 
 from naoloc.geometry import robot_matrix  # noqa: E402
-from naoloc.keyframe import CameraInfo, camera_in_robot  # noqa: E402
 from naoloc.mapping import localizer, posegraph  # noqa: E402
+from naoloc.robot.keyframe import CameraInfo, camera_in_robot  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 OLD_REV = "670fda5d215446d16c5736d5a718c3f651a35f44"  # the two solvers before the merge

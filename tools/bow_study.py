@@ -37,8 +37,8 @@ from wall_pose_accuracy import sim_survey
 
 from naoloc.config import load_config
 from naoloc.errors import NaolocError
-from naoloc.mapping.features import FeatureExtractor
 from naoloc.mapping.vocabulary import dbow_scores, l2_normalise, train_vocabulary
+from naoloc.perception.features import FeatureExtractor
 
 
 def _retrieval_errors(

@@ -32,8 +32,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import naoloc
-from naoloc import kinematics as kin
 from naoloc.constants import FRAME_ROBOT
+from naoloc.robot import kinematics as kin
 
 
 def _in_robot(robot: naoloc.Robot, index: int) -> np.ndarray:

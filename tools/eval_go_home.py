@@ -37,7 +37,7 @@ from naoloc.evaluation.protocols import sample_protocol_poses
 def _naoloc(*args: str) -> dict[str, Any]:
     """Run one naoloc verb; its last stdout line as a dict (``failed`` on a non-zero exit)."""
     out = subprocess.run(
-        [sys.executable, "-m", "naoloc.cli", *args], capture_output=True, text=True, check=False
+        [sys.executable, "-m", "naoloc.app.cli", *args], capture_output=True, text=True, check=False
     )
     lines = out.stdout.strip().splitlines()
     try:
@@ -51,7 +51,7 @@ def _naoloc(*args: str) -> dict[str, Any]:
 
 def _starts(cfg_path: Path, n: int, seed: int) -> list[tuple[float, float, float]]:
     from naoloc.config import load_config
-    from naoloc.registry import connect
+    from naoloc.robot.registry import connect
 
     cfg = load_config(cfg_path)
     with connect(cfg) as robot:

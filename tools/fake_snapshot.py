@@ -31,7 +31,7 @@ from naoloc.constants import (
     kTopCamera,
     kVGA,
 )
-from naoloc.image import frame_from_naoqi
+from naoloc.robot.image import frame_from_naoqi
 
 
 def main(argv: list[str] | None = None) -> int:

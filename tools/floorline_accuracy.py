@@ -10,7 +10,7 @@ honest camera) the robot is put at random poses facing a stretch of wall with no
 in front of it (a 1.6 m wide strip): two thirds of the views as the survey measures a side
 wall (head turned to the wall on the right, 0.7-1.4 m away), one third as it measures the
 front wall before a corner (0.9-2.2 m ahead). The bottom camera's image goes to
-:func:`naoloc.floorline.detect_wall_line` and the distance it reads is compared with the
+:func:`naoloc.perception.floorline.detect_wall_line` and the distance it reads is compared with the
 true one. Prints, per kind and per room: lines found, median and p90 of |error| (m), the
 share off by more than 0.1 m, and the median signed error. ``--compare REV`` scores the
 detector of git revision ``REV`` on the same images in the same process (the baseline).
@@ -31,10 +31,10 @@ from typing import Any
 import numpy as np
 
 import naoloc
-from naoloc.behaviours.camera import lens_of, look, stand
 from naoloc.behaviours.wall_follow import FRONT_PITCH, FloorEye
 from naoloc.constants import FRAME_ROBOT
 from naoloc.errors import RobotError
+from naoloc.robot.camera import lens_of, look, stand
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "tools")]
@@ -100,8 +100,8 @@ def views(seed: int, n: int, overrides: dict[str, Any]) -> list[dict[str, Any]]:
 
 
 def _module_at(rev: str) -> ModuleType:
-    """``naoloc/floorline.py`` as it was at git revision ``rev``."""
-    src = subprocess.run(["git", "show", f"{rev}:naoloc/floorline.py"], cwd=ROOT,
+    """``naoloc/perception/floorline.py`` as it was at git revision ``rev``."""
+    src = subprocess.run(["git", "show", f"{rev}:naoloc/perception/floorline.py"], cwd=ROOT,
                          check=True, capture_output=True, text=True).stdout  # fmt: skip
     path = Path(tempfile.mkdtemp(prefix="floorline_")) / "floorline_old.py"
     path.write_text(src)
@@ -145,7 +145,7 @@ def main(argv: list[str] | None = None) -> int:
     overrides = parse_sets(args.set)
     data = [v for seed in args.seeds for v in views(seed, args.views, overrides)]
     lens = lens_of(room_config(args.seeds[0], overrides=overrides))
-    from naoloc import floorline
+    from naoloc.perception import floorline
 
     score("this tree", floorline, data, lens)
     if args.compare:

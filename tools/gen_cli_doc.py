@@ -224,7 +224,7 @@ def _flag_rows(parser: argparse.ArgumentParser) -> list[tuple[str, str, str]]:
 
 def render() -> str:
     """The whole page."""
-    from naoloc.cli import VERBS, build_parser
+    from naoloc.app.cli import VERBS, build_parser
     from naoloc.config import Config, shipped_configs
 
     parser = build_parser()
@@ -262,10 +262,10 @@ def render() -> str:
         "`survey`, `localize`, `go-home` and `serve` take `--live [PORT]`: a Foxglove WebSocket",
         "server on 127.0.0.1:PORT (default 8765; 0 picks a free port, printed on stderr). Open",
         "it in Foxglove with *Open connection -> Foxglove WebSocket*, `ws://127.0.0.1:PORT`.",
-        "Topics (see `naoloc/live.py`):",
+        "Topics (see `naoloc/viz/live.py`):",
         "",
     ]
-    from naoloc import live
+    from naoloc.viz import live
 
     doc = live.__doc__ or ""
     topics = [line for line in doc.splitlines() if line.startswith(("- ``/", "  "))][:20]

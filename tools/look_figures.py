@@ -24,12 +24,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import cv2
 import numpy as np
-from naoloc.backends.mujoco.room import wall_point
 
 import naoloc
+from naoloc.backends.mujoco.room import wall_point
 from naoloc.config import load_config
 from naoloc.constants import kQVGA, kVGA, kYuvColorSpace
-from naoloc.image import frame_from_naoqi
+from naoloc.robot.image import frame_from_naoqi
 
 FACING = {"y0": -math.pi / 2, "x1": 0.0, "y1": math.pi / 2, "x0": math.pi}
 THRESHOLDS = (0.001, 0.0003, 0.0001)

@@ -28,11 +28,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from eval_unseen_rooms import add_set_option, parse_sets
 from wall_pose_accuracy import pose_errors, sim_survey
 
-from naoloc.commands.build_map import survey_keyframes
 from naoloc.config import load_config
 from naoloc.errors import NaolocError
 from naoloc.geometry import Pose2D
 from naoloc.mapping import build_map
+from naoloc.mapping.from_survey import survey_keyframes
 
 
 def _line(name: str, poses: Sequence[Pose2D], truth: list[Pose2D]) -> str:

@@ -28,15 +28,15 @@ from pathlib import Path
 
 import numpy as np
 
-from naoloc.behaviours.camera import Camera, lens_of, look, stand
 from naoloc.behaviours.localize import paper_queries, survey_look_ahead, truth_in_map
 from naoloc.behaviours.nearest_wall import detect_nearest_wall, detect_wall_by_floorline
 from naoloc.behaviours.wall_follow import FloorEye
 from naoloc.config import load_config
 from naoloc.evaluation.protocols import PAPER_POSITIONS, paper_poses
-from naoloc.keyframe import Keyframe
 from naoloc.mapping import load_map
-from naoloc.registry import connect
+from naoloc.robot.camera import Camera, lens_of, look, stand
+from naoloc.robot.keyframe import Keyframe
+from naoloc.robot.registry import connect
 
 
 def main() -> int:

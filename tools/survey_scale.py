@@ -21,10 +21,10 @@ from pathlib import Path
 import numpy as np
 
 import naoloc
-from naoloc.commands.build_map import build_from_dataset
-from naoloc.commands.survey import record_survey
+from naoloc.app.commands.build_map import build_from_dataset
 from naoloc.config import load_config
-from naoloc.dataset import read_dataset
+from naoloc.data.dataset import read_dataset
+from naoloc.data.recorder import record_survey
 
 
 def _path(poses: np.ndarray) -> float:

@@ -39,7 +39,7 @@ from naoloc.behaviours import survey
 from naoloc.behaviours.nearest_wall import nearest_side_in_room
 from naoloc.config import load_config
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
-from naoloc.keyframe import Keyframe
+from naoloc.robot.keyframe import Keyframe
 
 
 def run(config: Path, seed: int, laps: int) -> dict[str, Any]:

@@ -7,7 +7,7 @@ Usage::
 
 For each dataset it prints, in the map frame (the survey start), the position error of
 the keyframes' odometry poses and of the wall-referenced poses build-map uses
-(``map.wall_poses``, :mod:`naoloc.wall_poses`): median, p90 and max (m), the median heading
+(``map.wall_poses``, :mod:`naoloc.mapping.wall_poses`): median, p90 and max (m), the median heading
 error (rad), and the ratio of the medians; then the survey's floor-wall lines against the
 truth (the wall the measured normal points at, the room's size): side lines, and front lines
 by distance band. Needs a simulator's dataset (true poses, ``origin_room_pose``,
@@ -24,10 +24,10 @@ from typing import Any
 
 import numpy as np
 
-from naoloc.dataset import read_dataset
+from naoloc.data.dataset import read_dataset
 from naoloc.errors import NaolocError
 from naoloc.geometry import Pose2D
-from naoloc.wall_poses import wall_poses
+from naoloc.mapping.wall_poses import wall_poses
 
 
 def sim_survey(path: str | Path) -> tuple[Any, list[Pose2D]]:

@@ -1,15 +1,11 @@
-"""Backends, mapped into the naoloc namespace.
+"""Robot backends, one sub-package each, created through :mod:`naoloc.robot.registry`.
 
-The sources live in the top-level ``backends/`` folder (one folder per backend). An
-installed wheel maps each of them to ``naoloc.backends.<name>``; in a source checkout
-(editable install or a plain ``pytest``) this package extends its search path to that
-folder, so no generic top-level package named ``backends`` is ever importable.
+- ``fake``: a kinematic robot in a ray-cast room (fast tests);
+- ``mujoco``: the simulated NAO in MuJoCo (extra ``sim``);
+- ``naoqi``: a real NAO or a virtual NAOqi over the network, and the server side of
+  ``naoloc serve`` (the NAOqi emulation in ``naoqi.emulation``);
+- ``simulated``: the models both simulators share (odometry error, walk sway, camera).
+
+Each backend exposes ``create(cfg: Config) -> Robot``. Nothing here is imported by
+``import naoloc``.
 """
-
-from __future__ import annotations
-
-from pathlib import Path
-
-_SOURCE = Path(__file__).resolve().parent.parent.parent / "backends"
-if (_SOURCE / "fake" / "__init__.py").is_file() and (_SOURCE.parent / "naoloc").is_dir():
-    __path__.append(str(_SOURCE))

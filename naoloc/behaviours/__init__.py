@@ -11,7 +11,6 @@ to report the truth), so they run unchanged on every backend.
 
 from __future__ import annotations
 
-from naoloc.behaviours.camera import Camera, look, stand
 from naoloc.behaviours.go_home import GoHomeResult, go_home
 from naoloc.behaviours.localize import (
     SCAN_YAWS,
@@ -29,6 +28,7 @@ from naoloc.behaviours.nearest_wall import (
     nearest_wall,
 )
 from naoloc.behaviours.survey import SurveyResult, Waypoint, circuit, frames_per_lap, survey
+from naoloc.robot.camera import Camera, look, stand
 
 __all__ = [
     "SCAN_YAWS",

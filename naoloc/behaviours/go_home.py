@@ -2,8 +2,9 @@
 
 Each round localizes (:func:`naoloc.behaviours.localize.localize`, which turns in place
 until it is confident) and fuses the fix with the odometry walked since the last one in a
-particle filter (:mod:`naoloc.fusion`). From the filter's pose it plans a path home over the
-floor grid the map implies (:mod:`naoloc.planning`: the floor the survey walked is free,
+particle filter (:mod:`naoloc.localization.fusion`). From the filter's pose it plans a path home
+over the
+floor grid the map implies (:mod:`naoloc.navigation.grid`: the floor the survey walked is free,
 walls and furniture seen as landmarks near the floor are blocked), walks the first leg of it
 (at most ``leg_m``; a leg that would arrive from farther than ``FINAL_LEG_M`` stops short)
 open-loop on odometry with ``moveTo``, and localizes again. A leg that ends within
@@ -28,13 +29,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from naoloc.behaviours.camera import Camera
 from naoloc.behaviours.localize import Localization, estimate_fields, localize, truth_in_map
 from naoloc.config import Config
-from naoloc.fusion import Belief, Fix, ParticleFilter, fix_from_estimate
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
-from naoloc.planning import BLOCKED, FloorGrid, NoPath, grid_from_map
+from naoloc.localization.fusion import Belief, Fix, ParticleFilter, fix_from_estimate
+from naoloc.navigation.grid import BLOCKED, FloorGrid, NoPath, grid_from_map
 from naoloc.robot import Robot, pose_of
+from naoloc.robot.camera import Camera
 
 if TYPE_CHECKING:
     from naoloc.mapping import VisualMap

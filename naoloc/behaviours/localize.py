@@ -16,7 +16,8 @@ Two ways to take the query pictures:
   in twelve rooms; docs/RESULTS.md, "Issue 12, twelfth step"). Then (if not
   done already) the bottom camera measures the floor-wall lines around the
   robot (``localize.floor_lines``, by default ``always``): with the walls the map records
-  they allow a few poses (:mod:`naoloc.floorfix`). A PnP pose one of them confirms takes
+  they allow a few poses (:mod:`naoloc.localization.floorfix`). A PnP pose one of them confirms
+  takes
   that pose (the lines place the walls to a few centimetres, the map's landmarks less
   well); otherwise the one the pictures' landmark matches support best, clearly, becomes
   the estimate (method ``floorlines``). A keyframe-bearing guess the floor step neither
@@ -37,21 +38,21 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from naoloc.behaviours.camera import DEFAULT_HEAD_PITCH, Camera, lens_of, look, stand
 from naoloc.behaviours.nearest_wall import detect_nearest_wall, detect_wall_by_floorline
 from naoloc.behaviours.wall_follow import FloorEye
 from naoloc.config import Config
 from naoloc.errors import MotionError
-from naoloc.floorline import WallLine
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
-from naoloc.keyframe import Keyframe
+from naoloc.perception.floorline import WallLine
 from naoloc.robot import Robot, pose_of
+from naoloc.robot.camera import DEFAULT_HEAD_PITCH, Camera, lens_of, look, stand
+from naoloc.robot.keyframe import Keyframe
 
 if TYPE_CHECKING:
-    from naoloc.floorfix import Walls
+    from naoloc.localization.floorfix import Walls
     from naoloc.mapping import Estimate, VisualMap
-    from naoloc.mapping.features import Features
     from naoloc.mapping.localizer import MatchMemo
+    from naoloc.perception.features import Features
 
 # Head yaws of a scan, rad: the head turns +-2.09 rad, the camera sees +-0.53 rad more. Seven
 # (0.67 rad apart, the camera's 1.06 rad FOV overlapping): with the head tilted up toward the
@@ -109,12 +110,12 @@ def estimate_covariance(est: Estimate) -> dict[str, Any]:
     """The estimate's uncertainty as the JSON ``covariance`` (3 x 3 of x, y, theta).
 
     The standard deviations are those the particle filter gives a fix
-    (:func:`naoloc.fusion.fix_from_estimate`: from the PnP inliers, or the confidence);
+    (:func:`naoloc.localization.fusion.fix_from_estimate`: from the PnP inliers, or the confidence);
     nothing when there is no estimate.
     """
     if not est.found:
         return {}
-    from naoloc.fusion import fix_from_estimate
+    from naoloc.localization.fusion import fix_from_estimate
 
     fix = fix_from_estimate(est)
     sxy, sth = fix.sigma_xy_m**2, fix.sigma_theta_rad**2
@@ -386,7 +387,7 @@ def _floor_fix(
     meter: CpuMeter,
     log: FloorLog | None = None,
 ) -> Estimate:
-    """The estimate, or a better one from the floor lines (:mod:`naoloc.floorfix`).
+    """The estimate, or a better one from the floor lines (:mod:`naoloc.localization.floorfix`).
 
     A PnP pose that floor-line poses confirm (within :data:`FLOOR_CONFIRM_M` and
     :data:`FLOOR_CONFIRM_RAD`) takes the one of them the pictures' landmark matches support
@@ -396,7 +397,7 @@ def _floor_fix(
     rooms: median 0.07 m for PnP poses, 0.02 m for floor-line poses). A PnP pose no
     candidate confirms but no line contradicts (a wall hidden behind furniture gives no
     candidate on its axis) keeps its place on the axes the lines do not pin and takes the
-    lines' heading and coordinates on the others (:func:`naoloc.floorfix.check_pose`;
+    lines' heading and coordinates on the others (:func:`naoloc.localization.floorfix.check_pose`;
     ``details["floor_consistent"]``), if one axis is pinned and its support is
     :data:`FLOOR_KEEP_MARGIN` times that of every distinct candidate. Otherwise the
     candidate supported best replaces the estimate (a PnP pose the floor contradicts, a
@@ -411,11 +412,12 @@ def _floor_fix(
 
     With ``log``, the lines measured before a turn in place join those measured now,
     carried by the odometry and turned to agree with them
-    (:func:`naoloc.floorfix.carry_lines`; ``details["floor_carried"]`` counts them): the
+    (:func:`naoloc.localization.floorfix.carry_lines`; ``details["floor_carried"]`` counts them):
+    the
     head sees about 290 deg around the robot, so after a turn a wall seen before may be in
     the blind spot behind it, or hidden behind furniture from the new heading.
     """
-    from naoloc.floorfix import map_walls
+    from naoloc.localization.floorfix import map_walls
 
     walls = map_walls(vmap)
     if walls is None:
@@ -440,9 +442,10 @@ def _vote_carried(
     estimate: Estimate,
 ) -> Estimate:
     """:func:`_floor_vote` on the lines measured at ``here`` (odometry) and the ``earlier``
-    ones carried there (:func:`naoloc.floorfix.carry_lines`; ``details["floor_carried"]``
+    ones carried there (:func:`naoloc.localization.floorfix.carry_lines`;
+    ``details["floor_carried"]``
     counts them)."""
-    from naoloc.floorfix import carry_lines
+    from naoloc.localization.floorfix import carry_lines
 
     carried: list[WallLine] = []
     for at, seen in earlier:
@@ -465,7 +468,8 @@ def floor_step_again(
     the floor lines a localization already measured there (:attr:`Localization.floor_log`).
 
     The lines do not depend on the map: the last floor step's lines, with the earlier ones
-    carried to where the robot stood then (:func:`naoloc.floorfix.carry_lines`), are voted
+    carried to where the robot stood then (:func:`naoloc.localization.floorfix.carry_lines`), are
+    voted
     on with this map's walls and landmarks as the localization's last floor step would
     have, under ``cfg.localize.floor_lines``; a keyframe guess neither confirmed nor
     replaced becomes no estimate. An evaluation re-scores its pictures so, and other maps
@@ -479,7 +483,7 @@ def floor_step_again(
         estimate: ``vmap``'s estimate from ``feats`` (map frame).
         log: The lines measured and the odometry poses they were measured at, or None.
     """
-    from naoloc.floorfix import map_walls
+    from naoloc.localization.floorfix import map_walls
     from naoloc.mapping.localizer import CONFIDENT
 
     when = cfg.localize.floor_lines
@@ -502,7 +506,7 @@ def _floor_vote(
     estimate: Estimate,
 ) -> Estimate:
     """:func:`_floor_fix`'s work once the lines are measured (no robot calls)."""
-    from naoloc.floorfix import candidates, check_pose, landmark_candidates
+    from naoloc.localization.floorfix import candidates, check_pose, landmark_candidates
     from naoloc.mapping import support as sup
     from naoloc.mapping.localizer import Estimate as _Estimate
 

@@ -19,10 +19,10 @@ from typing import Literal
 
 import numpy as np
 
-from naoloc.behaviours.camera import DEFAULT_HEAD_PITCH, Camera, look
 from naoloc.behaviours.wall_follow import FloorEye
 from naoloc.errors import FeatureError, MotionError
 from naoloc.robot import Robot
+from naoloc.robot.camera import DEFAULT_HEAD_PITCH, Camera, look
 
 Side = Literal["left", "right"]
 

@@ -31,7 +31,6 @@ from typing import Any
 
 import numpy as np
 
-from naoloc.behaviours.camera import Camera, clamp_head, lens_of, look, stand
 from naoloc.behaviours.nearest_wall import (
     FloorLineWall,
     ParallaxWall,
@@ -51,10 +50,11 @@ from naoloc.behaviours.wall_follow import (
 )
 from naoloc.config import Config
 from naoloc.errors import MotionError
-from naoloc.floorline import WallLine
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
-from naoloc.keyframe import Keyframe
+from naoloc.perception.floorline import WallLine
 from naoloc.robot import Robot, pose_of
+from naoloc.robot.camera import Camera, clamp_head, lens_of, look, stand
+from naoloc.robot.keyframe import Keyframe
 
 FRONT_LOOKAHEAD_M = 1.0  # start looking at the front wall this far before the corner
 FRONT_RANGE_M = 2.6  # the front wall's line is trusted up to this distance

@@ -1,7 +1,7 @@
 """Keeping the survey's distance and heading to the wall from the bottom camera.
 
 :class:`FloorEye` is a second ALVideoDevice subscription, to the bottom camera (index 1),
-that measures the floor-wall line (:mod:`naoloc.floorline`) with the camera pose from the
+that measures the floor-wall line (:mod:`naoloc.perception.floorline`) with the camera pose from the
 robot's own kinematics (``getTransform("CameraBottom", FRAME_ROBOT, True)``), so it works
 the same on a real NAO and over the network. :func:`corrected_step` turns a measured side
 wall into the next ``moveTo``: back to the survey's wall offset and parallel to the wall,
@@ -18,13 +18,13 @@ from typing import Any
 
 import numpy as np
 
-from naoloc.behaviours.camera import Camera
 from naoloc.config import CameraConfig
 from naoloc.constants import FRAME_ROBOT
-from naoloc.floorline import WallLine, detect_wall_line, detect_wall_lines
 from naoloc.geometry import Pose2D, modulo2PI
-from naoloc.lens import Lens
+from naoloc.perception.floorline import WallLine, detect_wall_line, detect_wall_lines
 from naoloc.robot import Robot
+from naoloc.robot.camera import Camera
+from naoloc.robot.lens import Lens
 
 BOTTOM_CAMERA = 1
 MAX_LATERAL_M = 0.12  # largest sideways correction per step

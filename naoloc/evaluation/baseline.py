@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from naoloc.geometry import modulo2PI, relative_pose
-from naoloc.keyframe import Keyframe
+from naoloc.robot.keyframe import Keyframe
 
 
 def nearest_neighbour(vmap: Any, queries: Sequence[Keyframe]) -> Any:

@@ -3,7 +3,7 @@ Fig. 20) and the cumulative distribution of errors.
 
 Everything is drawn in the map frame (m), with the walls and the furniture when known.
 Legends sit outside the data. A test pose without an estimate is drawn as a miss (its own
-marker, counted in the legend), never as an estimate. Figures come from :mod:`naoloc.plots`
+marker, counted in the legend), never as an estimate. Figures come from :mod:`naoloc.viz.plots`
 (their own Agg canvas, no pyplot), so importing this module costs nothing and needs no display.
 """
 
@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from naoloc.evaluation.stats import cdf
-from naoloc.plots import draw_furniture, legend_outside, new_figure, save_figure
+from naoloc.viz.plots import draw_furniture, legend_outside, new_figure, save_figure
 
 DPI = 110
 Furniture = Sequence[tuple[str, np.ndarray]] | None

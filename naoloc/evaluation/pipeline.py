@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from naoloc.config import Config
+from naoloc.data.outputs import atomic_write_text, folder_lock
 from naoloc.errors import BackendError, ConfigError, MotionError
 from naoloc.evaluation import figures, report
 from naoloc.evaluation.plan import STUDIES, Plan, make_plan
@@ -51,7 +52,6 @@ from naoloc.evaluation.runner import (
     survey_task,
 )
 from naoloc.evaluation.stats import group_rows, heading_errors, json_float, summarize
-from naoloc.outputs import atomic_write_text, folder_lock
 
 
 def check_simulated(cfg: Config) -> None:
@@ -148,7 +148,7 @@ def _evaluate(
     executor: Executor | None,
 ) -> dict[str, Any]:
     """:func:`evaluate` with ``outdir`` held."""
-    from naoloc.cli import write_resolved_config
+    from naoloc.data.outputs import write_resolved_config
 
     t_start = time.monotonic()
     workers = max(1, workers if workers is not None else (os.cpu_count() or 1))
@@ -244,7 +244,7 @@ def _test_poses(
 ) -> list[EvalPose]:
     if protocol == "paper":
         return paper_poses(origin, seed)
-    from naoloc.registry import connect
+    from naoloc.robot.registry import connect
 
     with connect(cfg) as robot:
         if robot.sim is None:
@@ -408,7 +408,7 @@ def _survey_table(
     laps: int,
 ) -> dict[str, Any]:
     """Table 1: images per lap and per wall (wall seen by the camera's optical axis)."""
-    from naoloc.dataset import read_dataset
+    from naoloc.data.dataset import read_dataset
 
     data = read_dataset(survey["dataset"])
     kfs = data.keyframes
@@ -451,7 +451,7 @@ def _write_outputs(
 ) -> None:
     from naoloc.config import load_config
     from naoloc.mapping import load_map
-    from naoloc.plots import furniture_footprints, room_corners
+    from naoloc.viz.plots import furniture_footprints, room_corners
 
     poly = room_corners(origin, room_size)
     furniture = furniture_footprints(load_config(summary["config"]), origin)

@@ -4,7 +4,7 @@ Tasks are plain picklable dataclasses; every one carries its config as a dict an
 seeds explicitly, so a result does not depend on which worker ran it or in which order.
 The pool uses the ``spawn`` start method (MuJoCo's renderer must be created inside each
 process); with one worker everything runs in the calling process. Progress goes to a
-:class:`naoloc.progress.Progress` bar on stderr.
+:class:`naoloc.viz.progress.Progress` bar on stderr.
 
 A localization chunk creates one robot from its config, optionally changes the world
 (moves or removes a poster through ``robot.sim``), then for each test pose teleports the
@@ -39,7 +39,7 @@ import numpy as np
 from naoloc.errors import ConfigError, DependencyNotInstalled, MotionError, NaolocError, RobotError
 from naoloc.evaluation.protocols import EvalPose, room_to_map
 from naoloc.geometry import Pose2D, modulo2PI
-from naoloc.progress import Progress
+from naoloc.viz.progress import Progress
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -335,8 +335,8 @@ def survey_task(task: SurveyTask) -> dict[str, Any]:
         ``{"name", "dataset", "frames", "laps", "path_m", "wall_s", "meta"}``, plus
         ``"failed"`` (the reason) when a step failed.
     """
-    from naoloc.commands.survey import record_survey
-    from naoloc.registry import connect
+    from naoloc.data.recorder import record_survey
+    from naoloc.robot.registry import connect
 
     path = Path(task.dataset_path)
     t0 = time.monotonic()
@@ -366,19 +366,13 @@ def map_task(task: MapTask) -> dict[str, Any]:
         ``{"name", "map", "images", "far_images", "neurons", "epochs", "features",
         "distinct_poses", "timings"}`` (``images``: the wall pictures the GCS learned).
     """
-    from naoloc.commands.build_map import far_keyframes, survey_keyframes
     from naoloc.config import MapConfig
-    from naoloc.dataset import read_dataset
-    from naoloc.mapping import build_map
+    from naoloc.data.dataset import read_dataset
+    from naoloc.mapping.from_survey import build_from_survey
 
     data = read_dataset(task.dataset_path)
     cfg = MapConfig.model_validate(task.map_config)
-    keyframes, facts = survey_keyframes(data, cfg)  # as naoloc build-map does
-    meta = dict(data.meta)
-    meta.pop("vision", None)  # per-frame survey measurements stay in the dataset
-    meta.update(facts)
-    far = far_keyframes(data, keyframes) if cfg.far_pictures else []
-    vmap = build_map(keyframes, cfg, meta=meta, far=far)
+    vmap, _ = build_from_survey(data, cfg)  # as naoloc build-map does
     Path(task.map_path).parent.mkdir(parents=True, exist_ok=True)
     vmap.save(task.map_path)
     return {
@@ -405,7 +399,7 @@ def localize_chunk(chunk: LocalizeChunk) -> list[dict[str, Any]]:
     """
     from naoloc.behaviours.localize import floor_step_again
     from naoloc.mapping import load_map
-    from naoloc.registry import connect
+    from naoloc.robot.registry import connect
 
     cfg = _config(chunk.config)
     records: list[dict[str, Any]] = []

@@ -22,15 +22,15 @@ import numpy as np
 from naoloc.config import MapConfig
 from naoloc.errors import DatasetError
 from naoloc.geometry import Pose2D, circular_mean, relative_pose
-from naoloc.keyframe import CameraInfo, Keyframe
-from naoloc.lens import Lens
 from naoloc.mapping.bundle import BundleProblem, bundle_adjust, tracks_from_links
 from naoloc.mapping.data import MapData
-from naoloc.mapping.features import FeatureExtractor, Features, to_pinhole
 from naoloc.mapping.gcs import train_gcs
 from naoloc.mapping.landmarks import camera_poses, query_camera, triangulate
 from naoloc.mapping.posegraph import refine_poses
 from naoloc.mapping.vocabulary import train_vocabulary
+from naoloc.perception.features import FeatureExtractor, Features, to_pinhole
+from naoloc.robot.keyframe import CameraInfo, Keyframe
+from naoloc.robot.lens import Lens
 
 ProgressFn = Callable[[str, int, int], None]
 

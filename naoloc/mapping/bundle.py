@@ -22,8 +22,8 @@ import numpy as np
 
 from naoloc.config import BundleTuning, PoseGraphTuning
 from naoloc.geometry import rotations_z, wrap_angles
-from naoloc.keyframe import camera_in_robot
 from naoloc.mapping.posegraph import Edge, graph_cost, graph_system
+from naoloc.robot.keyframe import camera_in_robot
 
 _HOLD = 1e9  # weight that holds keyframe 0 in place (the map frame)
 _REGULARISE = 1e-9  # keeps the normal equations invertible

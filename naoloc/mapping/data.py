@@ -13,9 +13,9 @@ from typing import Any
 import numpy as np
 
 from naoloc.config import MapConfig
-from naoloc.keyframe import CameraInfo
 from naoloc.mapping.gcs import GCSNetwork
 from naoloc.mapping.vocabulary import Vocabulary
+from naoloc.robot.keyframe import CameraInfo
 
 
 @dataclass(eq=False)

@@ -16,8 +16,8 @@ import numpy as np
 
 from naoloc.config import LandmarkTuning
 from naoloc.geometry import planar_pose, robot_matrix
-from naoloc.keyframe import CameraInfo, Keyframe, camera_in_robot
 from naoloc.mapping.vocabulary import pad_packed
+from naoloc.robot.keyframe import CameraInfo, Keyframe, camera_in_robot
 
 __all__ = [
     "DescriptorMatcher",

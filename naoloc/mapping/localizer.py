@@ -30,9 +30,7 @@ import numpy as np
 from naoloc.config import LocalizeMode, LocalizerTuning, LocalizeStrategy
 from naoloc.errors import NaolocError
 from naoloc.geometry import Pose2D, circular_mean, modulo2PI, relative_pose
-from naoloc.keyframe import Keyframe, camera_in_robot
 from naoloc.mapping.data import MapData
-from naoloc.mapping.features import FeatureExtractor, Features
 from naoloc.mapping.landmarks import (
     DescriptorMatcher,
     hamming_matcher,
@@ -44,6 +42,8 @@ from naoloc.mapping.landmarks import (
 from naoloc.mapping.planar import solve_planar
 from naoloc.mapping.planar_ransac import planar_hypotheses
 from naoloc.mapping.vocabulary import dbow_scores
+from naoloc.perception.features import FeatureExtractor, Features
+from naoloc.robot.keyframe import Keyframe, camera_in_robot
 
 __all__ = [
     "CONFIDENT",

@@ -19,11 +19,8 @@ from pathlib import Path
 from typing import Any
 
 from naoloc.config import MapConfig
-from naoloc.keyframe import Keyframe
-from naoloc.lens import Lens
 from naoloc.mapping.builder import ProgressFn, build_map_data, pinhole_features
 from naoloc.mapping.data import MapData
-from naoloc.mapping.features import FeatureExtractor, Features
 from naoloc.mapping.landmarks import query_camera
 from naoloc.mapping.localizer import (
     Estimate,
@@ -33,6 +30,9 @@ from naoloc.mapping.localizer import (
     map_extractor,
 )
 from naoloc.mapping.mapfile import read_map, save_map
+from naoloc.perception.features import FeatureExtractor, Features
+from naoloc.robot.keyframe import Keyframe
+from naoloc.robot.lens import Lens
 
 __all__ = ["MODES", "VisualMap", "build_map", "load_map"]
 

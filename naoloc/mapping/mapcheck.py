@@ -33,7 +33,7 @@ from typing import IO, Any
 import numpy as np
 
 from naoloc.errors import MapFormatError
-from naoloc.mapping.features import DESCRIPTOR_WIDTH, FEATURE_KINDS
+from naoloc.perception.features import DESCRIPTOR_WIDTH, FEATURE_KINDS
 
 #: Largest map file accepted, and largest total of its members' uncompressed sizes, bytes.
 #: The largest map the config allows (5000 neurons, 4096 words, thousands of images) is

@@ -29,7 +29,6 @@ import numpy as np
 
 from naoloc.config import PoseGraphTuning
 from naoloc.geometry import planar_pose, robot_matrix, se2_compose_local, se2_relative
-from naoloc.keyframe import camera_in_robot
 from naoloc.mapping.landmarks import (
     DescriptorMatcher,
     camera_poses,
@@ -39,6 +38,7 @@ from naoloc.mapping.landmarks import (
 )
 from naoloc.mapping.planar import solve_planar
 from naoloc.mapping.vocabulary import dbow_scores
+from naoloc.robot.keyframe import camera_in_robot
 
 DEFAULT = PoseGraphTuning()
 _HOLD = 1e9  # weight that holds node 0 in place (the map frame)

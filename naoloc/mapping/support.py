@@ -1,6 +1,6 @@
 """The landmarks' vote between candidate poses, and along one axis of the room.
 
-Where the pictures verified no pose, the floor-wall lines (:mod:`naoloc.floorfix`) list
+Where the pictures verified no pose, the floor-wall lines (:mod:`naoloc.localization.floorfix`) list
 the poses the walls allow and the landmarks choose among them. Every query feature is
 matched to its nearest landmark descriptors over the whole map once
 (:func:`support_matches`); :func:`pose_support` counts the features a pose reprojects
@@ -21,9 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from naoloc.geometry import Pose2D
-from naoloc.keyframe import Keyframe
 from naoloc.mapping.data import MapData
-from naoloc.mapping.features import Features
 from naoloc.mapping.landmarks import hamming_matcher, query_camera
 from naoloc.mapping.localizer import (
     SUPPORT_NEIGHBOURS,
@@ -34,6 +32,8 @@ from naoloc.mapping.localizer import (
     turn_scale_of,
 )
 from naoloc.mapping.vocabulary import pad_packed
+from naoloc.perception.features import Features
+from naoloc.robot.keyframe import Keyframe
 
 # axis_peaks: bins along the axis (m), the window a peak sums over (bins either side), the
 # narrowest angle between a feature's ray and the axis (rad; a ray along the axis says

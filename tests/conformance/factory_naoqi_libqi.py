@@ -7,9 +7,9 @@ from contextlib import contextmanager
 from typing import Any
 
 import pytest
-from naoloc.backends.naoqi.testing import served
 
 import naoloc
+from naoloc.backends.naoqi.testing import served
 from naoloc.constants import COLORSPACE_LAYERS, kQQQQVGA, kQQQVGA, kQQVGA, kQVGA, kVGA
 from naoloc.robot import Robot
 

@@ -1,6 +1,6 @@
-"""Conformance: ``naoloc.testing.check_robot`` on every backend and transport.
+"""Conformance: ``naoloc.robot.conformance.check_robot`` on every backend and transport.
 
-The checks themselves live in :mod:`naoloc.testing` (shipped, like Gymnasium's
+The checks themselves live in :mod:`naoloc.robot.conformance` (shipped, like Gymnasium's
 ``check_env``); here they run on the fake and MuJoCo robots in-process and on a
 virtual NAOqi (``naoloc serve``, real-time clock) over zmq and over libqi.
 """
@@ -13,9 +13,9 @@ import pytest
 
 from naoloc.constants import COLORSPACE_LAYERS
 from naoloc.errors import NaolocError
-from naoloc.registry import backend_names
 from naoloc.robot import Robot
-from naoloc.testing import CHECKS, ConformanceError, check_robot
+from naoloc.robot.conformance import CHECKS, ConformanceError, check_robot
+from naoloc.robot.registry import backend_names
 
 
 def test_check_robot_passes(robot: Robot, factory: ModuleType) -> None:

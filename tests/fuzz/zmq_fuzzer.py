@@ -15,6 +15,7 @@ from typing import Any
 
 import msgpack
 import zmq
+
 from naoloc.backends.naoqi import wire
 
 SERVICES = ["ALMotion", "ALVideoDevice", "ALRobotPosture", "NaolocWatchdog", "NaolocSim", "X"]

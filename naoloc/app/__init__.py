@@ -1,0 +1,1 @@
+"""The command line: ``naoloc`` and one module per verb (``naoloc.app.commands``)."""

@@ -1,0 +1,123 @@
+"""``naoloc build-map -c CFG -d DATASET.mcap -o MAP.npz``: Algorithm 4, plus a PNG of the map.
+
+The map, its PNG and the config copy (``MAP.config.yaml``) are written under temporary
+names and moved into place together once all three exist: a run that fails or is
+interrupted leaves an older map, PNG and config copy as they were. A partial dataset (an
+interrupted survey's ``DATASET.partial.mcap``) is read only when named, and said so.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from naoloc.config import Config
+from naoloc.data.dataset import read_dataset
+from naoloc.data.outputs import staged
+from naoloc.errors import DatasetError
+from naoloc.mapping.from_survey import MIN_MAP_FRAMES
+from naoloc.viz.progress import Progress
+
+
+def build_from_dataset(
+    dataset: Path,
+    cfg: Config,
+    output: Path,
+    *,
+    show_progress: bool | None = None,
+    config_copy: Path | None = None,
+) -> tuple[Any, dict[str, Any]]:
+    """Read a dataset, build the map with ``cfg.map``, save it and its PNG.
+
+    Args:
+        dataset: The survey ``.mcap``.
+        cfg: Config; ``cfg.map`` sets features, neurons, epochs and seed.
+        output: The map file (``.npz``); the PNG goes beside it (``MAP.png``).
+        show_progress: Force progress bars on or off; default: on a terminal.
+        config_copy: Also write the resolved config (no secrets) here, with the map.
+
+    Returns:
+        The :class:`naoloc.mapping.VisualMap` and the JSON summary.
+
+    Raises:
+        DatasetError: The dataset is unreadable, corrupt or has too few frames.
+    """
+    data = read_dataset(dataset)  # before importing the map code: a bad file fails fast
+    if len(data.keyframes) < MIN_MAP_FRAMES:
+        raise DatasetError(
+            f"{dataset}: {len(data.keyframes)} frame(s); a map needs at least {MIN_MAP_FRAMES}"
+        )
+
+    from naoloc.mapping.from_survey import build_from_survey
+    from naoloc.viz.plots import plot_map
+
+    bars: dict[str, Progress] = {}
+
+    def progress(stage: str, done: int, total: int) -> None:
+        bar = bars.get(stage)
+        if bar is None:
+            for old in bars.values():
+                old.close()
+            bars.clear()
+            bar = bars[stage] = Progress(total, f"build-map {stage}", enabled=show_progress)
+        bar.update(done - bar.count)
+
+    try:
+        vmap, facts = build_from_survey(
+            data,
+            cfg.map,
+            offset=cfg.survey.wall_offset_m,
+            meta={
+                "dataset": str(dataset),
+                "dataset_complete": data.complete,
+                "frames": len(data.keyframes),
+            },
+            progress=progress,
+        )
+    finally:
+        for bar in bars.values():
+            bar.close()
+    png = output.with_suffix(".png")
+    finals = [output, png] if config_copy is None else [output, png, config_copy]
+    with staged(*finals) as temps:
+        vmap.save(temps[0])
+        plot_map(vmap, temps[1])
+        if config_copy is not None:
+            temps[2].write_text(cfg.to_yaml(), encoding="utf-8")
+    timings = vmap.timings
+    summary = {
+        "images": int(vmap.images),
+        "far_images": int(vmap.far_images),
+        "neurons": len(vmap.neuron_poses),
+        "distinct_poses": int(vmap.distinct_poses),
+        "features_s": round(float(timings.get("features_s", 0.0)), 3),
+        "vocabulary_s": round(float(timings.get("vocabulary_s", 0.0)), 3),
+        "gcs_s": round(float(timings.get("gcs_s", 0.0)), 3),
+        "total_s": round(float(timings.get("total_s", 0.0)), 3),
+        "map": str(output),
+        "png": str(png),
+        "dataset_complete": data.complete,
+        "metric_scale": facts["metric_scale"],
+        "wall_poses": facts["wall_poses"],
+    }
+    if not data.complete:
+        summary["dataset_reason"] = data.meta.get("reason")
+    return vmap, summary
+
+
+def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
+    """Build the map of ``args.dataset`` into ``args.output``, with a PNG and the config."""
+    from naoloc.data.outputs import config_path_for
+
+    output: Path = args.output
+    _, summary = build_from_dataset(args.dataset, cfg, output, config_copy=config_path_for(output))
+    partial = ""
+    if not summary["dataset_complete"]:
+        partial = f" (partial dataset: {summary.get('dataset_reason') or 'incomplete'})"
+    print(
+        f"build-map: {summary['images']} images{partial} -> {summary['neurons']} neurons, "
+        f"{summary['distinct_poses']} distinct poses in {summary['total_s']:.1f} s "
+        f"-> {output}, {summary['png']}"
+    )
+    return summary

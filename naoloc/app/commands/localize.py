@@ -1,0 +1,73 @@
+"""``naoloc localize -c CFG -m MAP.npz [--at X Y THETA] [--png P]``: where am I in the map?"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from naoloc.config import Config
+from naoloc.errors import BackendError, NoEstimate
+from naoloc.robot import Robot
+
+
+def teleport_if_asked(robot: Robot, at: list[float] | None) -> None:
+    """Put a simulated robot at ``at`` = [x, y, theta] (room frame); nothing when None.
+
+    Raises:
+        BackendError: ``--at`` on a robot without a simulator.
+    """
+    if at is None:
+        return
+    if robot.sim is None:
+        raise BackendError(f"--at needs a simulator; backend {robot.backend!r} has none")
+    x, y, theta = (float(v) for v in at)
+    robot.sim.teleport(x, y, theta)
+
+
+def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
+    """Localize once (head scan, or the paper's 1-2 pictures in mode paper) and report."""
+    from naoloc.app.interrupt import interruptible
+    from naoloc.behaviours.localize import localize
+    from naoloc.data.outputs import config_path_for, staged
+    from naoloc.mapping import load_map
+    from naoloc.robot.registry import connect
+    from naoloc.viz.live import live_from_args, show_estimate, show_map, watch
+    from naoloc.viz.plots import plot_localization
+    from naoloc.viz.progress import Progress
+
+    vmap = load_map(args.map)
+    png: Path | None = args.png
+    with interruptible(), live_from_args(args) as live, connect(cfg) as robot:
+        teleport_if_asked(robot, args.at)
+        show_map(live, vmap)
+        with Progress(None, "localize") as bar:
+            loc = localize(watch(robot, live), vmap, cfg, on_step=lambda n: bar.update(1, n))
+        show_estimate(live, loc.estimate)
+    summary = loc.summary()
+    est = loc.estimate
+    if est.found:
+        line = (
+            f"localize: ({est.x:.2f}, {est.y:.2f}, {est.theta:.2f}) in the map frame, "
+            f"confidence {est.confidence:.2f}, {len(loc.queries)} images ({loc.strategy})"
+        )
+        if loc.error_m is not None:
+            line += f"; error {loc.error_m:.2f} m, {loc.heading_error_deg:.1f} deg"
+    else:
+        reason = est.details.get("reason", "nothing recognised")
+        line = f"localize: no estimate ({reason}) from {len(loc.queries)} images"
+    print(line)
+    if png is not None:  # the picture and its config copy appear together, or not at all
+        with staged(png, config_path_for(png)) as (tmp_png, tmp_cfg):
+            plot_localization(vmap, est, tmp_png, truth=loc.truth, queries=loc.queries)
+            tmp_cfg.write_text(cfg.to_yaml(), encoding="utf-8")
+        summary["png"] = str(png)
+        print(f"localize: picture -> {png}")
+    summary["localize_s"] = round(loc.wall_s, 3)
+    if not est.found:
+        raise NoEstimate(
+            f"no estimate: {est.details.get('reason', 'nothing recognised')} "
+            f"in {len(loc.queries)} images",
+            summary,
+        )
+    return summary

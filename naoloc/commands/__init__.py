@@ -1,5 +1,0 @@
-"""One module per CLI verb: ``naoloc.commands.<verb>.run(args, config) -> dict``.
-
-``run`` prints any human-readable text to stdout itself and returns the JSON
-summary, which :mod:`naoloc.cli` prints as the last line of stdout.
-"""

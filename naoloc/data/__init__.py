@@ -1,0 +1,1 @@
+"""Data on disk: survey datasets (MCAP), their checks, and outputs written whole."""

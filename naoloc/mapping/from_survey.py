@@ -1,0 +1,139 @@
+"""A map from a survey dataset: its keyframes posed from the walls, then Algorithm 4.
+
+The one place that turns a read survey (:class:`naoloc.data.dataset.Dataset`) into a
+:class:`naoloc.mapping.VisualMap`; ``naoloc build-map`` and the evaluation both call
+:func:`build_from_survey`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from typing import Any
+
+from naoloc.config import MapConfig
+from naoloc.geometry import Pose2D
+from naoloc.mapping.builder import ProgressFn, carried
+from naoloc.mapping.map import VisualMap, build_map
+from naoloc.mapping.wall_poses import wall_poses
+from naoloc.robot.keyframe import Keyframe
+
+# Fewest frames a map is built from: one or two pictures give no place to tell apart.
+MIN_MAP_FRAMES = 3
+# A survey's metric scale outside this range is a failed measurement, not the odometry.
+SCALE_RANGE = (0.6, 1.6)
+
+
+def apply_metric_scale(
+    keyframes: list[Keyframe], meta: dict[str, Any]
+) -> tuple[list[Keyframe], float | None]:
+    """Scale the keyframes' odometry positions to metres, by the survey's ``metric_scale``.
+
+    The survey measures it (metres per odometry metre) from the floor-wall line's
+    distances, which the camera height from the kinematics makes metric
+    (:func:`naoloc.behaviours.wall_follow.metric_scale`). Positions scale about the map
+    origin (the survey start); headings are unchanged.
+
+    Args:
+        keyframes: Keyframes with odometry poses in the map frame.
+        meta: The survey meta (``metric_scale`` may be missing or null).
+
+    Returns:
+        The keyframes to build from and the scale applied (None: left as they were).
+    """
+    scale = meta.get("metric_scale")
+    if not isinstance(scale, (int, float)) or not SCALE_RANGE[0] <= scale <= SCALE_RANGE[1]:
+        return keyframes, None
+    k = float(scale)
+
+    def scaled(p: Pose2D | None) -> Pose2D | None:
+        return None if p is None else Pose2D(p.x * k, p.y * k, p.theta)
+
+    out = [
+        dataclasses.replace(kf, pose=Pose2D(kf.pose.x * k, kf.pose.y * k, kf.pose.theta),
+                            command_pose=scaled(kf.command_pose))
+        for kf in keyframes
+    ]  # fmt: skip
+    return out, k
+
+
+def survey_keyframes(
+    data: Any, cfg: MapConfig, offset: float | None = None
+) -> tuple[list[Keyframe], dict[str, Any]]:
+    """The keyframes a map is built from, with the poses ``cfg`` asks for.
+
+    ``map.wall_poses`` (default): poses from the survey's walls
+    (:func:`naoloc.mapping.wall_poses.wall_poses`), which also fixes the metric scale (the known
+    circuit); a survey without floor-line records keeps its odometry. Otherwise, and
+    ``map.apply_metric_scale``: odometry scaled by the survey's ``metric_scale``.
+
+    Args:
+        data: The :class:`naoloc.data.dataset.Dataset`.
+        cfg: The map config.
+        offset: ``survey.wall_offset_m`` when the dataset's own config lacks it.
+
+    Returns:
+        The keyframes and facts for the map's meta (``metric_scale``, ``wall_poses``).
+    """
+    facts: dict[str, Any] = {"metric_scale": None, "wall_poses": None}
+    if cfg.wall_poses:
+        survey = data.config.get("survey") if isinstance(data.config, dict) else None
+        value = survey.get("wall_offset_m") if isinstance(survey, dict) else None
+        if isinstance(value, (int, float)) and value > 0:
+            offset = float(value)  # the survey walked at its own offset
+        walled = None if offset is None else wall_poses(data.keyframes, data.meta, offset=offset)
+        if walled is not None:
+            facts["wall_poses"] = walled.summary()
+            return walled.keyframes, facts
+    if cfg.apply_metric_scale:
+        keyframes, facts["metric_scale"] = apply_metric_scale(data.keyframes, data.meta)
+        return keyframes, facts
+    return list(data.keyframes), facts
+
+
+def far_keyframes(data: Any, keyframes: Sequence[Keyframe]) -> list[tuple[int, Keyframe]]:
+    """The dataset's far pictures with their stops, posed as the map's keyframes are.
+
+    A far picture is taken where its stop's wall picture was, the head turned: it takes
+    that keyframe's pose (from the walls or the scaled odometry, :func:`survey_keyframes`)
+    composed with the raw odometry from the wall picture to it.
+
+    Args:
+        data: The :class:`naoloc.data.dataset.Dataset`.
+        keyframes: Its wall pictures as :func:`survey_keyframes` posed them.
+    """
+    out = []
+    for stop, kf in data.far:
+        pose = carried(keyframes[stop].pose, data.keyframes[stop].pose, kf.pose)
+        out.append((stop, dataclasses.replace(kf, pose=pose)))
+    return out
+
+
+def build_from_survey(
+    data: Any,
+    cfg: MapConfig,
+    *,
+    offset: float | None = None,
+    meta: dict[str, Any] | None = None,
+    progress: ProgressFn | None = None,
+) -> tuple[VisualMap, dict[str, Any]]:
+    """Build the map of a survey dataset with ``cfg`` (not saved).
+
+    Args:
+        data: The :class:`naoloc.data.dataset.Dataset`.
+        cfg: The map config.
+        offset: ``survey.wall_offset_m`` when the dataset's own config lacks it.
+        meta: Extra entries for the map's meta (e.g. the dataset's path).
+        progress: Called as ``progress(stage, done, total)`` while building.
+
+    Returns:
+        The map and the facts :func:`survey_keyframes` found (``metric_scale``,
+        ``wall_poses``), which are also in the map's meta.
+    """
+    keyframes, facts = survey_keyframes(data, cfg, offset)
+    map_meta = dict(data.meta)
+    map_meta.pop("vision", None)  # per-frame survey measurements stay in the dataset
+    map_meta.update({**(meta or {}), **facts})
+    far = far_keyframes(data, keyframes) if cfg.far_pictures else []
+    vmap = build_map(keyframes, cfg, meta=map_meta, progress=progress, far=far)
+    return vmap, facts

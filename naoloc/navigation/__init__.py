@@ -1,0 +1,1 @@
+"""Navigation: the free-floor grid learned from the survey, paths, homing routes."""

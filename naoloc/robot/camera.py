@@ -1,0 +1,199 @@
+"""Taking pictures with what is known about where they were taken.
+
+:class:`Camera` subscribes once to ALVideoDevice and turns each NAOqi image into a
+:class:`~naoloc.robot.keyframe.Keyframe` carrying the odometry pose (sensors and commands),
+the head angles, the camera pose from ALMotion's kinematics and, on a simulator, the true
+pose. :func:`look` points the head.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from types import TracebackType
+
+from naoloc.config import CameraConfig, Config
+from naoloc.constants import FOV_V5, FOV_V6, FRAME_ROBOT, JOINT_LIMITS
+from naoloc.errors import RobotError
+from naoloc.geometry import Pose2D, relative_pose
+from naoloc.robot import Robot, pose_of
+from naoloc.robot.image import Frame, frame_from_naoqi
+from naoloc.robot.keyframe import CameraInfo, Keyframe
+from naoloc.robot.lens import Lens, lens_for
+
+# Head pitch while taking pictures, rad (negative looks up): as far up as the head goes.
+# Real rooms hang their art at 1.2-1.8 m and the top camera sits at about 0.5 m, looking
+# 6.9 deg down in StandInit; with the head level the band it sees from 1 m (0.07-0.95 m) is
+# skirting and blank wall. Measured in the home room at 1 m from the walls (median A-KAZE
+# keypoints per QVGA frame, tools/look_figures.py): pitch 0 -> 0, -0.4 -> 3, -0.67 -> 32.
+# The config keys survey.head_pitch_rad and localize.head_pitch_rad default to this.
+DEFAULT_HEAD_PITCH = -0.672
+HEAD_SPEED = 0.3  # fraction of the maximum head joint speed
+
+_YAW_MIN, _YAW_MAX, _ = JOINT_LIMITS["HeadYaw"]
+_PITCH_MIN, _PITCH_MAX, _ = JOINT_LIMITS["HeadPitch"]
+# NAOqi's head anti-collision limits (the shell meets the shoulders): HeadPitch range (deg)
+# at HeadYaw (deg), linearly interpolated, from the NAO "Joints" documentation page (head
+# section); naoloc/backends/mujoco/nao.py applies the same table to the simulated joints.
+_SHELL_YAW_DEG = (-119.52, -87.49, -62.45, -51.74, -43.32, -27.85, 0.0,
+                  27.85, 43.32, 51.74, 62.45, 87.49, 119.52)  # fmt: skip
+_SHELL_PITCH_MIN_DEG = (-25.73, -18.91, -24.64, -27.50, -31.40, -38.50, -38.50,
+                        -38.50, -31.40, -27.50, -24.64, -18.91, -25.73)  # fmt: skip
+_SHELL_PITCH_MAX_DEG = (18.91, 11.46, 17.19, 18.91, 21.20, 24.18, 29.51,
+                        24.18, 21.20, 18.91, 17.19, 11.46, 18.91)  # fmt: skip
+
+
+def _interp(x: float, xs: tuple[float, ...], ys: tuple[float, ...]) -> float:
+    """Piecewise-linear interpolation of ``ys`` over increasing ``xs``, clamped at the ends."""
+    if x <= xs[0]:
+        return ys[0]
+    for x0, x1, y0, y1 in zip(xs, xs[1:], ys, ys[1:], strict=False):
+        if x <= x1:
+            return y0 + (y1 - y0) * (x - x0) / (x1 - x0)
+    return ys[-1]
+
+
+def head_pitch_limits(yaw: float) -> tuple[float, float]:
+    """HeadPitch range (rad) the head can reach at a HeadYaw (rad), the shell's limits included.
+
+    At yaw 0 it is the joint's own range (-0.672..+0.515 rad); at +-1.53 rad (87.5 deg) it is
+    about -0.33..+0.20 rad.
+    """
+    deg = math.degrees(yaw)
+    lo = math.radians(_interp(deg, _SHELL_YAW_DEG, _SHELL_PITCH_MIN_DEG))
+    hi = math.radians(_interp(deg, _SHELL_YAW_DEG, _SHELL_PITCH_MAX_DEG))
+    return max(lo, _PITCH_MIN), min(hi, _PITCH_MAX)
+
+
+def clamp_head(yaw: float, pitch: float) -> tuple[float, float]:
+    """Clamp head angles (rad) to the joint limits, including the shell's at large yaw."""
+    yaw = min(max(yaw, _YAW_MIN + 1e-3), _YAW_MAX - 1e-3)
+    lo, hi = head_pitch_limits(yaw)
+    return yaw, min(max(pitch, lo + 1e-3), hi - 1e-3)
+
+
+def lens_of(cfg: Config) -> Lens:
+    """The lens of the configured robot's cameras (``camera.lens``; ``auto``: NAO's unless
+    ``world.camera_realism`` turns the simulated lens distortion off)."""
+    fov = FOV_V6 if cfg.world.model == "v6" else FOV_V5
+    choice = cfg.camera.lens
+    distortion = cfg.world.camera_realism.lens_distortion if choice == "auto" else choice == "nao"
+    return lens_for(distortion, *fov)
+
+
+def look(robot: Robot, yaw: float, pitch: float = DEFAULT_HEAD_PITCH) -> tuple[float, float]:
+    """Turn the head to ``(yaw, pitch)`` (rad, clamped to the limits); blocking.
+
+    Returns:
+        The angles commanded after clamping.
+    """
+    yaw, pitch = clamp_head(yaw, pitch)
+    robot.motion.angleInterpolationWithSpeed(["HeadYaw", "HeadPitch"], [yaw, pitch], HEAD_SPEED)
+    return yaw, pitch
+
+
+class Camera:
+    """One ALVideoDevice subscription that yields keyframes.
+
+    Args:
+        robot: The robot.
+        cfg: Which camera, resolution and colorspace.
+        name: Subscriber name.
+
+    Raises:
+        RobotError: The subscription or an image fails.
+    """
+
+    def __init__(self, robot: Robot, cfg: CameraConfig, name: str = "naoloc") -> None:
+        self.robot = robot
+        self.index = cfg.index
+        self.handle = robot.video.subscribeCamera(
+            name, cfg.index, cfg.resolution, cfg.colorspace, cfg.fps
+        )
+        self._fov = (
+            float(robot.video.getHorizontalFOV(cfg.index)),
+            float(robot.video.getVerticalFOV(cfg.index)),
+        )
+        self._closed = False
+
+    def frame(self) -> Frame:
+        """The latest image as a :class:`~naoloc.robot.image.Frame`.
+
+        No ``releaseImage`` follows: NAOqi's releaseImage frees buffers locked by
+        getImageLocal, and getImageRemote locks none (one remote call saved per picture).
+        """
+        return frame_from_naoqi(self.robot.video.getImageRemote(self.handle))
+
+    def info(self, frame: Frame) -> CameraInfo:
+        """The camera model of ``frame`` (size from the frame, FOV from ALVideoDevice)."""
+        return CameraInfo(frame.width, frame.height, self._fov[0], self._fov[1], self.index)
+
+    def keyframe(
+        self, origin: Pose2D | None = None, command_origin: Pose2D | None = None
+    ) -> tuple[Keyframe, Pose2D]:
+        """Take a picture with the robot's pose and head angles.
+
+        Args:
+            origin: FRAME_WORLD odometry pose (sensors) of the map origin; None keeps the
+                raw FRAME_WORLD pose.
+            command_origin: The same from commands (getRobotPosition(False)).
+
+        Returns:
+            The keyframe (pose relative to ``origin``) and the raw FRAME_WORLD odometry.
+        """
+        motion = self.robot.motion
+        frame = self.frame()
+        odometry = pose_of(motion, True)
+        command = pose_of(motion, False)
+        yaw, pitch = (float(a) for a in motion.getAngles(["HeadYaw", "HeadPitch"], True))
+        # The robot's own kinematics (a real NAO's included), never an assumed geometry.
+        name = "CameraTop" if self.index == 0 else "CameraBottom"
+        camera_pose = tuple(float(v) for v in motion.getTransform(name, FRAME_ROBOT, True))
+        truth = None
+        if self.robot.sim is not None:
+            truth = Pose2D.from_list(self.robot.sim.true_pose())
+        pose = odometry if origin is None else relative_pose(origin, odometry)
+        if command_origin is not None:
+            command = relative_pose(command_origin, command)
+        if len(camera_pose) != 16 or not all(
+            math.isfinite(v) for v in (*pose, yaw, pitch, *camera_pose)
+        ):
+            raise RobotError("the robot reported a non-finite pose, head angle or camera pose")
+        keyframe = Keyframe(
+            image=frame.bgr(),
+            pose=pose,
+            head_yaw=yaw,
+            head_pitch=pitch,
+            camera=self.info(frame),
+            stamp=frame.stamp,
+            command_pose=command,
+            true_pose=truth,
+            camera_pose=camera_pose,
+        )
+        return keyframe, odometry
+
+    def close(self) -> None:
+        """Unsubscribe (best effort). Safe to call twice."""
+        if self._closed:
+            return
+        self._closed = True
+        with contextlib.suppress(Exception):  # closing must not mask the real error
+            self.robot.video.unsubscribe(self.handle)
+
+    def __enter__(self) -> Camera:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+
+def stand(robot: Robot) -> None:
+    """Wake up and take StandInit (the walk-ready posture); blocking."""
+    if not robot.motion.robotIsWakeUp():
+        robot.motion.wakeUp()
+    robot.posture.goToPosture("StandInit", 0.5)

@@ -1,0 +1,117 @@
+"""Pure parts of the behaviours: the circuit's geometry and the nearest-wall detector."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from naoloc.behaviours import circuit, count_halves, frames_per_lap, nearest_wall
+from naoloc.robot.camera import clamp_head
+
+
+def _textured(h: int, w: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    small = rng.integers(0, 255, (h // 8, w // 8), dtype=np.uint8)
+    return np.kron(small, np.ones((8, 8), dtype=np.uint8))
+
+
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_nearest_wall_picks_the_textured_half(side: str) -> None:
+    img = np.full((240, 320), 128, dtype=np.uint8)
+    tex = _textured(240, 160, 0)
+    if side == "left":
+        img[:, :160] = tex
+    else:
+        img[:, 160:] = tex
+    wall = nearest_wall(img)
+    assert wall.side == side
+    assert wall.head_yaw == pytest.approx(math.pi / 2 if side == "left" else -math.pi / 2)
+    assert max(wall.left, wall.right) > 20 and min(wall.left, wall.right) < 5
+
+
+def test_blank_image_goes_right_with_no_keypoints() -> None:
+    assert count_halves(np.zeros((120, 160), np.uint8)) == (0, 0)
+    assert nearest_wall(np.zeros((120, 160, 3), np.uint8)).side == "right"
+
+
+def test_circuit_is_closed_and_counter_clockwise() -> None:
+    pts = circuit((4.0, 4.0), 0.2, 2, math.pi / 2)
+    pictures = [p for p in pts if p.picture]
+    assert len(pictures) == 2 * 80 == 2 * frames_per_lap((4.0, 4.0), 0.2)
+    # Every step is 0.2 m; the robot ends at the origin facing map +x.
+    xy = np.array([[p.pose.x, p.pose.y] for p in pictures])
+    steps = np.linalg.norm(np.diff(np.vstack([[0.0, 0.0], xy]), axis=0), axis=1)
+    assert np.allclose(steps[steps > 1e-9], 0.2)
+    assert pts[-1].pose.x == pytest.approx(0.0, abs=1e-9)
+    assert pts[-1].pose.y == pytest.approx(0.0, abs=1e-9)
+    assert abs(pts[-1].pose.theta) < 1e-9
+    # Counter-clockwise: the square lies in y >= 0 and the corners come in order.
+    assert xy[:, 1].min() > -1e-9 and xy[:, 0].min() > -1e-9
+    corners = [(p.pose.x, p.pose.y) for p in pts if not p.picture][:4]
+    assert np.allclose(corners, [(4, 0), (4, 4), (0, 4), (0, 0)], atol=1e-9)
+    assert [p.closes_lap for p in pts if not p.picture] == [False, False, False, True] * 2
+    assert [p.lap for p in pictures] == [0] * 80 + [1] * 80
+
+
+def test_clockwise_rectangle_with_uneven_sides() -> None:
+    pts = circuit((3.0, 1.0), 0.4, 1, -math.pi / 2)
+    corners = [(p.pose.x, p.pose.y) for p in pts if not p.picture]
+    assert np.allclose(corners, [(3, 0), (3, -1), (0, -1), (0, 0)], atol=1e-9)
+    # 3 m in 0.4 m steps -> 8 equal steps of 0.375 m; 1 m -> 2 steps (round(2.5) = 2).
+    assert frames_per_lap((3.0, 1.0), 0.4) == 2 * (8 + 2)
+    assert sum(p.picture for p in pts) == 20
+
+
+def test_head_clamped_to_limits_and_shell() -> None:
+    assert clamp_head(3.0, 0.0)[0] < 2.0857
+    assert clamp_head(-3.0, 0.0)[0] > -2.0857
+    assert clamp_head(1.57, -0.6)[1] == pytest.approx(-0.338, abs=2e-3)  # the shell
+    assert clamp_head(0.8, -0.672)[1] == pytest.approx(-0.527, abs=2e-3)
+    assert clamp_head(0.0, -0.6)[1] == pytest.approx(-0.6)
+    assert clamp_head(0.0, -0.9)[1] == pytest.approx(-0.671, abs=2e-3)
+
+
+def test_nearest_side_from_the_room_layout() -> None:
+    from naoloc.behaviours import nearest_side_in_room
+
+    assert nearest_side_in_room((6.0, 6.0), (1.0, 1.0, 0.0)).side == "right"
+    assert nearest_side_in_room((6.0, 6.0), (1.0, 5.0, 0.0)).side == "left"
+    assert nearest_side_in_room((6.0, 6.0), (1.0, 1.0, math.pi / 2)).side == "left"
+    assert nearest_side_in_room((4.0, 3.0), (3.5, 0.5, math.pi)).side == "left"
+
+
+def test_truncate_route_keeps_the_first_metres() -> None:
+    from naoloc.behaviours.go_home import _densify, truncate_route
+    from naoloc.geometry import Pose2D
+
+    here = Pose2D(3.0, 4.0, 1.0)
+    route = _densify(here, [Pose2D()])  # 5 m to the origin, waypoints at most 0.75 m apart
+    assert len(route) == 7 and route[-1] == Pose2D()
+    leg = truncate_route(here, route, 2.0)
+    assert math.hypot(leg[-1].x - 3.0, leg[-1].y - 4.0) == pytest.approx(2.0)
+    assert leg[-1].x == pytest.approx(3.0 * 0.6) and leg[-1].y == pytest.approx(4.0 * 0.6)
+    assert truncate_route(here, route, 9.0) == route
+    # Along a bent route the length follows the path, not the straight line.
+    bent = [Pose2D(1.0, 0.0), Pose2D(1.0, 1.0), Pose2D(0.0, 1.0)]
+    cut = truncate_route(Pose2D(), bent, 1.5)
+    assert (cut[-1].x, cut[-1].y) == pytest.approx((1.0, 0.5))
+
+
+def test_go_home_is_not_home_while_a_verified_fix_says_otherwise() -> None:
+    """A belief within the tolerance is not enough when the last fix, verified by the floor
+    lines, puts the robot farther: go-home said "reached" 0.42 m from home that way."""
+    from naoloc.behaviours.go_home import _fix_says_away
+    from naoloc.localization.fusion import fix_from_estimate
+    from naoloc.mapping import Estimate
+
+    confirmed = {"method": "pnp", "inliers": 62, "floor_confirmed": True}
+    away = Estimate(-0.40, 0.17, -0.1, 0.72, "verified", confirmed)
+    near = Estimate(-0.05, 0.03, -0.1, 0.72, "verified", confirmed)
+    unverified = Estimate(-0.40, 0.17, -0.1, 0.72, "verified", {"method": "pnp", "inliers": 62})
+    assert _fix_says_away(fix_from_estimate(away), 0.15)
+    assert not _fix_says_away(fix_from_estimate(near), 0.15)
+    assert not _fix_says_away(
+        fix_from_estimate(unverified), 0.15
+    )  # the filter's belief decides then

@@ -1,0 +1,83 @@
+"""Config: defaults, shipped files, and one-line errors that name the key path."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from naoloc.config import Config, load_config
+from naoloc.errors import ConfigError
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_defaults_match_the_contract() -> None:
+    cfg = load_config(None)
+    assert cfg.robot.backend == "mujoco"
+    assert cfg.robot.url == "tcp://127.0.0.1:9559"
+    assert cfg.world.room.size_m == (6.0, 6.0)
+    assert cfg.camera.resolution == 1 and cfg.camera.colorspace == 11
+    assert (cfg.survey.laps, cfg.survey.step_m, cfg.survey.wall_offset_m) == (2, 0.2, 1.0)
+    assert (cfg.map.features, cfg.map.neurons, cfg.map.epochs) == ("akaze", 300, 300)
+    assert cfg.start_pose() == (1.0, 1.0, 0.0)
+    assert cfg.survey_sides() == (4.0, 4.0)
+
+
+@pytest.mark.parametrize("path", sorted((ROOT / "configs").glob("*.yaml")), ids=lambda p: p.name)
+def test_shipped_configs_validate(path: Path) -> None:
+    cfg = load_config(path)
+    assert isinstance(cfg, Config)
+
+
+def test_minimal_file_is_complete(tmp_path: Path) -> None:
+    f = tmp_path / "room.yaml"
+    f.write_text("world:\n  room:\n    size_m: [5.0, 4.0]\n    seed: 7\n")
+    cfg = load_config(f)
+    assert cfg.survey_sides() == (3.0, 2.0)
+    assert cfg.world.room.seed == 7
+
+
+@pytest.mark.parametrize(
+    ("text", "fragment"),
+    [
+        ("world:\n  room:\n    sise_m: [5, 5]\n", "world.room.sise_m: unknown key"),
+        ("robot:\n  backend: webots\n", "robot.backend"),
+        ("camera: {resolution: 99}\n", "camera.resolution"),
+        ("survey: {laps: 0}\n", "survey.laps"),
+        ("survey: {wall_offset_m: 3.5}\n", "survey.wall_offset_m"),
+        ("world: {start_pose: [9, 1, 0]}\n", "world.start_pose"),
+        ("- just\n- a list\n", "top level must be a mapping"),
+        ("robot: [\n", "line"),
+    ],
+)
+def test_errors_are_one_line_with_file_and_key(tmp_path: Path, text: str, fragment: str) -> None:
+    f = tmp_path / "bad.yaml"
+    f.write_text(text)
+    with pytest.raises(ConfigError) as info:
+        load_config(f)
+    msg = str(info.value)
+    assert "\n" not in msg
+    assert msg.startswith(str(f))
+    assert fragment in msg
+
+
+def test_missing_file() -> None:
+    with pytest.raises(ConfigError, match="no such config file"):
+        load_config("/nonexistent/naoloc.yaml")
+
+
+def test_yaml_is_loaded_safely(tmp_path: Path) -> None:
+    f = tmp_path / "evil.yaml"
+    f.write_text("robot: !!python/object/apply:os.system ['echo pwned']\n")
+    with pytest.raises(ConfigError):
+        load_config(f)
+
+
+def test_config_is_immutable_and_overridable() -> None:
+    cfg = load_config({"robot": {"backend": "fake"}})
+    with pytest.raises(Exception):  # noqa: B017 - pydantic's frozen error
+        cfg.robot.backend = "mujoco"  # type: ignore[misc]
+    other = cfg.with_overrides({"map": {"neurons": 100}})
+    assert other.map.neurons == 100 and cfg.map.neurons == 300
+    assert load_config(other.to_dict()) == other
