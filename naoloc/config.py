@@ -537,6 +537,113 @@ class LocalizeStrategy(enum.StrEnum):
     PAPER = "paper"  # the paper's 1-2 pictures towards the nearest wall
 
 
+class FilterTuning(_Model):
+    """The localization filter's sensor and motion models and decisions (naoloc.localization).
+
+    Every figure the filter uses is here; ``localize.filter`` in a config overrides any.
+    Likelihoods are in nats (natural log); a decision compares evidence, not ad-hoc scores.
+    """
+
+    candidates: int = Field(5, ge=1, le=50, description="keyframes retrieved per picture")
+    neighbours: int = Field(
+        3, ge=1, le=10, description="nearest landmark descriptors a feature may be (any of)"
+    )
+    min_pnp_inliers: int = Field(
+        12, ge=6, description="PnP inliers of one picture that propose a new hypothesis"
+    )
+    pnp_reprojection_px: float = Field(4.0, gt=0, description="PnP RANSAC inlier threshold (px)")
+    pnp_iterations: int = Field(100, ge=1, le=10000, description="PnP RANSAC iterations")
+    camera_height_tolerance_m: float = Field(
+        0.3, gt=0, description="largest difference of a PnP camera from the head's height (m)"
+    )
+    pixel_sigma_px: float = Field(
+        2.0, gt=0, description="reprojection noise of a matched landmark (px, std)"
+    )
+    match_outlier_share: float = Field(
+        0.5, gt=0, lt=1, description="prior share of a picture's landmark matches that are wrong"
+    )
+    match_weight: float = Field(
+        0.2,
+        gt=0,
+        le=1,
+        description="evidence one landmark match carries (matches of a picture share the "
+        "map's errors: they are not independent)",
+    )
+    min_inliers: int = Field(
+        8, ge=3, description="landmarks a picture must fit to update a hypothesis"
+    )
+    landmark_sigma_m: float = Field(
+        0.05,
+        ge=0,
+        description="error of the map's landmarks in one place (m, std): a picture's pose "
+        "is no better (PnP poses erred a median 0.07 m in six rooms)",
+    )
+    landmark_sigma_rad: float = Field(
+        0.02, ge=0, description="heading error of a picture's pose from the landmarks (rad)"
+    )
+    wall_sigma_m: float = Field(
+        0.015, ge=0, description="error of the map's walls (m, std; the survey places them "
+        "to 1-4 cm)"
+    )
+    wall_sigma_rad: float = Field(
+        0.01, ge=0, description="direction error of the map's walls (rad, std)"
+    )
+    line_sigma_m: float = Field(0.02, gt=0, description="floor-line distance noise (m, std)")
+    line_sigma_per_m: float = Field(
+        0.02, ge=0, description="floor-line distance noise growing with distance (m per m)"
+    )
+    line_sigma_rad: float = Field(0.04, gt=0, description="floor-line direction noise (rad)")
+    line_outlier_share: float = Field(
+        0.4, gt=0, lt=1, description="prior share of floor lines that are not a wall's foot"
+    )
+    line_range_m: float = Field(
+        3.0, gt=0, description="farthest floor line the detector reports (m): the clutter range"
+    )
+    trans_per_m: float = Field(0.12, ge=0, description="odometry distance noise per metre")
+    rot_per_rad: float = Field(0.2, ge=0, description="odometry turn noise per radian")
+    rot_per_m: float = Field(0.1, ge=0, description="odometry heading noise per metre (rad/m)")
+    floor_m: float = Field(0.002, ge=0, description="odometry noise of any step (m)")
+    floor_rad: float = Field(0.002, ge=0, description="odometry noise of any step (rad)")
+    max_hypotheses: int = Field(12, ge=1, le=100, description="hypotheses kept at most")
+    prune_nats: float = Field(
+        25.0, gt=0, description="a hypothesis this far below the best one is dropped (nats)"
+    )
+    merge_mahalanobis: float = Field(
+        3.0, gt=0, description="hypotheses closer than this (Mahalanobis) are merged"
+    )
+    gate_mahalanobis: float = Field(
+        4.0, gt=0, description="a picture's pose farther than this from a hypothesis does not "
+        "update it (Mahalanobis, 3 degrees of freedom)"
+    )
+    forget_per_observation: float = Field(
+        0.03,
+        ge=0,
+        lt=1,
+        description="share of its evidence a hypothesis forgets per observation (a carried "
+        "robot's old place fades)",
+    )
+    null_nats: float = Field(
+        20.0,
+        gt=0,
+        description="evidence a place must have over 'these observations are not of the "
+        "mapped room' to be believed (nats; prior log-odds of the other room)",
+    )
+    confident: float = Field(
+        0.9, gt=0, le=1, description="probability of the best place for a tracking pose"
+    )
+    max_sigma_m: float = Field(
+        0.12, gt=0, description="a belief wider than this (position std, m) gives no pose"
+    )
+    max_sigma_rad: float = Field(
+        0.1, gt=0, description="a belief wider than this (heading std, rad) gives no pose"
+    )
+    verdict_pictures: int = Field(
+        5,
+        ge=1,
+        description="pictures with features before the filter says 'not the mapped room'",
+    )
+
+
 class LocalizeConfig(_Model):
     """Algorithm 5 and beyond."""
 
@@ -566,6 +673,16 @@ class LocalizeConfig(_Model):
         "pose; otherwise their pose the pictures' matches support clearly best (method "
         "floorlines). always (default), unsure (only when the pictures verified no "
         "confident pose) or off; YAML's bare false/off is off, true/on is always",
+    )
+
+    settle_sigma_m: float = Field(
+        0.03,
+        gt=0,
+        description="scan strategy: stop looking once the tracked pose's position std is "
+        "at most this (m); otherwise look until the sweep ends",
+    )
+    filter: FilterTuning = Field(
+        FilterTuning(), description="the localization filter's models and decisions"
     )
 
     @field_validator("resolution")

@@ -11,13 +11,11 @@ to report the truth), so they run unchanged on every backend.
 
 from __future__ import annotations
 
-from naoloc.behaviours.go_home import GoHomeResult, go_home
 from naoloc.behaviours.localize import (
     SCAN_YAWS,
     Localization,
     localize,
     paper_queries,
-    scan_queries,
     truth_in_map,
 )
 from naoloc.behaviours.nearest_wall import (
@@ -33,7 +31,6 @@ from naoloc.robot.camera import Camera, look, stand
 __all__ = [
     "SCAN_YAWS",
     "Camera",
-    "GoHomeResult",
     "Localization",
     "SurveyResult",
     "WallSide",
@@ -42,13 +39,11 @@ __all__ = [
     "count_halves",
     "detect_nearest_wall",
     "frames_per_lap",
-    "go_home",
     "localize",
     "look",
     "nearest_side_in_room",
     "nearest_wall",
     "paper_queries",
-    "scan_queries",
     "stand",
     "survey",
     "truth_in_map",

@@ -81,14 +81,22 @@ def lens_of(cfg: Config) -> Lens:
     return lens_for(distortion, *fov)
 
 
-def look(robot: Robot, yaw: float, pitch: float = DEFAULT_HEAD_PITCH) -> tuple[float, float]:
+def look(
+    robot: Robot, yaw: float, pitch: float = DEFAULT_HEAD_PITCH, speed: float = HEAD_SPEED
+) -> tuple[float, float]:
     """Turn the head to ``(yaw, pitch)`` (rad, clamped to the limits); blocking.
+
+    Args:
+        robot: The robot.
+        yaw: HeadYaw, rad.
+        pitch: HeadPitch, rad (negative looks up).
+        speed: Fraction of the head's maximum joint speed.
 
     Returns:
         The angles commanded after clamping.
     """
     yaw, pitch = clamp_head(yaw, pitch)
-    robot.motion.angleInterpolationWithSpeed(["HeadYaw", "HeadPitch"], [yaw, pitch], HEAD_SPEED)
+    robot.motion.angleInterpolationWithSpeed(["HeadYaw", "HeadPitch"], [yaw, pitch], speed)
     return yaw, pitch
 
 

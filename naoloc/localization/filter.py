@@ -1,0 +1,386 @@
+"""The belief: a few Gaussian hypotheses, ranked by the evidence of recent observations.
+
+The filter keeps up to ``max_hypotheses`` :class:`~naoloc.localization.hypothesis.Hypothesis`
+(B-Human's multi-hypothesis self-locator, with nav2 AMCL's mixture sensor models):
+
+- every observation moves every hypothesis by the odometry since the last one, corrects
+  it, and adds the evidence it gives (nats over "clutter") to the hypothesis' score, which
+  forgets a share ``forget_per_observation`` of its past at each observation (so the old
+  place of a robot that was carried fades);
+- a picture whose PnP proposes a pose that no hypothesis explains starts a new
+  hypothesis there (global localization, recovery). It is replayed through the recent
+  observations, so that its score counts the same observations as the others';
+- hypotheses far below the best are dropped, close ones merged.
+
+The belief's answer (:meth:`MultiHypothesisFilter.belief`) weighs each hypothesis by
+``exp(score)`` against the prior that the observations come from somewhere the map does
+not show (``exp(null_nats)``). "Not the mapped room" is that alternative winning.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from naoloc.config import FilterTuning
+from naoloc.geometry import Pose2D, relative_pose, robot_matrix
+from naoloc.localization.floorfix import Walls, candidates
+from naoloc.localization.hypothesis import (
+    Hypothesis,
+    bias_prior,
+    motion_step,
+    predictive_evidence,
+)
+from naoloc.localization.pictures import PictureMatches
+from naoloc.localization.walls import WallMap, fit_line
+from naoloc.mapping.planar_ransac import planar_hypotheses
+from naoloc.perception.floorline import WallLine
+
+__all__ = ["Belief", "Evidence", "MultiHypothesisFilter"]
+
+# Observations kept to replay a new hypothesis through.
+WINDOW = 40
+# An earlier observation taken this near (m, rad by the odometry) also corrects a new
+# hypothesis; farther ones only score it.
+NEAR_M = 0.05
+NEAR_RAD = 0.05
+# The pooled proposal: pictures taken within POOL_M (m) of here, the planar RANSAC's
+# bearing tolerance (rad), pairs drawn and poses kept.
+POOL_M = 0.3
+POOL_BEARING_RAD = 0.015
+POOL_SAMPLES = 1500
+POOL_KEEP = 3
+# Siblings from unexplained lines: from the SHIFT_FROM best hypotheses, moved between
+# SHIFT_MIN_M and SHIFT_MAX_M; a line with more evidence than SHIFT_EXPLAINED_NATS is
+# explained already.
+SHIFT_FROM = 3
+SHIFT_MIN_M = 0.05
+SHIFT_MAX_M = 1.0
+SHIFT_EXPLAINED_NATS = 2.0
+# Line proposals kept (the best the pictures support), and their covariance (m, m, rad);
+# those beside a picture's proposal come from within NEAR_PROPOSAL_M / _RAD of it.
+LINE_PROPOSALS = 8
+NEAR_PROPOSAL_M = 1.0
+NEAR_PROPOSAL_RAD = 0.3
+LINE_PROPOSAL_COV = np.diag([0.06**2, 0.06**2, 0.04**2])
+# Covariance a new hypothesis starts with before its picture corrects it (m, m, rad).
+PROPOSAL_COV = np.diag([0.3**2, 0.3**2, 0.2**2])
+
+Evidence = PictureMatches | tuple[WallLine, ...] | None
+"""What one observation gives the filter: a picture's matches, a scan's lines, or nothing."""
+
+
+@dataclass(frozen=True)
+class Belief:
+    """The filter's answer.
+
+    Attributes:
+        pose: The best hypothesis' pose, map frame (None: no hypothesis).
+        cov: Its covariance (3 x 3: x, y m; theta rad).
+        probability: Its weight among the hypotheses and the other-room alternative.
+        other_room: The other-room alternative's weight.
+        hypotheses: How many hypotheses the filter holds.
+        support: Pictures the best hypothesis explained.
+        pictures: Pictures with features seen so far.
+        contradicted: Whether the latest informative picture proposes a pose the best
+            hypothesis does not explain.
+    """
+
+    pose: np.ndarray | None
+    cov: np.ndarray | None
+    probability: float
+    other_room: float
+    hypotheses: int
+    support: int
+    pictures: int
+    contradicted: bool
+
+
+class MultiHypothesisFilter:
+    """The belief over the robot's pose in one map.
+
+    Args:
+        walls: The map's walls (None: the floor lines are not used).
+        tun: The filter's tuning.
+        turn_scale: The robot's odometry turn per true turn, as the survey measured it.
+    """
+
+    def __init__(self, walls: WallMap | None, tun: FilterTuning, turn_scale: float = 1.0) -> None:
+        self.walls = walls
+        self.tun = tun
+        self.turn_scale = turn_scale if turn_scale > 0 else 1.0
+        self.hypotheses: list[Hypothesis] = []
+        self.window: deque[tuple[Evidence, Pose2D]] = deque(maxlen=WINDOW)
+        self.odometry: Pose2D | None = None
+        self.pictures = 0
+        self.contradicted = False
+
+    def step_of(self, a: Pose2D, b: Pose2D) -> np.ndarray:
+        """The odometry step from ``a`` to ``b`` in FRAME_ROBOT at ``a``, turn de-scaled."""
+        rel = relative_pose(a, b)
+        return np.array([rel.x, rel.y, rel.theta / self.turn_scale])
+
+    def observe(self, evidence: Evidence, odometry: Pose2D) -> None:
+        """Move the belief to ``odometry`` and correct it with ``evidence``."""
+        if self.odometry is not None:
+            step = self.step_of(self.odometry, odometry)
+            for h in self.hypotheses:
+                h.predict(step, self.tun)
+        self.odometry = odometry
+        self.window.append((evidence, odometry))
+        keep = 1.0 - self.tun.forget_per_observation
+        for h in self.hypotheses:
+            h.score = keep * h.score + self._update(h, evidence)
+        if isinstance(evidence, PictureMatches):
+            if evidence.features > 0:
+                self.pictures += 1
+            self._propose(evidence)
+        elif evidence and self.walls is not None:
+            self._shift_to_lines(evidence)
+            if not self._probable():
+                for z in self._line_poses():
+                    self._add(z, None, LINE_PROPOSAL_COV)
+        self._prune()
+
+    def _add(self, z: np.ndarray, anchor: PictureMatches | None, cov: np.ndarray | None) -> bool:
+        """Spawn a hypothesis at ``z`` unless one explains it already; whether it was."""
+        if any(
+            h.mahalanobis(z, PROPOSAL_COV * 0.1) < self.tun.gate_mahalanobis
+            for h in self.hypotheses
+        ):
+            return False
+        h = self._spawn(z, anchor, cov)
+        if h is None:
+            return False
+        self.hypotheses.append(h)
+        return True
+
+    def _carried_lines(self) -> list[WallLine]:
+        """The window's floor lines taken near here, carried into FRAME_ROBOT now."""
+        assert self.odometry is not None
+        out: list[WallLine] = []
+        for evidence, odo in self.window:
+            if not isinstance(evidence, tuple) or not evidence:
+                continue
+            step = self.step_of(self.odometry, odo)  # that frame's pose in the frame now
+            if math.hypot(step[0], step[1]) > POOL_M:
+                continue
+            for line in evidence:
+                normal = line.normal + step[2]
+                shift = math.cos(normal) * step[0] + math.sin(normal) * step[1]
+                out.append(dataclasses.replace(
+                    line, distance=line.distance + shift,
+                    normal=math.atan2(math.sin(normal), math.cos(normal)),
+                ))  # fmt: skip
+        return out
+
+    def _line_poses(self, near: np.ndarray | None = None) -> list[np.ndarray]:
+        """The poses the pooled floor lines allow (every wall and furniture coordinate),
+        the :data:`LINE_PROPOSALS` the pictures support best.
+
+        Args:
+            near: Only poses at this pose's quarter turn within :data:`NEAR_PROPOSAL_M` and
+                :data:`NEAR_PROPOSAL_RAD` of it; None: every quarter turn.
+        """
+        assert self.walls is not None
+        lines = self._carried_lines()
+        if len(lines) < 2:
+            return []
+        walls = Walls(self.walls.frame, self.walls.bounds)
+        heading = None if near is None else float(near[2])
+        poses = [np.array(tuple(p)) for p in candidates(lines, walls, heading)]
+        if near is not None:
+            poses = [
+                z for z in poses
+                if math.hypot(*(z[:2] - near[:2])) < NEAR_PROPOSAL_M
+                and abs(math.remainder(z[2] - near[2], 2 * math.pi)) < NEAR_PROPOSAL_RAD
+            ]  # fmt: skip
+        if not poses:
+            return []
+        scored = [(self._quick_score(z), i, z) for i, z in enumerate(poses)]
+        scored.sort(key=lambda t: (-t[0], t[1]))
+        return [z for s, _i, z in scored[:LINE_PROPOSALS] if s > 0.0]
+
+    def _quick_score(self, z: np.ndarray) -> float:
+        """The window pictures' evidence for pose ``z`` now, without correcting it."""
+        assert self.odometry is not None
+        total = 0.0
+        for evidence, odo in self.window:
+            if isinstance(evidence, PictureMatches) and evidence.points.shape[0]:
+                step = self.step_of(self.odometry, odo)
+                pose, cov = motion_step(z, LINE_PROPOSAL_COV, step, self.tun)
+                cov = cov + bias_prior(self.tun)
+                total += predictive_evidence(evidence, pose, cov, self.tun)
+        return total
+
+    def _shift_to_lines(self, lines: tuple[WallLine, ...]) -> None:
+        """Siblings of the leading hypotheses moved so that a line they leave unexplained
+        is a wall's foot (B-Human resets a hypothesis where percepts agree on another pose).
+
+        Only lines whose direction agrees with a wall's (within ``gate_mahalanobis`` of the
+        line's and the hypothesis' heading noise) and shifts up to :data:`SHIFT_MAX_M`.
+        """
+        assert self.walls is not None
+        leaders = sorted(self.hypotheses, key=lambda h: -h.score)[:SHIFT_FROM]
+        fresh: list[Hypothesis] = []
+        for h in leaders:
+            for line in lines:
+                fit = fit_line(self.walls, line, h.pose, self.tun, h.cov)
+                if fit.wall >= 0 and fit.log_ratio > SHIFT_EXPLAINED_NATS:
+                    continue  # this hypothesis explains the line already
+                dist, direction = self.walls.expected(h.pose)
+                turn = np.angle(np.exp(1j * (line.normal - direction)))
+                sig_a = math.hypot(self.tun.line_sigma_rad, math.sqrt(h.cov[2, 2]))
+                for k in np.flatnonzero(np.abs(turn) < self.tun.gate_mahalanobis * sig_a):
+                    shift = dist[k] - line.distance
+                    if abs(shift) > SHIFT_MAX_M or abs(shift) < SHIFT_MIN_M:
+                        continue
+                    n = np.array([math.cos(self.walls.normals[k]), math.sin(self.walls.normals[k])])
+                    z = np.array([*(h.pose[:2] + shift * n), h.pose[2] - turn[k]])
+                    if any(
+                        g.mahalanobis(z) < self.tun.merge_mahalanobis
+                        for g in [*self.hypotheses, *fresh]
+                    ):
+                        continue
+                    sibling = self._spawn(z, None, h.cov)
+                    if sibling is not None:
+                        fresh.append(sibling)
+        self.hypotheses += fresh
+
+    def _update(self, h: Hypothesis, evidence: Evidence) -> float:
+        if isinstance(evidence, PictureMatches):
+            return h.update_picture(evidence, self.tun).evidence
+        if evidence and self.walls is not None:
+            return h.update_lines(self.walls, evidence, self.tun)
+        return 0.0
+
+    def _propose(self, m: PictureMatches) -> None:
+        """New hypotheses where the pictures put the robot, unless one explains them.
+
+        The picture's own PnP proposes; while no hypothesis is probable, so do the pooled
+        matches of the recent pictures taken near here (a two-point planar RANSAC,
+        :func:`naoloc.mapping.planar_ransac.planar_hypotheses`), which finds a pose no
+        single picture has enough matches for.
+        """
+        self.contradicted = False
+        proposals: list[np.ndarray] = []
+        if m.proposal is not None:
+            proposals.append(m.proposal)
+        elif not self._probable():
+            proposals += self._pooled()
+        for i, z in enumerate(proposals):
+            anchor = m if i == 0 and m.proposal is not None else None
+            added = self._add(z, anchor, None)
+            if added and anchor is not None and len(self.hypotheses) > 1:
+                self.contradicted = True
+            # The walls place the robot better than the landmarks: the poses the lines
+            # allow near this one, at its heading, stand beside it.
+            for w in self._line_poses(near=z):
+                self._add(w, None, LINE_PROPOSAL_COV)
+
+    def _probable(self) -> bool:
+        """Whether the best hypothesis outweighs the others and the other room."""
+        b = self.belief()
+        return b.pose is not None and b.probability >= self.tun.confident
+
+    def _pooled(self) -> list[np.ndarray]:
+        """Poses the pooled matches of the window's pictures taken near here agree on."""
+        assert self.odometry is not None
+        mats, pts, px = [], [], []
+        for evidence, odo in self.window:
+            if not isinstance(evidence, PictureMatches) or evidence.matched.shape[0] == 0:
+                continue
+            step = self.step_of(self.odometry, odo)
+            if math.hypot(step[0], step[1]) > POOL_M:
+                continue
+            to_pic = np.linalg.inv(robot_matrix(*step))  # now-frame point -> picture's frame
+            mat = evidence.projection @ to_pic
+            mats.append(np.repeat(mat[None], evidence.matched.shape[0], axis=0))
+            pts.append(evidence.matched)
+            px.append(evidence.matched_pixels)
+        if not mats or sum(len(p) for p in pts) < self.tun.min_pnp_inliers:
+            return []
+        found = planar_hypotheses(
+            np.concatenate(mats), np.concatenate(pts), np.concatenate(px),
+            bearing_tol_rad=POOL_BEARING_RAD, samples=POOL_SAMPLES, keep=POOL_KEEP,
+            seed=len(self.window),
+        )  # fmt: skip
+        return [pose for count, pose in found if count >= self.tun.min_pnp_inliers]
+
+    def _spawn(
+        self, z: np.ndarray, anchor: PictureMatches | None, cov: np.ndarray | None = None
+    ) -> Hypothesis | None:
+        """A hypothesis at ``z`` (now), scored on the window so that its score counts the
+        same observations as the others' (with the same forgetting).
+
+        ``anchor`` (the picture that proposed it, the window's latest) corrects it first;
+        then every earlier observation taken from (nearly) here corrects it too, and those
+        taken elsewhere only score it, at the pose the odometry carries it back to. None
+        when no observation supports it.
+        """
+        assert self.odometry is not None
+        h = Hypothesis(z, PROPOSAL_COV if cov is None else cov, self.tun)
+        keep = 1.0 - self.tun.forget_per_observation
+        events = list(self.window)
+        score = 0.0
+        if anchor is not None:
+            score = h.update_picture(anchor, self.tun).evidence
+            events = events[:-1]
+        for age, (evidence, odo) in enumerate(reversed(events), start=1 if anchor else 0):
+            step = self.step_of(self.odometry, odo)
+            near = math.hypot(step[0], step[1]) < NEAR_M and abs(step[2]) < NEAR_RAD
+            probe = h if near else Hypothesis(*motion_step(h.pose, h.cov, step, self.tun), self.tun)
+            score += keep**age * self._update(probe, evidence)
+        if h.support + h.line_support == 0:
+            return None
+        h.score = score
+        return h
+
+    def _prune(self) -> None:
+        hs = sorted(self.hypotheses, key=lambda h: -h.score)
+        kept: list[Hypothesis] = []
+        for h in hs:
+            if kept and h.score < kept[0].score - self.tun.prune_nats:
+                continue
+            if any(k.mahalanobis(h.pose, h.cov) < self.tun.merge_mahalanobis for k in kept):
+                continue  # the same place as a better hypothesis
+            kept.append(h)
+            if len(kept) >= self.tun.max_hypotheses:
+                break
+        self.hypotheses = kept
+
+    def belief(self) -> Belief:
+        """The best hypothesis and how much the evidence favours it."""
+        null = self.tun.null_nats
+        if not self.hypotheses:
+            return Belief(None, None, 0.0, 1.0, 0, 0, self.pictures, self.contradicted)
+        scores = np.array([h.score for h in self.hypotheses] + [null])
+        top = float(scores.max())
+        weights = np.exp(scores - top)
+        weights /= weights.sum()
+        best = int(np.argmax(scores[:-1]))
+        h = self.hypotheses[best]
+        return Belief(
+            h.pose.copy(),
+            h.cov.copy(),
+            float(weights[best]),
+            float(weights[-1]),
+            len(self.hypotheses),
+            h.support,
+            self.pictures,
+            self.contradicted,
+        )
+
+    def set_pose(self, pose: np.ndarray, cov: np.ndarray, score: float) -> None:
+        """Start from a known pose (e.g. the survey's start), with ``score`` nats behind it."""
+        self.hypotheses = [Hypothesis(pose, cov, self.tun, score)]
+
+    @staticmethod
+    def sigma(cov: np.ndarray) -> tuple[float, float]:
+        """Position std (m, the larger axis) and heading std (rad) of a covariance."""
+        pos = float(np.sqrt(max(np.linalg.eigvalsh(cov[:2, :2]).max(), 0.0)))
+        return pos, math.sqrt(max(float(cov[2, 2]), 0.0))

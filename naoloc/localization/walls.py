@@ -1,0 +1,151 @@
+"""The floor-line sensor model: floor-wall lines against the walls the map records.
+
+The survey walked a rectangle a known offset inside the room's walls and placed them
+(``meta["wall_poses"]``: the wall frame W in the map frame and the four walls' coordinates
+in W, see :mod:`naoloc.mapping.wall_poses`). A floor-wall line seen from pose
+``x = (px, py, theta)`` (map frame) is a wall's foot: at distance ``d = c - n . p`` along the
+wall's outward normal ``n`` (angle ``alpha``), in direction ``phi = alpha - theta`` in
+FRAME_ROBOT. A line that no wall explains (a bench's front, a skirting board in shadow) is
+clutter: the model is a mixture of the walls and a uniform clutter density over the
+detector's range and all directions, as nav2 AMCL's likelihood field mixes a hit and a
+random measurement.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from naoloc.config import FilterTuning
+from naoloc.geometry import Pose2D
+from naoloc.perception.floorline import WallLine
+
+__all__ = ["LineFit", "WallMap", "wall_map"]
+
+
+@dataclass(frozen=True)
+class WallMap:
+    """The room's walls in the map frame.
+
+    Attributes:
+        frame: The wall frame W in the map frame (x along the survey's first wall).
+        bounds: The walls in W, ``(x_min, x_max, y_min, y_max)``, m.
+        normals: ``(4,)`` outward normal angle of each wall in the map frame, rad.
+        coords: ``(4,)`` each wall's coordinate along its normal, m (``n . p = c`` on it).
+    """
+
+    frame: Pose2D
+    bounds: tuple[float, float, float, float]
+    normals: np.ndarray
+    coords: np.ndarray
+
+    @classmethod
+    def of(cls, frame: Pose2D, bounds: tuple[float, float, float, float]) -> WallMap:
+        """Walls from their frame (map frame) and their bounds in it (m)."""
+        x0, x1, y0, y1 = bounds
+        local = np.array([0.0, math.pi / 2, math.pi, -math.pi / 2])
+        normals = frame.theta + local
+        n = np.column_stack([np.cos(normals), np.sin(normals)])
+        coords = n @ np.array([frame.x, frame.y]) + np.array([x1, y1, -x0, -y0])
+        return cls(frame, (x0, x1, y0, y1), normals, coords)
+
+    def inside(self, x: float, y: float, margin: float = 0.0) -> bool:
+        """Whether the map-frame point (m) is inside the walls by at least ``margin`` (m)."""
+        n = np.column_stack([np.cos(self.normals), np.sin(self.normals)])
+        return bool(np.all(self.coords - n @ np.array([x, y]) >= margin))
+
+    def expected(self, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each wall's distance (m) and direction (rad, FRAME_ROBOT) seen from ``pose``."""
+        n = np.column_stack([np.cos(self.normals), np.sin(self.normals)])
+        dist = self.coords - n @ pose[:2]
+        direction = np.angle(np.exp(1j * (self.normals - pose[2])))
+        return dist, direction
+
+
+def wall_map(meta: dict[str, Any]) -> WallMap | None:
+    """The walls a map's meta records (``wall_poses.wall_frame`` and ``walls_m``), or None.
+
+    None for a map whose keyframe poses did not come from the walls (odometry poses).
+    """
+    wp = meta.get("wall_poses")
+    if not isinstance(wp, dict):
+        return None
+    frame, bounds = wp.get("wall_frame"), wp.get("walls_m")
+    if not (isinstance(frame, list) and len(frame) == 3 and isinstance(bounds, list)):
+        return None
+    values = [*frame, *bounds]
+    if len(bounds) != 4 or not all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values
+    ):
+        return None
+    x0, x1, y0, y1 = (float(v) for v in bounds)
+    if not (x0 < x1 and y0 < y1):
+        return None
+    return WallMap.of(Pose2D(*(float(v) for v in frame)), (x0, x1, y0, y1))
+
+
+@dataclass(frozen=True)
+class LineFit:
+    """One line's best wall at a pose.
+
+    Attributes:
+        wall: Index of the wall (0..3), or -1 when clutter explains it better.
+        residual: ``(2,)`` observed minus expected: distance (m), direction (rad).
+        jacobian: ``(2, 3)`` d residual / d pose (x, y, theta).
+        sigma: ``(2,)`` the line's noise: distance (m), direction (rad).
+        log_ratio: log of (walls-and-clutter mixture / clutter alone), nats.
+    """
+
+    wall: int
+    residual: np.ndarray
+    jacobian: np.ndarray
+    sigma: np.ndarray
+    log_ratio: float
+
+
+def line_sigma(line: WallLine, tun: FilterTuning) -> np.ndarray:
+    """A line's noise: distance (m) growing with distance, direction (rad)."""
+    return np.array([tun.line_sigma_m + tun.line_sigma_per_m * line.distance, tun.line_sigma_rad])
+
+
+def fit_line(
+    walls: WallMap, line: WallLine, pose: np.ndarray, tun: FilterTuning, cov: np.ndarray | None
+) -> LineFit:
+    """The wall that explains ``line`` seen from ``pose`` best, and how much it explains.
+
+    Args:
+        walls: The map's walls.
+        line: A floor-wall line, FRAME_ROBOT.
+        pose: ``(x, y, theta)`` of the robot at capture, map frame.
+        tun: The filter's tuning.
+        cov: The pose's covariance, widening the match (None: the pose is exact).
+
+    Returns:
+        The best wall (or -1) with the residual, Jacobian and the mixture's log ratio.
+    """
+    dist, direction = walls.expected(pose)
+    sigma = line_sigma(line, tun)
+    r_d = line.distance - dist
+    r_a = np.angle(np.exp(1j * (line.normal - direction)))
+    n = np.column_stack([np.cos(walls.normals), np.sin(walls.normals)])
+    best, best_m, best_s = -1, math.inf, np.diag(sigma**2)
+    for k in range(4):
+        jac = np.array([[n[k, 0], n[k, 1], 0.0], [0.0, 0.0, 1.0]])
+        s = np.diag(sigma**2) + (jac @ cov @ jac.T if cov is not None else 0.0)
+        r = np.array([r_d[k], r_a[k]])
+        m = float(r @ np.linalg.solve(s, r))
+        if m < best_m:
+            best, best_m, best_s = k, m, s
+    clutter = tun.line_outlier_share / (tun.line_range_m * 2.0 * math.pi)
+    hit = (
+        (1.0 - tun.line_outlier_share)
+        * math.exp(-0.5 * best_m)
+        / (2.0 * math.pi * math.sqrt(float(np.linalg.det(best_s))))
+    )
+    log_ratio = math.log((hit + clutter) / clutter)
+    jac = np.array([[n[best, 0], n[best, 1], 0.0], [0.0, 0.0, 1.0]])
+    residual = np.array([r_d[best], r_a[best]])
+    return LineFit(best if hit > clutter else -1, residual, jac, sigma, log_ratio)
