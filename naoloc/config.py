@@ -557,7 +557,7 @@ class FilterTuning(_Model):
         0.3, gt=0, description="largest difference of a PnP camera from the head's height (m)"
     )
     pixel_sigma_px: float = Field(
-        2.0, gt=0, description="reprojection noise of a matched landmark (px, std)"
+        3.0, gt=0, description="reprojection noise of a landmark at its pose (px, std)"
     )
     match_outlier_share: float = Field(
         0.5, gt=0, lt=1, description="prior share of a picture's landmark matches that are wrong"
@@ -579,7 +579,7 @@ class FilterTuning(_Model):
         "is no better (PnP poses erred a median 0.07 m in six rooms)",
     )
     landmark_sigma_rad: float = Field(
-        0.02, ge=0, description="heading error of a picture's pose from the landmarks (rad)"
+        0.005, ge=0, description="heading error of a picture's pose from the landmarks (rad)"
     )
     wall_sigma_m: float = Field(
         0.015, ge=0, description="error of the map's walls (m, std; the survey places them "
@@ -595,6 +595,16 @@ class FilterTuning(_Model):
     line_sigma_rad: float = Field(0.04, gt=0, description="floor-line direction noise (rad)")
     line_outlier_share: float = Field(
         0.4, gt=0, lt=1, description="prior share of floor lines that are not a wall's foot"
+    )
+    clutter_aligned: float = Field(
+        0.8,
+        ge=0,
+        le=1,
+        description="share of non-wall floor lines along a wall's direction (furniture "
+        "stands along the walls)",
+    )
+    clutter_aligned_rad: float = Field(
+        0.1, gt=0, le=0.78, description="how near a wall's direction such a line is (rad)"
     )
     line_range_m: float = Field(
         3.0, gt=0, description="farthest floor line the detector reports (m): the clutter range"

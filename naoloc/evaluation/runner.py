@@ -397,7 +397,6 @@ def localize_chunk(chunk: LocalizeChunk) -> list[dict[str, Any]]:
         (map frame; ``localize_ms`` wall time of pictures and map, ``compute_ms`` CPU time of
         the map's work alone).
     """
-    from naoloc.behaviours.localize import floor_step_again
     from naoloc.mapping import load_map
     from naoloc.robot.registry import connect
 
@@ -413,7 +412,7 @@ def localize_chunk(chunk: LocalizeChunk) -> list[dict[str, Any]]:
             change(*_resolve_posters(sim, method, args))
         maps = {s.map_path: load_map(s.map_path) for s in chunk.scorers}
         for pose in chunk.poses:
-            taken: dict[str, tuple[list[Any], Pose2D, Any]] = {}  # queries, truth, lines
+            taken: dict[str, tuple[Any, Pose2D, Any]] = {}  # localization, truth, its map
             done: dict[tuple[str, str, str], tuple[Any, float, float]] = {}
             for scorer in chunk.scorers:
                 key = (scorer.map_path, scorer.mode, scorer.strategy)
@@ -425,25 +424,19 @@ def localize_chunk(chunk: LocalizeChunk) -> list[dict[str, Any]]:
                     except RobotError as err:  # furniture there: not the localizer's fault
                         records.append({"variant": scorer.variant, "skipped": str(err)})
                         break
-                    est, queries, ms, cpu, log = _localize(
-                        robot, maps[scorer.map_path], cfg, scorer
-                    )
-                    taken[scorer.strategy] = (queries, _truth(chunk, sim, queries), log)
+                    vmap = maps[scorer.map_path]
+                    est, result, ms, cpu = _localize(robot, vmap, cfg, scorer)
+                    truth = room_to_map(chunk.origin_room_pose, sim.true_pose())
+                    taken[scorer.strategy] = (result, truth, vmap)
                 else:
                     t1, c1 = time.perf_counter(), time.process_time()
-                    queries, _, log = taken[scorer.strategy]
-                    vmap = maps[scorer.map_path]
-                    if scorer.strategy == "scan" and scorer.mode != "nearest":
-                        feats = vmap.extract(queries)  # once, for the map and the floor step
-                        est = vmap.localize_features(feats, queries, scorer.mode)
-                        est = floor_step_again(vmap, cfg, queries, feats, est, log)
-                    else:
-                        est = _score(vmap, queries, scorer.mode)
+                    result, _, first = taken[scorer.strategy]
+                    est = _rescore(maps[scorer.map_path], first, result, scorer.mode, cfg)
                     ms = (time.perf_counter() - t1) * 1e3
                     cpu = (time.process_time() - c1) * 1e3
                 done[key] = (est, ms, cpu)
-                queries, truth, _ = taken[scorer.strategy]
-                records.append(_record(scorer, pose, truth, est, (ms, cpu), len(queries)))
+                result, truth, _ = taken[scorer.strategy]
+                records.append(_record(scorer, pose, truth, est, (ms, cpu), result))
     return records
 
 
@@ -453,13 +446,18 @@ def _record(
     truth: Pose2D,
     est: Any,
     times_ms: tuple[float, float],
-    queries: int,
+    result: Any,
 ) -> dict[str, Any]:
     ex, ey, et = float(est.x), float(est.y), float(est.theta)
     err = math.hypot(ex - truth.x, ey - truth.y)
     head = abs(modulo2PI(et - truth.theta)) if math.isfinite(et) else float("nan")
-    details = dict(getattr(est, "details", {}) or {})
-    details["queries"] = queries
+    details = dict(getattr(est, "evidence", {}) or {})
+    details["queries"] = result.pictures
+    details["line_scans"] = result.line_scans
+    details["extra_turns"] = result.extra_turns
+    if est.reason:
+        details["reason"] = est.reason
+    cov = est.covariance
     return {
         "variant": scorer.variant,
         "mode": scorer.mode,
@@ -469,11 +467,14 @@ def _record(
         "room_pose": list(pose.room_pose),
         "truth": truth.to_list(),
         "estimate": [ex, ey, et],
-        "confidence": float(getattr(est, "confidence", float("nan"))),
+        "confidence": float(est.confidence),
+        "status": str(est.status),
+        "covariance": None if cov is None else np.asarray(cov).tolist(),
         "error_m": err if math.isfinite(err) else float("nan"),
         "heading_error_deg": math.degrees(head),
         "localize_ms": times_ms[0],
         "compute_ms": times_ms[1],
+        "robot_s": float(result.robot_s),
         "details": jsonable(details),
     }
 
@@ -519,39 +520,35 @@ def _require_sim(robot: Any) -> Any:
     return robot.sim
 
 
-def _localize(
-    robot: Any, vmap: Any, cfg: Any, scorer: Scorer
-) -> tuple[Any, list[Any], float, float, Any]:
-    """Run the localize behaviour; returns the estimate, its queries, its wall time (ms),
-    the CPU time of its map work (ms) and the floor lines it measured (or None)."""
+def _localize(robot: Any, vmap: Any, cfg: Any, scorer: Scorer) -> tuple[Any, Any, float, float]:
+    """Run the localize behaviour; returns the estimate, the localization, its wall time
+    (ms) and the CPU time of its estimation (ms)."""
     from naoloc.behaviours.localize import localize
+    from naoloc.localization.paper import localize_nearest_image
 
     mode = "paper" if scorer.mode == "nearest" else scorer.mode
     result = localize(robot, vmap, cfg, mode=mode, strategy=scorer.strategy)
-    queries = list(result.queries)
-    log = result.floor_log
     if scorer.mode == "nearest":
         c1 = time.process_time()
-        est = _score(vmap, queries, "nearest")
-        return est, queries, float(result.wall_s) * 1e3, (time.process_time() - c1) * 1e3, log
-    est = result.estimate
-    return est, queries, float(result.wall_s) * 1e3, float(result.compute_s) * 1e3, log
+        est = localize_nearest_image(vmap, result.queries)
+        return est, result, float(result.wall_s) * 1e3, (time.process_time() - c1) * 1e3
+    return result.estimate, result, float(result.wall_s) * 1e3, float(result.compute_s) * 1e3
 
 
-def _truth(chunk: LocalizeChunk, sim: Any, queries: Sequence[Any]) -> Pose2D:
-    """True pose in the map frame when the last query was taken."""
-    last = queries[-1] if queries else None
-    if last is not None and last.true_pose is not None:
-        room = last.true_pose
-    else:
-        room = Pose2D.from_list(sim.true_pose())
-    return room_to_map(chunk.origin_room_pose, (room.x, room.y, room.theta))
+def _rescore(vmap: Any, first: Any, result: Any, mode: str, cfg: Any) -> Any:
+    """The estimate another map (or mode) gives from a localization's observations.
 
+    The scan strategy's observations are replayed through a filter over ``vmap`` (as hloc
+    re-runs from stored features: the same pictures and lines, matched to this map); the
+    paper's pictures go to Algorithm 5 or the nearest image.
+    """
+    from naoloc.localization.localizer import replay
+    from naoloc.localization.paper import localize_nearest_image, localize_paper
 
-def _score(vmap: Any, queries: Sequence[Any], mode: str) -> Any:
-    """Estimate the pose from already captured queries with another map or mode."""
+    queries = result.queries
     if mode == "nearest":
-        from naoloc.evaluation.baseline import nearest_neighbour
-
-        return nearest_neighbour(vmap, queries)
-    return vmap.localize(queries, mode=mode)
+        return localize_nearest_image(vmap, queries)
+    if mode == "paper" or result.strategy == "paper":
+        return localize_paper(vmap, vmap.extract(queries), queries)
+    same = vmap.feature_params == first.feature_params
+    return replay(vmap, result.observations, cfg.localize.filter, same_features=same).pose()

@@ -31,11 +31,9 @@ from naoloc.geometry import Pose2D, relative_pose, robot_matrix
 from naoloc.localization.floorfix import Walls, candidates
 from naoloc.localization.hypothesis import (
     Hypothesis,
-    bias_prior,
     motion_step,
-    predictive_evidence,
 )
-from naoloc.localization.pictures import PictureMatches
+from naoloc.localization.pictures import PictureMatches, picture_log_ratio
 from naoloc.localization.walls import WallMap, fit_line
 from naoloc.mapping.planar_ransac import planar_hypotheses
 from naoloc.perception.floorline import WallLine
@@ -67,6 +65,11 @@ LINE_PROPOSALS = 8
 NEAR_PROPOSAL_M = 1.0
 NEAR_PROPOSAL_RAD = 0.3
 LINE_PROPOSAL_COV = np.diag([0.06**2, 0.06**2, 0.04**2])
+# Exploration along the walls' axes: from the EXPLORE_FROM best hypotheses, by these
+# steps (m); a step must gain EXPLORE_MARGIN_NATS of the pictures' evidence.
+EXPLORE_FROM = 2
+EXPLORE_STEPS_M = (-0.6, -0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45, 0.6)
+EXPLORE_MARGIN_NATS = 3.0
 # Covariance a new hypothesis starts with before its picture corrects it (m, m, rad).
 PROPOSAL_COV = np.diag([0.3**2, 0.3**2, 0.2**2])
 
@@ -141,9 +144,8 @@ class MultiHypothesisFilter:
             self._propose(evidence)
         elif evidence and self.walls is not None:
             self._shift_to_lines(evidence)
-            if not self._probable():
-                for z in self._line_poses():
-                    self._add(z, None, LINE_PROPOSAL_COV)
+            for z in self._line_poses():
+                self._add(z, None, LINE_PROPOSAL_COV)
         self._prune()
 
     def _add(self, z: np.ndarray, anchor: PictureMatches | None, cov: np.ndarray | None) -> bool:
@@ -211,10 +213,10 @@ class MultiHypothesisFilter:
         total = 0.0
         for evidence, odo in self.window:
             if isinstance(evidence, PictureMatches) and evidence.points.shape[0]:
-                step = self.step_of(self.odometry, odo)
-                pose, cov = motion_step(z, LINE_PROPOSAL_COV, step, self.tun)
-                cov = cov + bias_prior(self.tun)
-                total += predictive_evidence(evidence, pose, cov, self.tun)
+                pose, _ = motion_step(
+                    z, np.zeros((3, 3)), self.step_of(self.odometry, odo), self.tun
+                )
+                total += picture_log_ratio(evidence, pose, self.tun)
         return total
 
     def _shift_to_lines(self, lines: tuple[WallLine, ...]) -> None:
@@ -270,8 +272,7 @@ class MultiHypothesisFilter:
         proposals: list[np.ndarray] = []
         if m.proposal is not None:
             proposals.append(m.proposal)
-        elif not self._probable():
-            proposals += self._pooled()
+        proposals += self._pooled()
         for i, z in enumerate(proposals):
             anchor = m if i == 0 and m.proposal is not None else None
             added = self._add(z, anchor, None)
@@ -281,6 +282,33 @@ class MultiHypothesisFilter:
             # allow near this one, at its heading, stand beside it.
             for w in self._line_poses(near=z):
                 self._add(w, None, LINE_PROPOSAL_COV)
+        self._explore()
+
+    def _explore(self) -> None:
+        """Neighbours of the leading hypotheses along the walls' axes, where the pictures
+        agree better (a line of furniture in front of a wall, taken for the wall, puts a
+        hypothesis a bench's depth off; its landmarks then fit better a step away).
+
+        Each leader's pose is shifted by :data:`EXPLORE_STEPS_M` along the wall frame's x
+        and y; a shift whose pictures' evidence beats the leader's own by
+        :data:`EXPLORE_MARGIN_NATS` becomes a hypothesis.
+        """
+        if self.walls is None:
+            return
+        ux = np.array([math.cos(self.walls.frame.theta), math.sin(self.walls.frame.theta)])
+        axes = (ux, np.array([-ux[1], ux[0]]))
+        for h in sorted(self.hypotheses, key=lambda h: -h.score)[:EXPLORE_FROM]:
+            own = self._quick_score(h.pose)
+            best, best_z = own + EXPLORE_MARGIN_NATS, None
+            for axis in axes:
+                for step in EXPLORE_STEPS_M:
+                    z = h.pose.copy()
+                    z[:2] += step * axis
+                    score = self._quick_score(z)
+                    if score > best:
+                        best, best_z = score, z
+            if best_z is not None:
+                self._add(best_z, None, LINE_PROPOSAL_COV)
 
     def _probable(self) -> bool:
         """Whether the best hypothesis outweighs the others and the other room."""

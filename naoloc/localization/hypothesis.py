@@ -31,14 +31,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from naoloc.config import FilterTuning
-from naoloc.localization.pictures import EVIDENCE_CAP, PictureMatches, mixture, reprojection
+from naoloc.localization.pictures import (
+    EVIDENCE_CAP,
+    PictureMatches,
+    mixture,
+    picture_log_ratio,
+    reprojection,
+)
 from naoloc.localization.walls import WallMap, fit_line
 from naoloc.perception.floorline import WallLine
 
 __all__ = ["Hypothesis", "PictureFit", "motion_step", "predictive_evidence", "wrap"]
 
 # Evidence one line scan can give at most, nats: its lines share the map's wall errors.
-LINE_EVIDENCE_CAP = 8.0
+LINE_EVIDENCE_CAP = 4.0
 
 
 def wrap(angle: float) -> float:
@@ -253,11 +259,11 @@ class Hypothesis:
                 break
         per = np.bincount(m.group, weights=resp, minlength=m.features)
         inliers = int(np.sum(per > 0.5))
-        evidence = float(predictive or 0.0)
         if inliers < tun.min_inliers:
-            return PictureFit(inliers, evidence, False)
+            return PictureFit(inliers, picture_log_ratio(m, self.pose, tun), False)
         self.state = x
         self.full = 0.5 * (cur + cur.T)
+        evidence = picture_log_ratio(m, self.pose, tun)
         self.support += 1
         self.last_inliers = inliers
         return PictureFit(inliers, evidence, True)

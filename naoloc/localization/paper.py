@@ -11,6 +11,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -20,7 +21,7 @@ from naoloc.mapping.data import MapData
 from naoloc.perception.features import Features
 from naoloc.robot.keyframe import Keyframe
 
-__all__ = ["featured_neuron_poses", "localize_paper"]
+__all__ = ["featured_neuron_poses", "localize_nearest_image", "localize_paper"]
 
 
 def featured_neuron_poses(vmap: MapData) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -90,4 +91,54 @@ def localize_paper(
         float(np.mean(xs)), float(np.mean(ys)), modulo2PI(theta),
         None, float(np.clip(conf, 0.0, 1.0)), Status.TRACKING, "", "gcs",
         {"neurons": winners},
+    )  # fmt: skip
+
+
+def localize_nearest_image(vmap: Any, queries: Sequence[Keyframe]) -> PoseEstimate:
+    """The plain nearest-neighbour baseline: does the GCS network earn its place?
+
+    Exactly the paper's Algorithm 5 with the network taken out: each query's histogram
+    (same features, vocabulary and distance as the GCS winner search) is matched to the
+    nearest *training image* histogram instead of the nearest neuron, and the estimate is
+    the mean pose of those images (map frame, at the last query). Training images without
+    keypoints are left out.
+
+    Args:
+        vmap: A :class:`naoloc.mapping.VisualMap`.
+        queries: Query images; their odometry poses give the turn between them.
+    """
+    feats = vmap.extract(queries)
+    usable = [i for i, f in enumerate(feats) if len(f) > 0]
+    poses = np.asarray(vmap.keyframe_poses, dtype=np.float64)
+    nan = float("nan")
+    if not usable or len(poses) == 0:
+        return PoseEstimate(nan, nan, nan, None, 0.0, Status.LOST, "no features", "none")
+    hists = np.asarray(vmap.histograms, dtype=np.float64)
+    heads = np.asarray(vmap.keyframe_heads, dtype=np.float64)
+    # Training images without a keypoint have no histogram to compare: leave them out (an
+    # empty histogram would be the nearest one to every unusual query).
+    has_kp = np.diff(np.asarray(vmap.kp_offsets)) > 0
+    if not has_kp.any():
+        has_kp[:] = True
+    has_kp[vmap.wall_images :] = False  # the paper's training images: the wall pictures
+    hists = np.where(has_kp[:, None], hists, np.inf)
+    turns = _turns_to_last(queries, 1.0)
+    xs, ys, sin_sum, cos_sum, closeness, images = [], [], 0.0, 0.0, [], []
+    for i in usable:
+        hist = vmap.vocabulary.histogram(feats[i].descriptors)
+        d2 = np.sum((hists - hist[None, :]) ** 2, axis=1)
+        j = int(np.argmin(d2))
+        images.append(j)
+        xs.append(poses[j, 0])
+        ys.append(poses[j, 1])
+        view = poses[j, 2] + heads[j, 0]  # camera heading of the training image, map frame
+        theta_last = view - queries[i].head_yaw + turns[i]
+        sin_sum += math.sin(theta_last)
+        cos_sum += math.cos(theta_last)
+        closeness.append(max(0.0, 1.0 - math.sqrt(float(d2[j])) / math.sqrt(2.0)))
+    conf = len(usable) / len(feats) * float(np.mean(closeness))
+    return PoseEstimate(
+        float(np.mean(xs)), float(np.mean(ys)), modulo2PI(math.atan2(sin_sum, cos_sum)),
+        None, float(np.clip(conf, 0.0, 1.0)), Status.TRACKING, "", "nearest-image",
+        {"images": images},
     )  # fmt: skip

@@ -42,7 +42,7 @@ __all__ = [
 
 # Evidence one picture can give at most, nats: its features' landmarks share the map's
 # errors in one place, so many of them say little more than a few.
-EVIDENCE_CAP = 12.0
+EVIDENCE_CAP = 40.0
 
 
 @dataclass(frozen=True, eq=False)

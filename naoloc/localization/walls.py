@@ -111,6 +111,21 @@ def line_sigma(line: WallLine, tun: FilterTuning) -> np.ndarray:
     return np.array([tun.line_sigma_m + tun.line_sigma_per_m * line.distance, tun.line_sigma_rad])
 
 
+def clutter_density(walls: WallMap, line: WallLine, pose: np.ndarray, tun: FilterTuning) -> float:
+    """Density (per m and rad) of a line that is not a wall's foot, at ``line``.
+
+    Rooms' furniture stands along the walls: a clutter line is within
+    ``clutter_aligned_rad`` of a wall's direction with probability ``clutter_aligned``
+    (a bench's front, a bookcase's foot), otherwise any direction; at any distance up to
+    ``line_range_m``.
+    """
+    _dist, direction = walls.expected(pose)
+    off = np.abs(np.angle(np.exp(1j * (line.normal - direction))))
+    width = tun.clutter_aligned_rad
+    aligned = float(np.any(off < width)) * tun.clutter_aligned / (4 * 2 * width)
+    return (aligned + (1.0 - tun.clutter_aligned) / (2.0 * math.pi)) / tun.line_range_m
+
+
 def fit_line(
     walls: WallMap, line: WallLine, pose: np.ndarray, tun: FilterTuning, cov: np.ndarray | None
 ) -> LineFit:
@@ -139,7 +154,7 @@ def fit_line(
         m = float(r @ np.linalg.solve(s, r))
         if m < best_m:
             best, best_m, best_s = k, m, s
-    clutter = tun.line_outlier_share / (tun.line_range_m * 2.0 * math.pi)
+    clutter = tun.line_outlier_share * clutter_density(walls, line, pose, tun)
     hit = (
         (1.0 - tun.line_outlier_share)
         * math.exp(-0.5 * best_m)
