@@ -582,12 +582,21 @@ class FilterTuning(_Model):
         0.005, ge=0, description="heading error of a picture's pose from the landmarks (rad)"
     )
     wall_sigma_m: float = Field(
-        0.015, ge=0, description="error of the map's walls (m, std; the survey places them "
-        "to 1-4 cm)"
+        0.015,
+        ge=0,
+        description="error of the map's walls (m, std; the survey places them to 1-4 cm)",
     )
     wall_sigma_rad: float = Field(
         0.01, ge=0, description="direction error of the map's walls (rad, std)"
     )
+    map_floor_m: float = Field(
+        0.02,
+        ge=0,
+        description="error no number of observations removes: the map's own placement of "
+        "its walls and landmarks around the robot (m, std; added to the reported "
+        "covariance)",
+    )
+    map_floor_rad: float = Field(0.01, ge=0, description="the same for the heading (rad, std)")
     line_sigma_m: float = Field(0.02, gt=0, description="floor-line distance noise (m, std)")
     line_sigma_per_m: float = Field(
         0.02, ge=0, description="floor-line distance noise growing with distance (m per m)"
@@ -595,6 +604,16 @@ class FilterTuning(_Model):
     line_sigma_rad: float = Field(0.04, gt=0, description="floor-line direction noise (rad)")
     line_outlier_share: float = Field(
         0.4, gt=0, lt=1, description="prior share of floor lines that are not a wall's foot"
+    )
+    min_line_span_m: float = Field(
+        0.25, ge=0, description="floor lines shorter than this along the floor are not used (m)"
+    )
+    line_agree_rad: float = Field(
+        0.1, gt=0, description="lines that propose poses agree on the heading within this (rad)"
+    )
+    line_agree_m: float = Field(0.12, gt=0, description="their coordinates are one within this (m)")
+    behind_wall_m: float = Field(
+        0.2, ge=0, description="a proposed pose puts no seen line farther behind its wall (m)"
     )
     clutter_aligned: float = Field(
         0.8,
@@ -622,8 +641,10 @@ class FilterTuning(_Model):
         3.0, gt=0, description="hypotheses closer than this (Mahalanobis) are merged"
     )
     gate_mahalanobis: float = Field(
-        4.0, gt=0, description="a picture's pose farther than this from a hypothesis does not "
-        "update it (Mahalanobis, 3 degrees of freedom)"
+        4.0,
+        gt=0,
+        description="a picture's pose farther than this from a hypothesis does not "
+        "update it (Mahalanobis, 3 degrees of freedom)",
     )
     forget_per_observation: float = Field(
         0.03,

@@ -33,6 +33,7 @@ from naoloc.behaviours.nearest_wall import detect_nearest_wall, detect_wall_by_f
 from naoloc.behaviours.wall_follow import FloorEye
 from naoloc.config import load_config
 from naoloc.evaluation.protocols import PAPER_POSITIONS, paper_poses
+from naoloc.localization.paper import localize_paper
 from naoloc.mapping import load_map
 from naoloc.robot.camera import Camera, lens_of, look, stand
 from naoloc.robot.keyframe import Keyframe
@@ -85,7 +86,7 @@ def main() -> int:
                     line = f"position {pose.group}: halves {'left' if halves > 0 else 'right'}"
                     line += f", floor lines {lines.side}:"
                     for way, queries in views.items():
-                        est = vmap.localize(queries, mode="paper")
+                        est = localize_paper(vmap, vmap.extract(queries), queries)
                         err = (
                             math.hypot(est.x - truth.x, est.y - truth.y) if est.found else math.inf
                         )

@@ -36,8 +36,9 @@ _MAX_LINE = 1000  # characters of an error line (with its notes) printed on stde
 VERBS: dict[str, str] = {
     "survey": "Algorithm 3: walk closed laps, record images and odometry poses (MCAP)",
     "build-map": "Algorithm 4: features -> histograms -> GCS -> neuron poses (map .npz)",
-    "localize": "Algorithm 5: the robot's pose in the map from 1-2 images",
-    "go-home": "walk back to the map origin using the map",
+    "localize": "the robot's pose in the map from a short look (or the paper's 1-2 images)",
+    "go-home": "walk back to the map origin on the live pose",
+    "track": "the pose at every camera frame while the robot walks (JSON lines)",
     "evaluate": "measure localization error with the paper or random protocol",
     "serve": "serve a simulated robot as a virtual NAOqi",
     "demo": "survey -> build map -> localize in the default simulated room",
@@ -48,6 +49,13 @@ def _pose(text: str) -> float:
     value = float(text)
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return value
+
+
+def _positive(text: str) -> float:
+    value = _pose(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a positive number")
     return value
 
 
@@ -92,7 +100,7 @@ def build_parser() -> argparse.ArgumentParser:
         "-o", "--output", required=True, metavar="MAP.npz", type=Path,
         help="the map to write (a picture of it goes beside it)",
     )  # fmt: skip
-    for verb in ("localize", "go-home"):
+    for verb in ("localize", "go-home", "track"):
         p = add(verb)
         p.add_argument(
             "-m", "--map", required=True, metavar="MAP.npz", type=Path, help="a built map"
@@ -103,6 +111,15 @@ def build_parser() -> argparse.ArgumentParser:
         )  # fmt: skip
         p.add_argument("--png", type=Path, default=None, help="write a picture of the result")
         _add_live(p)
+        if verb == "track":
+            p.add_argument(
+                "--to", nargs=2, type=_pose, metavar=("X", "Y"), default=None,
+                help="walk to this point (map frame, m) while tracking; default: stand",
+            )  # fmt: skip
+            p.add_argument(
+                "--duration", type=_positive, default=20.0, metavar="S",
+                help="robot seconds to track at most (default 20)",
+            )  # fmt: skip
     p = add("evaluate")
     p.add_argument("--protocol", choices=("paper", "random", "anywhere"), default="random")
     p.add_argument("-n", type=int, default=40, help="test poses (random protocol)")

@@ -298,7 +298,9 @@ def localize(
             feats = vmap.extract(queries)
             estimate = localize_paper(vmap, feats, queries)
             compute = time.process_time() - c0
-            observations: list[Observation] = [Picture(q, f) for q, f in zip(queries, feats)]
+            observations: list[Observation] = [
+                Picture(q, f) for q, f in zip(queries, feats, strict=True)
+            ]
             pictures = len(queries)
         else:
             order = list(yaws)
@@ -312,9 +314,7 @@ def localize(
                         break
                 if loc.pose().found or turned >= extra_turns:
                     break
-                if loc.pose().status is Status.NOT_MAPPED and loc.filter.pictures >= 2 * len(
-                    yaws
-                ):
+                if loc.pose().status is Status.NOT_MAPPED and loc.filter.pictures >= 2 * len(yaws):
                     break  # two sweeps fit no place: looking more will not change that
                 try:
                     if not robot.motion.moveTo(0.0, 0.0, EXTRA_TURN_RAD):

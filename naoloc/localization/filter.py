@@ -28,11 +28,11 @@ import numpy as np
 
 from naoloc.config import FilterTuning
 from naoloc.geometry import Pose2D, relative_pose, robot_matrix
-from naoloc.localization.floorfix import Walls, candidates
 from naoloc.localization.hypothesis import (
     Hypothesis,
     motion_step,
 )
+from naoloc.localization.line_poses import line_poses
 from naoloc.localization.pictures import PictureMatches, picture_log_ratio
 from naoloc.localization.walls import WallMap, fit_line
 from naoloc.mapping.planar_ransac import planar_hypotheses
@@ -67,9 +67,11 @@ NEAR_PROPOSAL_RAD = 0.3
 LINE_PROPOSAL_COV = np.diag([0.06**2, 0.06**2, 0.04**2])
 # Exploration along the walls' axes: from the EXPLORE_FROM best hypotheses, by these
 # steps (m); a step must gain EXPLORE_MARGIN_NATS of the pictures' evidence.
-EXPLORE_FROM = 2
+EXPLORE_FROM = 1
 EXPLORE_STEPS_M = (-0.6, -0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45, 0.6)
 EXPLORE_MARGIN_NATS = 3.0
+# Pictures a quick score looks at (the latest ones of the window).
+QUICK_PICTURES = 8
 # Covariance a new hypothesis starts with before its picture corrects it (m, m, rad).
 PROPOSAL_COV = np.diag([0.3**2, 0.3**2, 0.2**2])
 
@@ -146,6 +148,7 @@ class MultiHypothesisFilter:
             self._shift_to_lines(evidence)
             for z in self._line_poses():
                 self._add(z, None, LINE_PROPOSAL_COV)
+            self._explore()
         self._prune()
 
     def _add(self, z: np.ndarray, anchor: PictureMatches | None, cov: np.ndarray | None) -> bool:
@@ -155,6 +158,11 @@ class MultiHypothesisFilter:
             for h in self.hypotheses
         ):
             return False
+        if anchor is None and self.hypotheses:
+            # Not worth a replay when the pictures say far less for it than for the best.
+            best = max(self.hypotheses, key=lambda g: g.score)
+            if self._quick_score(z) < self._quick_score(best.pose) - self.tun.prune_nats:
+                return False
         h = self._spawn(z, anchor, cov)
         if h is None:
             return False
@@ -188,13 +196,13 @@ class MultiHypothesisFilter:
             near: Only poses at this pose's quarter turn within :data:`NEAR_PROPOSAL_M` and
                 :data:`NEAR_PROPOSAL_RAD` of it; None: every quarter turn.
         """
-        assert self.walls is not None
+        if self.walls is None:
+            return []
         lines = self._carried_lines()
         if len(lines) < 2:
             return []
-        walls = Walls(self.walls.frame, self.walls.bounds)
         heading = None if near is None else float(near[2])
-        poses = [np.array(tuple(p)) for p in candidates(lines, walls, heading)]
+        poses = line_poses(lines, self.walls, self.tun, heading)
         if near is not None:
             poses = [
                 z for z in poses
@@ -208,15 +216,16 @@ class MultiHypothesisFilter:
         return [z for s, _i, z in scored[:LINE_PROPOSALS] if s > 0.0]
 
     def _quick_score(self, z: np.ndarray) -> float:
-        """The window pictures' evidence for pose ``z`` now, without correcting it."""
+        """The latest pictures' evidence for pose ``z`` now, without correcting it."""
         assert self.odometry is not None
         total = 0.0
-        for evidence, odo in self.window:
-            if isinstance(evidence, PictureMatches) and evidence.points.shape[0]:
-                pose, _ = motion_step(
-                    z, np.zeros((3, 3)), self.step_of(self.odometry, odo), self.tun
-                )
-                total += picture_log_ratio(evidence, pose, self.tun)
+        pictures = [
+            (e, o) for e, o in self.window if isinstance(e, PictureMatches) and e.points.shape[0]
+        ]
+        for evidence, odo in pictures[-QUICK_PICTURES:]:
+            step = self.step_of(self.odometry, odo)
+            pose, _ = motion_step(z, np.zeros((3, 3)), step, self.tun)
+            total += picture_log_ratio(evidence, pose, self.tun)
         return total
 
     def _shift_to_lines(self, lines: tuple[WallLine, ...]) -> None:
@@ -282,7 +291,6 @@ class MultiHypothesisFilter:
             # allow near this one, at its heading, stand beside it.
             for w in self._line_poses(near=z):
                 self._add(w, None, LINE_PROPOSAL_COV)
-        self._explore()
 
     def _explore(self) -> None:
         """Neighbours of the leading hypotheses along the walls' axes, where the pictures
@@ -392,9 +400,24 @@ class MultiHypothesisFilter:
         weights /= weights.sum()
         best = int(np.argmax(scores[:-1]))
         h = self.hypotheses[best]
+        # The belief's spread about the best pose: its own covariance, the hypotheses near
+        # it by their weight (moment matching), and the map's irreducible error.
+        cov = h.cov.copy()
+        near = 0.0
+        spread = np.zeros((3, 3))
+        for w, g in zip(weights[:-1], self.hypotheses, strict=True):
+            if g is h or w < 1e-6:
+                continue
+            d = g.pose - h.pose
+            d[2] = math.remainder(float(d[2]), 2 * math.pi)
+            spread += w * (g.cov + np.outer(d, d))
+            near += w
+        if near > 0:
+            cov = (weights[best] * cov + spread) / (weights[best] + near)
+        cov = cov + np.diag([self.tun.map_floor_m**2] * 2 + [self.tun.map_floor_rad**2])
         return Belief(
             h.pose.copy(),
-            h.cov.copy(),
+            cov,
             float(weights[best]),
             float(weights[-1]),
             len(self.hypotheses),

@@ -272,9 +272,10 @@ def mixture(
     e = tun.match_outlier_share
     wrong = e / m.area_px
     cov = np.broadcast_to(cov, (res.shape[0], 2, 2))
-    det = np.linalg.det(cov)
-    sol = np.linalg.solve(cov, res[..., None])[..., 0]
-    m2 = np.einsum("ni,ni->n", res, sol)
+    a, b, d = cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 1]
+    det = a * d - b * b
+    rx, ry = res[:, 0], res[:, 1]
+    m2 = (d * rx * rx - 2.0 * b * rx * ry + a * ry * ry) / det  # 2 x 2 inverse in closed form
     prior = (1.0 - e) / m.per_feature
     hit = np.where(
         front, prior * np.exp(-0.5 * np.minimum(m2, 700.0)) / (2 * math.pi * np.sqrt(det)), 0.0

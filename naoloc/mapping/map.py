@@ -22,28 +22,18 @@ from naoloc.config import MapConfig
 from naoloc.mapping.builder import ProgressFn, build_map_data, pinhole_features
 from naoloc.mapping.data import MapData
 from naoloc.mapping.landmarks import query_camera
-from naoloc.mapping.localizer import (
-    Estimate,
-    LocalizeMode,
-    MatchMemo,
-    localize_features,
-    map_extractor,
-)
 from naoloc.mapping.mapfile import read_map, save_map
 from naoloc.perception.features import FeatureExtractor, Features
 from naoloc.robot.keyframe import Keyframe
 from naoloc.robot.lens import Lens
 
-__all__ = ["MODES", "VisualMap", "build_map", "load_map"]
-
-#: The localize modes' names (see :class:`~naoloc.mapping.localizer.LocalizeMode`).
-MODES = tuple(m.value for m in LocalizeMode)
+__all__ = ["VisualMap", "build_map", "load_map"]
 
 
 @dataclass(eq=False)
 class VisualMap(MapData):
     """A learned room (see :class:`~naoloc.mapping.data.MapData` for the attributes),
-    with localize, extract and save as methods."""
+    with extract and save as methods."""
 
     _extractor: FeatureExtractor | None = field(default=None, repr=False)
 
@@ -56,7 +46,13 @@ class VisualMap(MapData):
     def extractor(self) -> FeatureExtractor:
         """The feature extractor the map was built with (created once)."""
         if self._extractor is None:
-            self._extractor = map_extractor(self)
+            p = self.feature_params
+            self._extractor = FeatureExtractor(
+                p["kind"],
+                int(p.get("max_features", 0)),
+                float(p.get("akaze_threshold", 0.001)),
+                int(p.get("min_keypoints", 0)),
+            )
         return self._extractor
 
     def extract(self, queries: Sequence[Keyframe]) -> list[Features]:
@@ -65,36 +61,6 @@ class VisualMap(MapData):
         ex = self.extractor()
         lens = Lens.from_dict(self.meta.get("lens"))  # the same robot's camera as the survey's
         return [pinhole_features(ex, q, query_camera(q), lens) for q in queries]
-
-    def localize(
-        self, queries: Sequence[Keyframe], mode: LocalizeMode | str = LocalizeMode.VERIFIED
-    ) -> Estimate:
-        """Estimate the robot pose when the last query was taken (Algorithm 5 and beyond).
-
-        Args:
-            queries: One or more images; their ``pose`` is odometry in any fixed frame (only
-                relative poses between queries are used); head angles at capture.
-            mode: ``verified`` (default) or ``paper``.
-
-        Returns:
-            The estimate in the map frame; confidence 0 when no query has features.
-
-        Raises:
-            NaolocError: On an unknown mode or no queries.
-        """
-        return self.localize_features(self.extract(queries), queries, mode)
-
-    def localize_features(
-        self,
-        feats: Sequence[Features],
-        queries: Sequence[Keyframe],
-        mode: LocalizeMode | str = LocalizeMode.VERIFIED,
-        memo: MatchMemo | None = None,
-    ) -> Estimate:
-        """Like :meth:`localize` with the query features already extracted; ``memo`` keeps
-        each picture's work for the next call on a growing scan
-        (:class:`naoloc.mapping.localizer.MatchMemo`)."""
-        return localize_features(self, feats, queries, mode, memo)
 
     def save(self, path: str | Path) -> None:
         """Write the map to one ``.npz`` file (see naoloc.mapping.mapfile)."""

@@ -15,6 +15,7 @@ import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -378,3 +379,12 @@ def grid_from_map(
     for x, y, _t in np.vstack([poses, np.zeros((1, 3))]):
         grid.mark(float(x), float(y), walked_radius, FREE, force=True)
     return grid
+
+
+def grid_of_map(vmap: Any) -> FloorGrid:
+    """The floor grid of a map: keyframe poses walked free, landmarks near the floor blocked."""
+    refined = getattr(vmap, "refined_poses", None)
+    poses = np.asarray(vmap.keyframe_poses if refined is None else refined)
+    points = getattr(vmap, "kp_points", None)
+    pts = np.empty((0, 3)) if points is None else np.asarray(points)
+    return grid_from_map(poses, pts)

@@ -308,39 +308,26 @@ def estimate_pose(estimate: Any) -> tuple[float, float, float] | None:
 
 
 def show_estimate(view: LiveView, estimate: Any) -> None:
-    """Show a :class:`naoloc.mapping.localizer.Estimate` with its 3 x 3 covariance of x, y,
-    theta: ``details['covariance']``, else what the localize JSON line reports (when known)."""
-    covariance = (getattr(estimate, "details", None) or {}).get("covariance")
-    if covariance is None and estimate_pose(estimate) is not None:
-        try:  # the uncertainty the localize JSON line reports, where the code has it
-            import importlib
-
-            behaviour = importlib.import_module("naoloc.behaviours.localize")
-            known = getattr(behaviour, "estimate_covariance", None)
-            fields: dict[str, Any] = known(estimate) if known is not None else {}
-            covariance = fields.get("covariance")
-        except Exception:  # no covariance is shown as zero (unknown), never invented
-            covariance = None
-    view.estimate(estimate_pose(estimate), covariance=covariance)
+    """Show a :class:`naoloc.localization.PoseEstimate` with its 3 x 3 covariance of x, y,
+    theta (none shown when it has none: unknown, never invented)."""
+    cov = getattr(estimate, "covariance", None)
+    view.estimate(estimate_pose(estimate), covariance=None if cov is None else np.asarray(cov))
 
 
-def follow_rounds(
-    view: LiveView, then: Callable[[int, Any], None] | None = None
-) -> Callable[[int, Any], None]:
-    """An ``on_round(tries, localization)`` callback for go-home that shows each estimate and
-    the path of estimates so far (misses leave the path as it was), then calls ``then``."""
+def follow_track(view: LiveView) -> Callable[[Any], None]:
+    """An ``on_point(track_point)`` callback (track, go-home) that shows each pose and the
+    path of poses so far."""
     walked: list[tuple[float, float, float]] = []
 
-    def on_round(tries: int, localization: Any) -> None:
-        show_estimate(view, localization.estimate)
-        pose = estimate_pose(localization.estimate)
+    def on_point(point: Any) -> None:
+        show_estimate(view, point.estimate)
+        pose = estimate_pose(point.estimate)
         if pose is not None:
             walked.append(pose)
-            view.path(walked)
-        if then is not None:
-            then(tries, localization)
+            if len(walked) % 5 == 1:
+                view.path(walked)
 
-    return on_round
+    return on_point
 
 
 class _WatchedVideo:

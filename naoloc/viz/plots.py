@@ -21,7 +21,8 @@ from naoloc.robot.keyframe import Keyframe
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-    from naoloc.mapping import Estimate, VisualMap
+    from naoloc.localization.localizer import PoseEstimate as Estimate
+    from naoloc.mapping import VisualMap
 
 
 def room_corners(origin_room_pose: Sequence[float], room_size: Sequence[float]) -> np.ndarray:

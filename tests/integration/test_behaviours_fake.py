@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -23,7 +24,7 @@ from naoloc.config import Config, load_config
 from naoloc.data.dataset import partial_path_for, read_dataset
 from naoloc.data.recorder import record_survey
 from naoloc.geometry import Pose2D, relative_pose
-from naoloc.mapping.localizer import Estimate, no_estimate
+from naoloc.localization import Picture, PoseEstimate, Status
 from naoloc.robot import Robot
 from naoloc.robot.camera import Camera, stand
 from naoloc.robot.keyframe import Keyframe
@@ -60,44 +61,53 @@ CIRCUIT = np.array(
 
 
 class TruthMap:
-    """A map double: the estimate is the true map-frame pose plus a fixed offset (m).
+    """A map double: the survey circuit's keyframes and no landmarks (go-home's floor grid
+    knows only the walked floor), and the map origin in the room frame."""
 
-    Its keyframes are the survey circuit and it has no landmarks, so go-home's floor grid
-    knows only the walked floor (the rest of the room is unknown, not blocked).
-    """
-
-    def __init__(self, robot: Robot, origin_room: Pose2D, *offsets: tuple[float, float]) -> None:
-        self.robot = robot
+    def __init__(self, origin_room: Pose2D) -> None:
         self.meta = {"origin_room_pose": origin_room.to_list()}
-        self.offsets = offsets  # used in turn, one per call
-        self.calls: list[int] = []
         self.keyframe_poses = CIRCUIT
 
     def extract(self, queries: Sequence[Keyframe]) -> list[None]:
-        """No features: the double answers from the truth (one placeholder per picture)."""
+        """No features: the filter double answers from the truth."""
         return [None] * len(queries)
 
-    def localize_features(
-        self,
-        feats: Sequence[None],
-        queries: Sequence[Keyframe],
-        mode: str = "verified",
-        memo: object = None,
-    ) -> Estimate:
-        assert len(feats) == len(queries)
-        return self.localize(queries, mode)
 
-    def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> Estimate:
-        offset = self.offsets[len(self.calls) % len(self.offsets)]
-        self.calls.append(len(queries))
+class TruthLocalizer:
+    """A filter double: the true map-frame pose plus a fixed offset (m), with a 1 cm
+    covariance, once it has taken ``needed`` pictures (before: lost).
+
+    Records every observation it is given, as the real filter does.
+    """
+
+    def __init__(
+        self, robot: Robot, vmap: TruthMap, offset: tuple[float, float] = (0.0, 0.0),
+        needed: int = 1,
+    ) -> None:  # fmt: skip
+        self.robot, self.vmap, self.offset, self.needed = robot, vmap, offset, needed
+        self.log: list[Any] = []
+        self.cpu_s = 0.0
+        self.filter = SimpleNamespace(walls=None, pictures=0)
+
+    def update(self, obs: Any) -> None:
+        self.log.append(obs)
+        if isinstance(obs, Picture):
+            self.filter.pictures += 1
+
+    def pose(self) -> PoseEstimate:
+        nan = float("nan")
+        if self.filter.pictures < self.needed:
+            return PoseEstimate(nan, nan, nan, None, 0.0, Status.LOST, "test: not yet", "none")
         assert self.robot.sim is not None
         truth = relative_pose(
-            Pose2D.from_list(self.meta["origin_room_pose"]),
+            Pose2D.from_list(self.vmap.meta["origin_room_pose"]),
             Pose2D.from_list(self.robot.sim.true_pose()),
         )
-        # A verified PnP estimate over many inliers: the filter trusts it to a few cm.
-        details = {"method": "pnp", "inliers": 200}
-        return Estimate(truth.x + offset[0], truth.y + offset[1], truth.theta, 1.0, mode, details)
+        cov = np.diag([1e-4, 1e-4, 1e-4])
+        return PoseEstimate(
+            truth.x + self.offset[0], truth.y + self.offset[1], truth.theta, cov, 1.0,
+            Status.TRACKING,
+        )  # fmt: skip
 
 
 def test_survey_walks_the_rectangle_and_records_each_step() -> None:
@@ -208,306 +218,87 @@ def test_localize_never_translates_and_reports_error(strategy: str) -> None:
         assert sim is not None
         origin = Pose2D.from_list(sim.true_pose())
         sim.teleport(2.0, 1.2, 2.5)
-        vmap = TruthMap(robot, origin, (0.3, -0.4))
+        vmap = TruthMap(origin)
+        loc = TruthLocalizer(robot, vmap, (0.3, -0.4), needed=3)
         before = Pose2D.from_list(sim.true_pose())
-        loc = localize(robot, vmap, cfg, strategy=strategy)  # type: ignore[arg-type]
+        if strategy == "paper":
+            from naoloc.behaviours.localize import paper_queries
+
+            with Camera(robot, cfg.camera, "t") as camera:
+                queries = paper_queries(camera, 2)
+            yaws = [q.head_yaw for q in queries]
+            # Two looks at the nearest wall, the second a little nearer its normal.
+            assert abs(yaws[1]) - abs(yaws[0]) == pytest.approx(PAPER_SECOND_OFFSET, abs=0.02)
+            return
+        result = localize(robot, vmap, cfg, localizer=loc)  # type: ignore[arg-type]
         after = Pose2D.from_list(sim.true_pose())
     assert before.distance(after) < 0.02
-    assert vmap.calls == [len(SCAN_YAWS) if strategy == "scan" else 2]
-    assert loc.error_m == pytest.approx(0.5, abs=1e-6)
-    assert loc.truth is not None and loc.truth.distance(relative_pose(origin, after)) < 1e-9
-    yaws = [q.head_yaw for q in loc.queries]
-    if strategy == "scan":
-        assert max(yaws) - min(yaws) > 3.5
-    else:  # two looks at the nearest wall, the second a little nearer its normal
-        assert abs(yaws[1]) - abs(yaws[0]) == pytest.approx(PAPER_SECOND_OFFSET, abs=0.02)
-    summary = loc.summary()
+    # A short look: it stops once the belief is concentrated (the third picture here).
+    assert result.pictures == 3 and len(loc.log) == result.pictures
+    assert result.error_m == pytest.approx(0.5, abs=1e-6)
+    assert result.truth is not None and result.truth.distance(relative_pose(origin, after)) < 1e-9
+    summary = result.summary()
     assert summary["error_m"] == pytest.approx(0.5, abs=1e-3) and "heading_error_deg" in summary
-    assert 0.0 <= summary["compute_s"] <= loc.wall_s  # the double's work: next to nothing
+    assert summary["status"] == "tracking" and summary["robot_s"] > 0
 
 
-def test_the_cpu_meter_counts_its_blocks_only() -> None:
-    """compute_s: CPU inside the timed blocks; waiting (a picture, a walk) is not counted."""
-    import time
-
-    from naoloc.behaviours.localize import CpuMeter
-
-    meter = CpuMeter()
-    with meter.timed():
-        t0 = time.process_time()
-        while time.process_time() - t0 < 0.03:
-            pass
-    time.sleep(0.05)
-    with pytest.raises(ValueError), meter.timed():
-        raise ValueError("counted all the same")
-    assert 0.03 <= meter.seconds < 0.05
-
-
-def test_localize_scan_with_a_turn_in_place() -> None:
+def test_localize_turns_in_place_while_lost() -> None:
     cfg = small_cfg()
     with connect(cfg) as robot:
         sim = robot.sim
         assert sim is not None
         origin = Pose2D.from_list(sim.true_pose())
         sim.teleport(1.5, 1.5, 0.0)
-        loc = localize(robot, TruthMap(robot, origin, (0.0, 0.0)), cfg, turns=2)  # type: ignore[arg-type]
+        loc = TruthLocalizer(robot, TruthMap(origin), needed=len(SCAN_YAWS) + 2)
+        result = localize(robot, TruthMap(origin), cfg, localizer=loc)  # type: ignore[arg-type]
         after = Pose2D.from_list(sim.true_pose())
-    assert len(loc.queries) == 2 * len(SCAN_YAWS)
+    assert result.extra_turns == 1 and result.pictures == len(SCAN_YAWS) + 2
     assert math.hypot(after.x - 1.5, after.y - 1.5) < 0.05
-    assert abs(abs(after.theta) - math.pi) < 0.1
+    assert abs(after.theta - math.pi / 2) < 0.1  # a quarter turn, no walk
 
 
-def test_go_home_walks_back_to_the_origin() -> None:
+def test_localize_gives_up_lost_after_its_turns() -> None:
+    cfg = small_cfg()
+    with connect(cfg) as robot:
+        origin = Pose2D.from_list(robot.sim.true_pose())  # type: ignore[union-attr]
+        loc = TruthLocalizer(robot, TruthMap(origin), needed=10**6)
+        result = localize(robot, TruthMap(origin), cfg, localizer=loc, extra_turns=1)  # type: ignore[arg-type]
+        assert not robot.motion.moveIsActive()
+    assert not result.estimate.found and result.extra_turns == 1
+    assert result.summary()["x"] is None and result.summary()["reason"]
+
+
+def test_go_home_walks_back_to_the_origin_on_the_live_pose() -> None:
     cfg = small_cfg()
     with connect(cfg) as robot:
         sim = robot.sim
         assert sim is not None
         origin = Pose2D.from_list(sim.true_pose())
         sim.teleport(2.2, 2.1, -2.0)
-        vmap = TruthMap(robot, origin, (0.05, -0.05))  # a biased but honest localizer
-        result = go_home(robot, vmap, cfg)  # type: ignore[arg-type]
+        vmap = TruthMap(origin)
+        loc = TruthLocalizer(robot, vmap, (0.03, -0.03))  # a biased but honest filter
+        result = go_home(robot, vmap, cfg, localizer=loc)  # type: ignore[arg-type]
         assert not robot.motion.moveIsActive()
-    assert result.reached
-    assert 1 <= result.tries <= 2
-    assert result.error_m is not None and result.error_m < 0.15
-    assert result.summary()["tries"] == result.tries
+    assert result.reached and result.looks == 1  # it never stopped to look again
+    assert result.error_m is not None and result.error_m < 0.2
+    assert len(result.trail) > 10  # a pose at every frame while walking
+    summary = result.summary()
+    assert summary["tries"] == 1 and summary["reached"] is True
+    # Walking continuously: little more than the time to walk the path.
+    assert result.robot_s < 2.0 * result.walk_s + 10.0
 
 
-def test_go_home_gives_up_after_max_tries() -> None:
+def test_go_home_stops_and_looks_when_lost_and_gives_up() -> None:
     cfg = small_cfg()
     with connect(cfg) as robot:
-        sim = robot.sim
-        assert sim is not None
-        origin = Pose2D.from_list(sim.true_pose())
-        sim.teleport(1.5, 1.5, 0.0)
-        # Wedged: every walk is blocked at once, so the robot never gets home.
-        robot.motion.moveTo = lambda *a, **k: False  # type: ignore[method-assign]
-        vmap = TruthMap(robot, origin, (0.0, 0.0))
-        result = go_home(robot, vmap, cfg)  # type: ignore[arg-type]
+        origin = Pose2D.from_list(robot.sim.true_pose())  # type: ignore[union-attr]
+        robot.sim.teleport(1.5, 1.5, 0.0)  # type: ignore[union-attr]
+        loc = TruthLocalizer(robot, TruthMap(origin), needed=10**6)  # never recognises anything
+        result = go_home(robot, TruthMap(origin), cfg, localizer=loc)  # type: ignore[arg-type]
+        assert not robot.motion.moveIsActive()
     assert not result.reached and result.reason
-    assert result.tries <= cfg.go_home.max_tries
-    assert result.blocked_at  # each blocked walk was remembered and planned around
+    assert result.looks == cfg.go_home.max_tries
     assert result.summary()["reached"] is False
-
-
-class UnsureMap(TruthMap):
-    """A truth double whose confidence follows a script (one value per call, last repeats)."""
-
-    def __init__(self, robot: Robot, origin_room: Pose2D, confidences: Sequence[float]) -> None:
-        super().__init__(robot, origin_room, (0.0, 0.0))
-        self.confidences = list(confidences)
-
-    def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> Estimate:
-        est = super().localize(queries, mode)
-        conf = self.confidences[min(len(self.calls), len(self.confidences)) - 1]
-        if conf <= 0.0:  # recognised nothing
-            return no_estimate(mode, "test: nothing recognised")
-        return Estimate(est.x, est.y, est.theta, conf, mode, est.details)
-
-
-@pytest.mark.parametrize(
-    ("confidences", "calls", "turned"),
-    [((0.3, 0.5, 0.99), [1, 2, 3], 2), ((0.2,), [1, 2, 3, 4], 3), ((0.99,), [1], 0)],
-)
-def test_localize_turns_in_place_until_confident(
-    confidences: tuple[float, ...], calls: list[int], turned: int
-) -> None:
-    cfg = small_cfg()
-    with connect(cfg) as robot:
-        sim = robot.sim
-        assert sim is not None
-        origin = Pose2D.from_list(sim.true_pose())
-        sim.teleport(1.5, 1.4, 0.3)
-        vmap = UnsureMap(robot, origin, confidences)
-        loc = localize(robot, vmap, cfg)  # type: ignore[arg-type]
-        after = Pose2D.from_list(sim.true_pose())
-        assert not robot.motion.moveIsActive()
-    # sweeps so far, then (after turns) the last sweep alone for the heading
-    assert vmap.calls == [len(SCAN_YAWS) * k for k in calls] + ([len(SCAN_YAWS)] if turned else [])
-    assert loc.extra_turns == turned and loc.summary()["extra_turns"] == turned
-    assert math.hypot(after.x - 1.5, after.y - 1.4) < 0.05  # turned, never translated
-    assert abs(naoloc_modulo(after.theta - 0.3 - turned * math.pi / 2)) < 0.1
-    # The estimate is for where the robot stands at the last picture.
-    assert loc.truth is not None and loc.truth.distance(relative_pose(origin, after)) < 1e-9
-    bodies = {round(q.pose.theta, 1) for q in loc.queries}
-    assert len(bodies) == turned + 1
-
-
-@pytest.mark.parametrize(
-    ("outcome", "support", "alternatives", "calls", "floor_calls"),
-    [
-        ("floor_confirmed", 5, False, [1], 1),
-        ("floor_consistent", 33, False, [1], 1),
-        ("floor_consistent", 6, False, [1, 2, 3, 4], 2),
-        ("floorlines", 40, False, [1], 1),
-        ("undecided", 0, False, [1, 2, 3, 4], 2),
-        ("floor_confirmed", 5, True, [1], 1),
-    ],
-    ids=[
-        "confirmed-stops",
-        "consistent-stops",
-        "consistent-but-weak-turns",
-        "vote-winner-stops",
-        "undecided-turns",
-        "look-alike-confirmed-stops",
-    ],
-)
-def test_floor_lines_may_settle_the_first_sweep(
-    monkeypatch: pytest.MonkeyPatch,
-    outcome: str,
-    support: int,
-    alternatives: bool,
-    calls: list[int],
-    floor_calls: int,
-) -> None:
-    """A first sweep that is not confident goes to the floor step before the robot turns:
-    when the step decides (it confirms the PnP pose, keeps it by a clear margin and enough
-    support, or a floor candidate wins the vote) the scan stops there, whatever look-alike
-    the pictures saw;
-    when it leaves the estimate as it was, the robot turns as before and the floor step
-    runs again at the end, with lines measured where the robot then stands."""
-    import importlib
-
-    module = importlib.import_module("naoloc.behaviours.localize")
-    seen: list[Estimate] = []
-    logs: list[Any] = []
-
-    def floor_fix(
-        _r: Any, _v: Any, _c: Any, _q: Any, _f: Any, est: Estimate, _m: Any, log: Any
-    ) -> Estimate:
-        seen.append(est)
-        logs.append(log)
-        if outcome == "undecided":
-            return est
-        if outcome == "floorlines":
-            return Estimate(est.x, est.y, est.theta, 0.3, est.mode,
-                            {**est.details, "method": "floorlines"})  # fmt: skip
-        return Estimate(est.x, est.y, est.theta, est.confidence, est.mode,
-                        {**est.details, outcome: True, "floor_support": support})  # fmt: skip
-
-    monkeypatch.setattr(module, "_floor_fix", floor_fix)
-
-    class Unsure(UnsureMap):
-        def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> Estimate:
-            est = super().localize(queries, mode)
-            if alternatives:
-                est.details["alternatives"] = [[0.0, 0.0, 0.0, 30]]
-            return est
-
-    cfg = small_cfg()
-    with connect(cfg) as robot:
-        sim = robot.sim
-        assert sim is not None
-        origin = Pose2D.from_list(sim.true_pose())
-        sim.teleport(1.5, 1.4, 0.3)
-        vmap = Unsure(robot, origin, (0.5,))
-        loc = localize(robot, vmap, cfg)  # type: ignore[arg-type]
-        assert not robot.motion.moveIsActive()
-    sweeps = [len(SCAN_YAWS) * k for k in calls]
-    assert vmap.calls == sweeps + ([len(SCAN_YAWS)] if len(calls) > 1 else [])
-    assert loc.extra_turns == len(calls) - 1 and len(seen) == floor_calls
-    if outcome == "floorlines":
-        assert loc.estimate.method == "floorlines"
-    elif outcome != "undecided":
-        assert loc.estimate.details.get(outcome) is True  # the last floor step's word
-    assert len(loc.queries) == sweeps[-1]
-    # One log per localization: the lines of the first floor step reach the last one.
-    assert all(log is logs[0] for log in logs) and logs[0] is not None
-
-
-def test_a_first_sweep_that_recognised_nothing_goes_to_the_floor_step(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    """No estimate from the first sweep: the floor step still runs before any turn, and a
-    candidate that clearly wins its vote ends the scan there."""
-    import importlib
-
-    module = importlib.import_module("naoloc.behaviours.localize")
-    seen: list[Estimate] = []
-
-    def floor_fix(
-        _r: Any, _v: Any, _c: Any, _q: Any, _f: Any, est: Estimate, _m: Any, *_: Any
-    ) -> Estimate:
-        seen.append(est)
-        return Estimate(1.0, 2.0, 0.5, 0.3, "verified", {"method": "floorlines"})
-
-    monkeypatch.setattr(module, "_floor_fix", floor_fix)
-    cfg = small_cfg()
-    with connect(cfg) as robot:
-        sim = robot.sim
-        assert sim is not None
-        vmap = UnsureMap(robot, Pose2D.from_list(sim.true_pose()), (0.0,))
-        loc = localize(robot, vmap, cfg)  # type: ignore[arg-type]
-        assert not robot.motion.moveIsActive()
-    assert len(seen) == 1 and not seen[0].found
-    assert loc.extra_turns == 0 and len(loc.queries) == len(SCAN_YAWS)
-    assert loc.estimate.method == "floorlines" and loc.estimate.found
-
-
-@pytest.mark.parametrize("floor_ran", [True, False], ids=["floor-step-ran", "no-floor-step"])
-def test_an_unverified_guess_the_floor_leaves_standing_is_no_estimate(
-    monkeypatch: pytest.MonkeyPatch, floor_ran: bool
-) -> None:
-    """A keyframe-bearing guess the floor step checked but neither confirmed nor replaced
-    is reported as no estimate (kept in the details); without a floor step it stays."""
-    import importlib
-
-    module = importlib.import_module("naoloc.behaviours.localize")
-
-    def floor_fix(
-        _r: Any, _v: Any, _c: Any, _q: Any, _f: Any, est: Estimate, _m: Any, *_: Any
-    ) -> Estimate:
-        if floor_ran:
-            est.details.update(floor_lines=4, floor_candidates=2, floor_support=12)
-        return est
-
-    monkeypatch.setattr(module, "_floor_fix", floor_fix)
-
-    class Guessing(TruthMap):
-        def localize(self, queries: Sequence[Keyframe], mode: str = "verified") -> Estimate:
-            est = super().localize(queries, mode)
-            return Estimate(est.x + 2.0, est.y, est.theta, 0.1, mode, {"method": "keyframes"})
-
-    cfg = small_cfg()
-    with connect(cfg) as robot:
-        sim = robot.sim
-        assert sim is not None
-        vmap = Guessing(robot, Pose2D.from_list(sim.true_pose()), (0.0, 0.0))
-        loc = localize(robot, vmap, cfg)  # type: ignore[arg-type]
-    est = loc.estimate
-    if floor_ran:
-        assert not est.found and loc.summary()["method"] == "none"
-        assert loc.summary()["x"] is None and loc.error_m is None
-        assert est.details["unverified"]["method"] == "keyframes"
-        assert len(est.details["unverified"]["pose"]) == 3
-    else:
-        assert est.found and est.method == "keyframes" and est.confidence == 0.1
-
-
-def test_heading_after_turns_comes_from_the_last_sweep() -> None:
-    from naoloc.behaviours.localize import _heading_from_last_sweep
-
-    class Tail:
-        def __init__(self, method: str) -> None:
-            self.method = method
-
-        def localize_features(
-            self,
-            feats: Sequence[None],
-            queries: Sequence[Keyframe],
-            mode: str = "verified",
-            memo: object = None,
-        ) -> Estimate:
-            return Estimate(9.0, 9.0, 0.5, 0.9, mode, {"method": self.method})
-
-    combined = Estimate(1.0, 2.0, 0.2, 0.8, "verified", {"method": "pnp"})
-    got = _heading_from_last_sweep(Tail("pnp"), [], [], combined, "verified")  # type: ignore[arg-type]
-    assert (got.x, got.y, got.theta) == (1.0, 2.0, 0.5)  # position kept, heading replaced
-    kept = _heading_from_last_sweep(Tail("keyframes"), [], [], combined, "verified")  # type: ignore[arg-type]
-    assert kept == combined  # keyframe bearings do not replace a PnP heading
-    rough = Estimate(1.0, 2.0, 0.2, 0.3, "verified", {"method": "keyframes"})
-    got = _heading_from_last_sweep(Tail("keyframes"), [], [], rough, "verified")  # type: ignore[arg-type]
-    assert (got.x, got.y, got.theta) == (1.0, 2.0, 0.5)  # but they replace the same, combined
 
 
 def naoloc_modulo(angle: float) -> float:
@@ -515,58 +306,3 @@ def naoloc_modulo(angle: float) -> float:
     from naoloc.geometry import modulo2PI
 
     return modulo2PI(angle)
-
-
-def test_go_home_plans_around_a_blocked_walk() -> None:
-    cfg = small_cfg()
-    with connect(cfg) as robot:
-        sim = robot.sim
-        assert sim is not None
-        origin = Pose2D.from_list(sim.true_pose())
-        sim.teleport(2.2, 2.1, -2.0)
-        real_move = robot.motion.moveTo
-        moves: list[tuple[float, ...]] = []
-
-        def first_walk_blocked(*args: Any, **kwargs: Any) -> bool:
-            moves.append(tuple(float(a) for a in args))
-            if len(moves) == 1:
-                return False  # an obstacle on the way home
-            return bool(real_move(*args, **kwargs))
-
-        robot.motion.moveTo = first_walk_blocked  # type: ignore[method-assign]
-        vmap = TruthMap(robot, origin, (0.0, 0.0))
-        result = go_home(robot, vmap, cfg, leg_m=5.0)  # type: ignore[arg-type]
-    assert result.reached and result.error_m is not None and result.error_m < 0.15
-    assert result.tries >= 2 and len(result.blocked_at) == 1
-    summary = result.summary()
-    assert summary["reached"] and summary["path_m"] > 1.0 and summary["blocked"] == 1
-    assert summary["method"] == "filter" and len(summary["covariance"]) == 3
-
-
-def test_go_home_steps_when_nothing_is_recognised() -> None:
-    cfg = small_cfg()
-    with connect(cfg) as robot:
-        sim = robot.sim
-        assert sim is not None
-        origin = Pose2D.from_list(sim.true_pose())
-        sim.teleport(1.5, 1.5, 0.0)
-        vmap = UnsureMap(robot, origin, (0.0, 0.0, 0.0, 0.0, 0.99))
-        result = go_home(robot, vmap, cfg)  # type: ignore[arg-type]
-    # Lost all around (4 sweeps), one step forward, then a confident estimate leads home.
-    n = len(SCAN_YAWS)  # pictures per sweep
-    assert vmap.calls[:5] == [n, 2 * n, 3 * n, 4 * n, n]
-    assert result.reached and result.error_m is not None and result.error_m < 0.15
-
-
-def test_go_home_legs_stop_short_and_stalls_are_seen() -> None:
-    from naoloc.behaviours.go_home import FINAL_LEG_M, _leg_length, _stalled
-
-    here = Pose2D(1.5, 0.0, math.pi)
-    home = [Pose2D(0.0, 0.0)]
-    assert _leg_length(here, home, 2.0) == pytest.approx(1.5 - FINAL_LEG_M / 2)
-    assert _leg_length(Pose2D(0.5, 0.0), home, 2.0) == 2.0  # near: the whole way
-    assert _leg_length(Pose2D(4.0, 0.0), home, 2.0) == 2.0  # far: a full leg
-    # 0.5 m of odometry, but the fixes before and after are 5 cm apart: blocked ahead.
-    bump = _stalled((Pose2D(2.0, 1.0), 0.5, 0.0), Pose2D(2.05, 1.0))
-    assert bump is not None and bump.x == pytest.approx(2.05 + 0.3) and bump.y == 1.0
-    assert _stalled((Pose2D(2.0, 1.0), 0.5, 0.0), Pose2D(2.45, 1.0)) is None

@@ -13,7 +13,7 @@ import yaml
 from naoloc.app.cli import main
 from naoloc.evaluation.protocols import PROTOCOL_BANDS, distance_to_walls, sample_protocol_poses
 from naoloc.evaluation.stats import group_rows
-from naoloc.mapping.localizer import no_estimate
+from naoloc.localization import Localizer, Status
 
 pytest.importorskip("naoloc.backends.fake")
 
@@ -79,12 +79,16 @@ def test_recognised_pose_exits_0_with_method(
         == 0
     )
     line = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
-    assert line["method"] in ("pnp", "keyframes") and line["error_m"] < 0.3
+    assert line["method"] == "filter" and line["status"] == "tracking"
+    assert line["error_m"] < 0.3
 
 
-def test_no_estimate_has_no_pose() -> None:
-    est = no_estimate("verified", "no features")
+def test_no_observation_has_no_pose(textured_map: Path) -> None:
+    from naoloc.mapping import load_map
+
+    est = Localizer(load_map(textured_map)).pose()
     assert not est.found and est.method == "none" and est.confidence == 0.0
+    assert est.status is Status.LOST and est.reason
     assert all(math.isnan(v) for v in (est.x, est.y, est.theta))
 
 

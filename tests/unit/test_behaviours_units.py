@@ -83,12 +83,11 @@ def test_nearest_side_from_the_room_layout() -> None:
 
 
 def test_truncate_route_keeps_the_first_metres() -> None:
-    from naoloc.behaviours.go_home import _densify, truncate_route
     from naoloc.geometry import Pose2D
+    from naoloc.navigation.route import truncate_route
 
     here = Pose2D(3.0, 4.0, 1.0)
-    route = _densify(here, [Pose2D()])  # 5 m to the origin, waypoints at most 0.75 m apart
-    assert len(route) == 7 and route[-1] == Pose2D()
+    route = [Pose2D(3.0 * (1 - k / 6), 4.0 * (1 - k / 6)) for k in range(1, 7)]  # 5 m home
     leg = truncate_route(here, route, 2.0)
     assert math.hypot(leg[-1].x - 3.0, leg[-1].y - 4.0) == pytest.approx(2.0)
     assert leg[-1].x == pytest.approx(3.0 * 0.6) and leg[-1].y == pytest.approx(4.0 * 0.6)
@@ -99,19 +98,23 @@ def test_truncate_route_keeps_the_first_metres() -> None:
     assert (cut[-1].x, cut[-1].y) == pytest.approx((1.0, 0.5))
 
 
-def test_go_home_is_not_home_while_a_verified_fix_says_otherwise() -> None:
-    """A belief within the tolerance is not enough when the last fix, verified by the floor
-    lines, puts the robot farther: go-home said "reached" 0.42 m from home that way."""
-    from naoloc.behaviours.go_home import _fix_says_away
-    from naoloc.localization.fusion import fix_from_estimate
-    from naoloc.mapping import Estimate
+@pytest.mark.parametrize(
+    ("here", "expect"),
+    [
+        ((0.0, 0.0, 0.0), "forward"),  # goal ahead: walk forward, no turn
+        ((0.0, 0.0, math.pi), "turn"),  # goal behind: turn in place first
+        ((0.0, 0.5, 0.0), "right"),  # goal ahead and to the right: forward, turning right
+    ],
+)
+def test_pursuit_walks_toward_the_route(here: tuple[float, float, float], expect: str) -> None:
+    from naoloc.geometry import Pose2D
+    from naoloc.navigation.route import pursuit
 
-    confirmed = {"method": "pnp", "inliers": 62, "floor_confirmed": True}
-    away = Estimate(-0.40, 0.17, -0.1, 0.72, "verified", confirmed)
-    near = Estimate(-0.05, 0.03, -0.1, 0.72, "verified", confirmed)
-    unverified = Estimate(-0.40, 0.17, -0.1, 0.72, "verified", {"method": "pnp", "inliers": 62})
-    assert _fix_says_away(fix_from_estimate(away), 0.15)
-    assert not _fix_says_away(fix_from_estimate(near), 0.15)
-    assert not _fix_says_away(
-        fix_from_estimate(unverified), 0.15
-    )  # the filter's belief decides then
+    cmd = pursuit(Pose2D(*here), [Pose2D(2.0, 0.0)])
+    if expect == "forward":
+        assert cmd.x > 0 and abs(cmd.theta) < 1e-9
+    elif expect == "turn":
+        assert cmd.x == 0 and cmd.theta != 0
+    else:
+        assert cmd.x > 0 and cmd.theta < 0
+    assert pursuit(Pose2D(*here), []).x == 0.0

@@ -8,8 +8,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from naoloc.evaluation.baseline import nearest_neighbour
 from naoloc.geometry import Pose2D
+from naoloc.localization.paper import localize_nearest_image as nearest_neighbour
 from naoloc.robot.keyframe import Keyframe
 
 
@@ -50,13 +50,13 @@ def test_nearest_image_pose_and_heading() -> None:
     est = nearest_neighbour(vmap, [_query(1, Pose2D(5, 5, 0.3), -math.pi / 2)])
     assert (est.x, est.y) == pytest.approx((2.0, 0.0))
     assert est.theta == pytest.approx(0.0)
-    assert est.mode == "nearest" and est.details["images"] == [1]
+    assert est.method == "nearest-image" and est.evidence["images"] == [1]
     # Two queries: mean pose; the heading is the last query's (turned +0.5 rad in place).
     q1 = _query(1, Pose2D(0, 0, 0.0), -math.pi / 2)
     q2 = _query(2, Pose2D(0, 0, 0.5), -math.pi / 2)
     est = nearest_neighbour(vmap, [q1, q2])
     assert (est.x, est.y) == pytest.approx((2.0, 1.0))
-    assert est.details["images"] == [1, 2]
+    assert est.evidence["images"] == [1, 2]
     assert 0 < est.confidence <= 1
 
 
@@ -64,10 +64,10 @@ def test_images_without_keypoints_never_win_and_no_features_gives_zero_confidenc
     vmap = _map()
     vmap.extract = lambda qs: [_Len(descriptors=int(q.image[0, 0])) for q in qs]
     est = nearest_neighbour(vmap, [_query(0, Pose2D(), -math.pi / 2)])
-    assert est.details["images"] == [0]
+    assert est.evidence["images"] == [0]
     vmap.extract = lambda qs: [_Empty() for _ in qs]
     est = nearest_neighbour(vmap, [_query(0, Pose2D(), 0.0)])
-    assert est.confidence == 0.0 and est.details["method"] == "none"
+    assert est.confidence == 0.0 and est.method == "none" and not est.found
 
 
 def test_far_pictures_are_never_the_nearest_training_image() -> None:
@@ -75,7 +75,7 @@ def test_far_pictures_are_never_the_nearest_training_image() -> None:
     images: the nearest-image baseline never picks one, however close its histogram."""
     vmap = _map()
     vmap.extract = lambda qs: [_Len(descriptors=int(q.image[0, 0])) for q in qs]
-    assert nearest_neighbour(vmap, [_query(2, Pose2D(), -math.pi / 2)]).details["images"] == [2]
+    assert nearest_neighbour(vmap, [_query(2, Pose2D(), -math.pi / 2)]).evidence["images"] == [2]
     vmap.wall_images = 2  # image 2 (and the empty one) as far pictures
     est = nearest_neighbour(vmap, [_query(2, Pose2D(), -math.pi / 2)])
-    assert est.details["images"] != [2] and est.details["images"][0] < 2
+    assert est.evidence["images"] != [2] and est.evidence["images"][0] < 2

@@ -15,6 +15,8 @@ from hypothesis import strategies as st
 from naoloc.config import MapConfig
 from naoloc.errors import FeatureError, MapFormatError
 from naoloc.geometry import Pose2D
+from naoloc.localization import Localizer, Picture
+from naoloc.localization.paper import localize_paper
 from naoloc.mapping import VisualMap, build_map, load_map
 from naoloc.mapping.mapfile import map_bytes
 from naoloc.mapping.vocabulary import train_vocabulary
@@ -93,14 +95,17 @@ def test_round_trip_is_bit_for_bit(small_map: VisualMap, tmp_path: Path) -> None
     assert map_bytes(loaded) == path.read_bytes()
     assert np.array_equal(loaded.gcs.weights, small_map.gcs.weights)
     assert loaded.meta == small_map.meta and loaded.config == small_map.config
-    est = loaded.localize(synthetic_keyframes()[3:5], mode="paper")
-    assert est.mode == "paper" and 0.0 <= est.confidence <= 1.0
+    queries = synthetic_keyframes()[3:5]
+    est = localize_paper(loaded, loaded.extract(queries), queries)
+    assert est.method == "gcs" and 0.0 <= est.confidence <= 1.0
 
 
 def test_blank_query_gives_zero_confidence(small_map: VisualMap) -> None:
     blank = Keyframe(np.zeros((240, 320), np.uint8), Pose2D())
-    for mode in ("verified", "paper"):
-        assert small_map.localize([blank], mode=mode).confidence == 0.0
+    assert localize_paper(small_map, small_map.extract([blank]), [blank]).confidence == 0.0
+    loc = Localizer(small_map)
+    loc.update(Picture(blank))
+    assert loc.pose().confidence == 0.0 and not loc.pose().found
 
 
 def _rewrite(data: bytes, edit: dict[str, np.ndarray]) -> bytes:
@@ -172,7 +177,7 @@ def test_far_pictures_leave_the_papers_map_alone(small_map: VisualMap, tmp_path:
     """The survey's far pictures join the keyframes (features, landmarks, retrieval) after
     the wall pictures, each posed at its stop; the paper's vocabulary, GCS and neuron poses,
     and the wall pictures' refined poses, are those of the same map without them."""
-    from naoloc.mapping.localizer import featured_neuron_poses
+    from naoloc.localization.paper import featured_neuron_poses
 
     walls = synthetic_keyframes()
     across = _texture(7)

@@ -9,14 +9,13 @@ corner, as the survey records them. The wall-referenced poses must match the tru
 from __future__ import annotations
 
 import math
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 import pytest
 
 from naoloc.geometry import Pose2D
-from naoloc.localization.floorfix import map_walls
+from naoloc.localization.walls import wall_map
 from naoloc.mapping.wall_poses import _start_from_wall, side_distances, wall_poses
 from naoloc.robot.keyframe import Keyframe
 
@@ -266,7 +265,7 @@ def test_the_map_keeps_the_walls_the_survey_walked_inside() -> None:
     keyframes, _truth, meta = _survey()
     walled = wall_poses(keyframes, meta, offset=OFFSET)
     assert walled is not None
-    walls = map_walls(SimpleNamespace(meta={"wall_poses": walled.summary()}))  # type: ignore[arg-type]
+    walls = wall_map({"wall_poses": walled.summary()})
     assert walls is not None
     # The map frame is the survey start, a corner of the circuit: the walls one offset out.
     lo_x = walls.frame * Pose2D(walls.bounds[0], 0.0, 0.0)

@@ -54,8 +54,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         if loc.error_m is not None:
             line += f"; error {loc.error_m:.2f} m, {loc.heading_error_deg:.1f} deg"
     else:
-        reason = est.details.get("reason", "nothing recognised")
-        line = f"localize: no estimate ({reason}) from {len(loc.queries)} images"
+        line = f"localize: no estimate ({est.reason}) from {len(loc.queries)} images"
     print(line)
     if png is not None:  # the picture and its config copy appear together, or not at all
         with staged(png, config_path_for(png)) as (tmp_png, tmp_cfg):
@@ -65,9 +64,5 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         print(f"localize: picture -> {png}")
     summary["localize_s"] = round(loc.wall_s, 3)
     if not est.found:
-        raise NoEstimate(
-            f"no estimate: {est.details.get('reason', 'nothing recognised')} "
-            f"in {len(loc.queries)} images",
-            summary,
-        )
+        raise NoEstimate(f"no estimate: {est.reason} in {len(loc.queries)} images", summary)
     return summary
