@@ -57,6 +57,27 @@ class RobotConfig(_Model):
     )
 
 
+class RoomChanges(_Model):
+    """What changed in the room since it was surveyed (the Microsoft indoor-localization
+    competition moved furniture between set-up and test).
+
+    Applied to the generated room (``world.room.changes``): a map built from a survey of the
+    room without changes is then localized against in the changed one
+    (``evaluate --protocol changed``).
+    """
+
+    moved: float = Field(
+        0.3, ge=0, le=1, description="share of the furniture moved (rounded to whole pieces)"
+    )
+    max_move_m: float = Field(
+        0.5, ge=0, le=3.0, description="farthest a moved piece goes, in x and y (m)"
+    )
+    added: int = Field(
+        2, ge=0, le=20, description="boxes added that the survey never saw (0.3-0.6 m)"
+    )
+    seed: int = Field(0, ge=0, description="seed of which pieces move, where, and the boxes")
+
+
 class RoomConfig(_Model):
     """A procedurally generated room (simulated backends)."""
 
@@ -72,6 +93,9 @@ class RoomConfig(_Model):
     )
     poster_dir: str | None = Field(
         None, description="folder of photographs to use as posters instead of procedural ones"
+    )
+    changes: RoomChanges | None = Field(
+        None, description="furniture moved or added since the survey; null = none"
     )
 
     @field_validator("size_m")

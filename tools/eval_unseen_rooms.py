@@ -32,7 +32,7 @@ import yaml
 
 from naoloc.config import Config, load_config
 from naoloc.evaluation.pipeline import evaluate
-from naoloc.evaluation.stats import summarize
+from naoloc.evaluation.stats import integrity, summarize
 
 
 def room_config(
@@ -40,6 +40,7 @@ def room_config(
     backend: str = "mujoco",
     *,
     small: bool = False,
+    mixed: bool = False,
     overrides: dict[str, Any] | None = None,
 ) -> Config:
     """A room drawn from ``seed``: sides 5-8 m (small: about 4 x 3 m), 4-6 pictures a wall.
@@ -49,12 +50,38 @@ def room_config(
         backend: "mujoco" or "fake".
         small: A lab-sized room with the survey 0.7 m from the walls and 3 laps (nearer, the
             robot's arm hides the floor beside it from the bottom camera).
+        mixed: Any room the localization targets name: 4 x 3 to 10 x 8 m, home or office,
+            light 0.3, 1 or 1.5 (a room under 4.5 m wide is surveyed 0.7 m from the walls).
         overrides: Nested config keys applied to every room.
 
     Returns:
         A config with the survey 1 m from the walls, 2 laps, 0.2 m steps (small: 0.7 m, 3).
     """
     rng = np.random.default_rng(seed)
+    extra: dict[str, Any] = {}
+    if mixed:
+        sx = round(float(rng.uniform(4.0, 10.0)), 1)
+        sy = round(float(rng.uniform(3.0, min(sx, 8.0))), 1)
+        small_room = min(sx, sy) < 4.5
+        survey = {"laps": 3 if small_room else 2, "step_m": 0.2,
+                  "wall_offset_m": 0.7 if small_room else 1.0}  # fmt: skip
+        extra = {"style": str(rng.choice(["home", "office"]))}
+        light = float(rng.choice([0.3, 1.0, 1.5]))
+        base = {
+            "robot": {"backend": backend},
+            "world": {
+                "room": {
+                    "size_m": [sx, sy],
+                    "seed": int(seed),
+                    "posters_per_wall": int(rng.integers(4, 7)),
+                    "furniture": True,
+                    **extra,
+                },
+                "sim": {"light": light},
+            },
+            "survey": survey,
+        }
+        return load_config(base).with_overrides(overrides or {})
     if small:
         sx, sy = round(float(rng.uniform(3.5, 4.5)), 1), round(float(rng.uniform(2.8, 3.5)), 1)
         survey = {"laps": 3, "step_m": 0.2, "wall_offset_m": 0.7}
@@ -104,8 +131,13 @@ def main() -> int:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--backend", default="mujoco", choices=("mujoco", "fake"))
     parser.add_argument("--out", type=Path, default=None, help="output folder (not the repo)")
-    parser.add_argument("--protocol", default="random", choices=("random", "anywhere"))
+    parser.add_argument("--protocol", default="random", choices=("random", "anywhere", "changed"))
     parser.add_argument("--small", action="store_true", help="lab-sized rooms (about 4 x 3 m)")
+    parser.add_argument(
+        "--mixed", action="store_true",
+        help="rooms of every kind the targets name: 4 x 3 to 10 x 8 m, home and office, "
+        "light 0.3 to 1.5 (drawn from each seed)",
+    )  # fmt: skip
     add_set_option(parser, "config override for every room, e.g. world.sim.light=0.3")
     args = parser.parse_args()
     overrides = parse_sets(args.set)
@@ -113,10 +145,14 @@ def main() -> int:
     out = args.out or Path(tempfile.mkdtemp(prefix="naoloc_unseen_"))
     errors: list[float] = []
     compute: list[float] = []  # CPU ms of each localization's map work
+    every: list[dict[str, Any]] = []  # all main-variant records, for the integrity figures
+    robot_s: list[float] = []
     rooms: list[dict[str, Any]] = []
     t0 = time.monotonic()
     for seed in seeds:
-        cfg = room_config(seed, args.backend, small=args.small, overrides=overrides)
+        cfg = room_config(
+            seed, args.backend, small=args.small, mixed=args.mixed, overrides=overrides
+        )
         line = evaluate(
             cfg, args.protocol, args.n, seed, out / f"room_{seed}", workers=args.workers
         )
@@ -124,12 +160,18 @@ def main() -> int:
         errors += [r["error_m"] if r["error_m"] is not None else float("nan")
                    for r in recs if r["variant"] == "main"]  # fmt: skip
         compute += [r["compute_ms"] for r in recs if r["variant"] == "main"]
+        main = [r for r in recs if r["variant"] == "main"]
+        every += main
+        robot_s += [r["robot_s"] for r in main if r.get("robot_s") is not None]
         full = json.loads(Path(line["summary"]).read_text(encoding="utf-8"))
         line.update({k: full[k] for k in ("compute_ms_median", "compute_ms_max")})
-        room = {"seed": seed, "size_m": list(cfg.world.room.size_m), **line}
+        room = {"seed": seed, "size_m": list(cfg.world.room.size_m),
+                "style": cfg.world.room.style, "light": cfg.world.sim.light,
+                "integrity": integrity(main), **line}  # fmt: skip
         rooms.append(room)
         print(
-            f"room seed {seed} {cfg.world.room.size_m[0]:g} x {cfg.world.room.size_m[1]:g} m: "
+            f"room seed {seed} {cfg.world.room.size_m[0]:g} x {cfg.world.room.size_m[1]:g} m "
+            f"{cfg.world.room.style} light {cfg.world.sim.light:g}: "
             f"n {line['n']} median {line['median_error_m']} m p90 {line['p90_error_m']} m "
             f"max {line['max_error_m']} m heading {line['median_heading_error_deg']} deg "
             f"no estimate {line['no_estimate']} "
@@ -150,6 +192,11 @@ def main() -> int:
         "compute_ms": {
             name: round(float(np.percentile(compute, q)), 1) if compute else None
             for name, q in (("median", 50), ("p90", 90), ("max", 100))
+        },
+        "integrity": integrity(every),
+        "robot_s": {
+            name: round(float(np.percentile(robot_s, q)), 2) if robot_s else None
+            for name, q in (("median", 50), ("p90", 90))
         },
         "protocol": args.protocol,
         "overrides": overrides,

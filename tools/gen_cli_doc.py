@@ -56,52 +56,62 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "sides_with_corner, median_scale, lines_used, frames (null: odometry poses kept)",
     },
     "localize": {
-        "x": "estimate, map frame (m); null when nothing was recognised",
-        "y": "estimate, map frame (m); null when nothing was recognised",
-        "theta": "estimated heading, map frame (rad); null when nothing was recognised",
-        "confidence": "0..1; 0 when nothing was recognised (exit code 3)",
-        "method": (
-            "how the estimate was made: `pnp`, `floorlines`, `keyframes` (an unverified guess, "
-            "only where the floor step did not run: `localize.floor_lines` off, or a map "
-            "without walls), `gcs` (paper mode), `none` when nothing was recognised (a "
-            "keyframe guess the floor step neither confirms nor replaces is `none` too)"
-        ),
-        "mode": "`verified` or `paper` (localize.mode)",
-        "strategy": "`scan` (head sweep) or `paper` (the paper's 1-2 pictures)",
-        "images": "pictures used",
-        "extra_turns": (
-            "quarter turns in place made because the estimate was not confident (0 also when "
-            "the floor lines settled the first sweep)"
-        ),
+        "x": "the belief's pose, map frame (m); null without one",
+        "y": "the belief's pose, map frame (m); null without one",
+        "theta": "the belief's heading, map frame (rad); null without one",
+        "confidence": "probability of the best place given the observations, 0..1; 0 without "
+        "a pose (exit code 3)",
+        "method": "`filter` (the localization filter), `gcs` (the paper's Algorithm 5, "
+        "localize.mode paper), `none` without a pose",
+        "status": "`tracking` (a pose), `lost` (not concentrated yet) or `not the mapped room` "
+        "(the observations fit no place of the map; exit code 3)",
+        "reason": "why there is no pose (absent with one)",
+        "strategy": "`scan` (a short look: head sweep, turns while lost) or `paper`",
+        "images": "top-camera pictures taken",
+        "line_scans": "bottom-camera floor pictures taken (floor-wall lines)",
+        "extra_turns": "quarter turns in place made while the belief was not concentrated",
+        "robot_s": "the robot's time spent (simulated time on a simulator) (s)",
         "error_m": "distance to the truth (m); simulator only",
         "heading_error_deg": "heading error (deg); simulator only",
         "truth": "true pose [x, y, theta], map frame; simulator only",
         "localize_s": "wall-clock time (s)",
-        "compute_s": "CPU time of the map's work alone (s): extraction, localizer, floor lines "
-        "and votes; not the pictures or the motion",
-        "covariance": "3 x 3 uncertainty of x, y, theta (m^2, rad^2); absent with no estimate",
+        "compute_s": "CPU time of the estimation alone (s): features, matching, the filter, "
+        "floor lines; not the pictures or the motion",
+        "covariance": "3 x 3 covariance of x, y, theta (m^2, rad^2): the belief's spread; "
+        "absent without a pose",
         "png": "the picture written with --png",
     },
     "go-home": {
-        "x": "final estimate, map frame (m)",
-        "y": "final estimate, map frame (m)",
-        "theta": "final estimated heading, map frame (rad)",
-        "confidence": "confidence of the final estimate, 0..1",
-        "method": "`filter` (odometry and fixes fused) or how the last estimate was made",
-        "covariance": "3 x 3 uncertainty of x, y, theta of the final belief (m^2, rad^2)",
-        "spread_m": "spread of the final belief (m)",
-        "tries": "walks made toward the origin",
-        "reached": "true when the final estimate is within go_home.tolerance_m",
-        "path_m": "distance walked (m)",
-        "estimates": "every estimate [x, y] on the way, map frame (m)",
-        "blocked": "walks that were blocked (moveTo returned False)",
+        "x": "the belief's final pose, map frame (m); null without one",
+        "y": "the belief's final pose, map frame (m); null without one",
+        "theta": "the belief's final heading, map frame (rad); null without one",
+        "confidence": "probability of the final pose, 0..1",
+        "method": "`filter`, or `none` without a pose",
+        "status": "the final belief's status (`tracking`, `lost`, `not the mapped room`)",
+        "covariance": "3 x 3 covariance of the final pose (m^2, rad^2)",
+        "tries": "looks from standstill (the first one included): it stops to look only "
+        "when the belief is lost",
+        "reached": "true when the belief put the robot within go_home.tolerance_m of home",
+        "path_m": "length of the first planned path home (m)",
+        "walked_m": "distance walked by odometry (m)",
+        "robot_s": "the robot's time spent (s)",
+        "walk_s": "time to walk the planned path at a NAO's 0.1 m/s (s)",
         "reason": "why it stopped without reaching home",
         "error_m": "true distance from the map origin at the end (m); simulator only",
         "truth": "true final pose [x, y, theta], map frame; simulator only",
         "png": "the picture written with --png",
     },
+    "track": {
+        "poses": "poses streamed (one JSON line each before this one)",
+        "tracking": "of those, with a pose",
+        "rate_hz": "poses per second of robot time",
+        "cpu_ms_median": "median CPU time per camera frame (ms)",
+        "walked_m": "distance walked by odometry (m)",
+        "median_error_m": "median error of the poses (m); simulator only",
+        "reason": "why it stopped early",
+    },
     "evaluate": {
-        "protocol": "`paper` or `random`",
+        "protocol": "`paper`, `random`, `anywhere` or `changed`",
         "n": "estimates of the main variant",
         "median_error_m": "median position error (m)",
         "p90_error_m": "90th percentile position error (m)",

@@ -121,7 +121,11 @@ def build_parser() -> argparse.ArgumentParser:
                 help="robot seconds to track at most (default 20)",
             )  # fmt: skip
     p = add("evaluate")
-    p.add_argument("--protocol", choices=("paper", "random", "anywhere"), default="random")
+    p.add_argument(
+        "--protocol", choices=("paper", "random", "anywhere", "changed"), default="random",
+        help="changed: anywhere, in the room with world.room.changes (default: 30 %% of the "
+        "furniture moved up to 0.5 m, 2 boxes added); the map is of the room as surveyed",
+    )  # fmt: skip
     p.add_argument("-n", type=int, default=40, help="test poses (random protocol)")
     p.add_argument("--seed", type=int, default=0, help="seed of the test poses")
     p.add_argument("--workers", type=int, default=None, help="processes (default: cores)")

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from naoloc.config import Config
+from naoloc.config import Config, RoomChanges
 from naoloc.data.outputs import atomic_write_text, folder_lock
 from naoloc.errors import BackendError, ConfigError, MotionError
 from naoloc.evaluation import figures, report
@@ -120,8 +120,8 @@ def evaluate(
         OutputBusy: Another run is writing into ``outdir``.
     """
     check_simulated(cfg)
-    if protocol not in ("paper", "random", "anywhere"):
-        raise ConfigError(f"unknown protocol {protocol!r}; valid: paper, random, anywhere")
+    if protocol not in ("paper", "random", "anywhere", "changed"):
+        raise ConfigError(f"unknown protocol {protocol!r}; valid: paper, random, anywhere, changed")
     if protocol == "paper" and tuple(round(s, 6) for s in cfg.survey_sides()) != PAPER_SQUARE_M:
         raise ConfigError(
             f"the paper protocol needs a 4 x 4 m survey square; this config walks "
@@ -152,8 +152,14 @@ def _evaluate(
 
     t_start = time.monotonic()
     workers = max(1, workers if workers is not None else (os.cpu_count() or 1))
+    test_cfg = cfg  # the room the robot localizes in
+    if protocol == "changed":
+        # The survey (and the map) sees the room as it was; the test, the changed room.
+        changes = cfg.world.room.changes or RoomChanges()
+        test_cfg = cfg.with_overrides({"world": {"room": {"changes": changes.model_dump()}}})
+        cfg = cfg.with_overrides({"world": {"room": {"changes": None}}})
     plan = make_plan(cfg, protocol, studies)
-    base_dict = cfg.to_dict()
+    base_dict = test_cfg.to_dict()
 
     # 1. Surveys: the base one, plus the drift levels of the robustness study.
     survey_tasks = [
@@ -188,7 +194,7 @@ def _evaluate(
     }
 
     # 3. Test poses and localizations.
-    poses = _test_poses(cfg, protocol, n, seed, origin, room_size)
+    poses = _test_poses(test_cfg, protocol, n, seed, origin, room_size)
     skipped = {v.name: failed[plan.maps[v.map_name][0]] for v in plan.variants
                if plan.maps[v.map_name][0] in failed}  # fmt: skip
     runnable = Plan(plan.surveys, plan.maps, [v for v in plan.variants if v.name not in skipped],
@@ -207,7 +213,7 @@ def _evaluate(
     )
     summary["wall_s"] = round(time.monotonic() - t_start, 2)
     _write_outputs(outdir, summary, records, plan, maps, surveys, origin, room_size, protocol)
-    write_resolved_config(cfg, outdir / "config.yaml")  # last: it describes the outputs
+    write_resolved_config(test_cfg, outdir / "config.yaml")  # last: it describes the outputs
     line = {k: summary[k] for k in _LINE_KEYS}
     line.update(
         {

@@ -125,6 +125,7 @@ def distance_to_walls(x: float, y: float, room_size: tuple[float, float]) -> flo
 PROTOCOL_BANDS: dict[str, tuple[tuple[float, float], float]] = {
     "random": ((0.6, 1.4), 0.25),
     "anywhere": ((0.3, math.inf), 0.3),
+    "changed": ((0.3, math.inf), 0.3),  # anywhere, in the room as it changed
 }
 
 

@@ -168,3 +168,42 @@ def json_float(value: float, digits: int = 4) -> float | None:
     if value is None or not math.isfinite(value):
         return None
     return round(float(value), digits)
+
+
+def integrity(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """How honest a set of localizations is (map frame, the ``estimates.json`` records).
+
+    Returns:
+        ``n``; ``no_estimate`` (share without a pose); of those with a pose: the share
+        outside their reported 99 % position ellipse (``outside_99``; about 1 % when the
+        covariance is calibrated), the count more than 0.3 m off at confidence >= 0.5
+        (``confident_wrong``), the position error's median, p90 and p99 (m) and the heading
+        error's p90 (deg); ``not_mapped``: how many said "not the mapped room".
+    """
+    n = len(records)
+    posed = [r for r in records if r.get("covariance") is not None and r.get("error_m") is not None
+             and math.isfinite(float(r["error_m"]))]  # fmt: skip
+    d2 = []
+    for r in posed:
+        cov = np.asarray(r["covariance"], dtype=np.float64)[:2, :2]
+        err = np.asarray(r["estimate"][:2], np.float64) - np.asarray(r["truth"][:2], np.float64)
+        d2.append(float(err @ np.linalg.solve(cov, err)))
+    errs = np.array([float(r["error_m"]) for r in posed])
+    heads = np.array([float(r["heading_error_deg"]) for r in posed])
+    conf = np.array([float(r.get("confidence", 0.0)) for r in posed])
+    chi2_99 = -2.0 * math.log(0.01)  # 2 degrees of freedom
+    out: dict[str, Any] = {
+        "n": n,
+        "no_estimate": json_float((n - len(posed)) / n) if n else None,
+        "not_mapped": sum(1 for r in records if r.get("status") == "not the mapped room"),
+        "outside_99": json_float(float(np.mean(np.array(d2) > chi2_99))) if d2 else None,
+        "confident_wrong": int(np.sum((errs > 0.3) & (conf >= 0.5))) if posed else 0,
+    }
+    if posed:
+        out.update(
+            median_m=json_float(float(np.median(errs))),
+            p90_m=json_float(float(np.quantile(errs, 0.9))),
+            p99_m=json_float(float(np.quantile(errs, 0.99))),
+            heading_p90_deg=json_float(float(np.quantile(heads, 0.9)), 2),
+        )
+    return out

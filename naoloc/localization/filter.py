@@ -213,7 +213,7 @@ class MultiHypothesisFilter:
             return []
         scored = [(self._quick_score(z), i, z) for i, z in enumerate(poses)]
         scored.sort(key=lambda t: (-t[0], t[1]))
-        return [z for s, _i, z in scored[:LINE_PROPOSALS] if s > 0.0]
+        return [z for _s, _i, z in scored[:LINE_PROPOSALS]]
 
     def _quick_score(self, z: np.ndarray) -> float:
         """The latest pictures' evidence for pose ``z`` now, without correcting it."""

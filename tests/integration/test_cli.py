@@ -16,6 +16,7 @@ ARGS = {
     "build-map": ["-d", "x.mcap", "-o", "x.npz"],
     "localize": ["-m", "x.npz"],
     "go-home": ["-m", "x.npz"],
+    "track": ["-m", "x.npz"],
     "evaluate": ["-o", "out"],
     "serve": [],
     "demo": [],

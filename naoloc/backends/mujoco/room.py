@@ -18,6 +18,7 @@ compiling (see ``sim.fill_textures``), so nothing is written to disk.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -363,18 +364,69 @@ def build_layout(cfg: Config) -> RoomLayout:
     room = cfg.world.room
     rng = np.random.default_rng([room.seed, 0x6E616F])
     if room.style != "posters":
-        return _furnished_layout(cfg, rng)
+        return _changed(_furnished_layout(cfg, rng), cfg)
     posters = _place_posters(cfg, rng)
     furniture = _place_furniture(cfg, rng) if room.furniture else ()
     wall_rgb = tuple(int(v) for v in rng.integers(170, 235, 3))
-    return RoomLayout(
-        size=(float(room.size_m[0]), float(room.size_m[1])),
-        wall_height=float(room.wall_height_m),
-        posters=posters,
-        furniture=furniture,
-        wall_image=poster_images.plaster_texture(256, wall_rgb, room.seed),  # type: ignore[arg-type]
-        floor_image=poster_images.floor_texture(512, room.seed),
+    return _changed(
+        RoomLayout(
+            size=(float(room.size_m[0]), float(room.size_m[1])),
+            wall_height=float(room.wall_height_m),
+            posters=posters,
+            furniture=furniture,
+            wall_image=poster_images.plaster_texture(256, wall_rgb, room.seed),  # type: ignore[arg-type]
+            floor_image=poster_images.floor_texture(512, room.seed),
+        ),
+        cfg,
     )
+
+
+def _changed(layout: RoomLayout, cfg: Config) -> RoomLayout:
+    """The layout with ``world.room.changes`` applied (itself when there are none).
+
+    A share of the pieces moves by up to ``max_move_m`` in x and y, staying inside the
+    walls and clear of the other pieces (a piece that finds no such place in 40 draws
+    stays); ``added`` plain boxes stand where nothing stood.
+    """
+    changes = cfg.world.room.changes
+    if changes is None:
+        return layout
+    rng = np.random.default_rng([cfg.world.room.seed, changes.seed, 0xC4A6])
+    sx, sy = layout.size
+    pieces = list(layout.furniture)
+    count = round(changes.moved * len(pieces))
+    chosen: list[int] = rng.choice(len(pieces), size=count, replace=False).tolist() if count else []
+    for i in sorted(chosen):
+        others = [f for j, f in enumerate(pieces) if j != i]
+        for _ in range(40):
+            dx, dy = rng.uniform(-changes.max_move_m, changes.max_move_m, 2)
+            moved = _shifted(pieces[i], float(dx), float(dy))
+            x0, y0, x1, y1 = moved.rect
+            inside = x0 > 0.05 and y0 > 0.05 and x1 < sx - 0.05 and y1 < sy - 0.05
+            if inside and all(_rect_gap(moved.rect, f.rect) >= 0.05 for f in others):
+                pieces[i] = moved
+                break
+    for k in range(changes.added):
+        for _ in range(60):
+            w, d = rng.uniform(0.3, 0.6, 2)
+            h = float(rng.uniform(0.4, 0.9))
+            cx, cy = rng.uniform(0.4, sx - 0.4), rng.uniform(0.4, sy - 0.4)
+            rect = (cx - w / 2, cy - d / 2, cx + w / 2, cy + d / 2)
+            if all(_rect_gap(rect, f.rect) >= 0.1 for f in pieces):
+                color = _rgba(rng.uniform(0.15, 0.85, 3))
+                part = Part("box", (float(cx), float(cy), h / 2), (w / 2, d / 2, h / 2), color)
+                pieces.append(Furniture(f"added_{k}", "box", rect, h, (part,)))
+                break
+    return dataclasses.replace(layout, furniture=tuple(pieces))
+
+
+def _shifted(f: Furniture, dx: float, dy: float) -> Furniture:
+    """A piece moved by ``(dx, dy)`` m on the floor."""
+    x0, y0, x1, y1 = f.rect
+    parts = tuple(
+        dataclasses.replace(p, pos=(p.pos[0] + dx, p.pos[1] + dy, p.pos[2])) for p in f.parts
+    )
+    return dataclasses.replace(f, rect=(x0 + dx, y0 + dy, x1 + dx, y1 + dy), parts=parts)
 
 
 def _textured(f: Furniture) -> Furniture:

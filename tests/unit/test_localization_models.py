@@ -1,0 +1,187 @@
+"""The localization filter's parts on synthetic observations: sensor models, the motion
+model, one hypothesis' updates, the status decision (a table), proposals from lines."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from naoloc.config import FilterTuning
+from naoloc.geometry import Pose2D
+from naoloc.localization.filter import Belief, MultiHypothesisFilter
+from naoloc.localization.hypothesis import Hypothesis, motion_step
+from naoloc.localization.line_poses import line_poses
+from naoloc.localization.localizer import Status, decide
+from naoloc.localization.pictures import PictureMatches, mixture, picture_log_ratio, reprojection
+from naoloc.localization.walls import WallMap, fit_line, wall_map
+from naoloc.perception.floorline import WallLine
+
+TUN = FilterTuning()
+# A 6 x 4 m room whose wall frame is the map frame turned 0.3 rad and moved (1, -0.5).
+WALLS = WallMap.of(Pose2D(1.0, -0.5, 0.3), (-1.0, 5.0, -1.0, 3.0))
+
+
+def _line(walls: WallMap, pose: np.ndarray, k: int, span: float = 1.0) -> WallLine:
+    """The floor line of wall ``k`` seen exactly from ``pose``."""
+    dist, direction = walls.expected(pose)
+    return WallLine(float(dist[k]), float(direction[k]), 200, 0.9, 0.01, span)
+
+
+def test_walls_from_the_meta_and_what_a_pose_sees() -> None:
+    meta = {"wall_poses": {"wall_frame": [1.0, -0.5, 0.3], "walls_m": [-1.0, 5.0, -1.0, 3.0]}}
+    walls = wall_map(meta)
+    assert walls is not None and np.allclose(walls.coords, WALLS.coords)
+    assert wall_map({}) is None
+    assert wall_map({"wall_poses": {"wall_frame": [0, 0, 0], "walls_m": [1, 0, 0, 1]}}) is None
+    # At the wall frame's origin facing along its x: the +x wall 5 m ahead, +y 3 m left.
+    dist, direction = WALLS.expected(np.array([1.0, -0.5, 0.3]))
+    assert dist == pytest.approx([5.0, 3.0, 1.0, 1.0])
+    assert direction == pytest.approx([0.0, math.pi / 2, math.pi, -math.pi / 2])
+    assert WALLS.inside(1.0, -0.5, 0.5) and not WALLS.inside(-5.0, 0.0)
+
+
+def test_a_seen_wall_explains_its_line_and_clutter_explains_a_stray_one() -> None:
+    pose = np.array([2.0, 0.5, 0.7])
+    fit = fit_line(WALLS, _line(WALLS, pose, 1), pose, TUN, None)
+    assert fit.wall == 1 and np.allclose(fit.residual, 0.0) and fit.log_ratio > 3.0
+    # Numerical Jacobian of the residual matches.
+    eps = 1e-6
+    for i in range(3):
+        d = np.zeros(3)
+        d[i] = eps
+        moved = fit_line(WALLS, _line(WALLS, pose, 1), pose + d, TUN, None)
+        num = (moved.residual - fit.residual) / eps
+        assert num == pytest.approx(fit.jacobian[:, i], abs=1e-5)
+    stray = WallLine(0.8, 0.45, 100, 0.5, 0.02, 0.6)  # a direction no wall has
+    assert fit_line(WALLS, stray, pose, TUN, None).wall == -1
+
+
+def test_the_motion_model_moves_and_grows_uncertainty_with_the_walk() -> None:
+    pose, cov = np.array([1.0, 2.0, math.pi / 2]), np.zeros((3, 3))
+    new, grown = motion_step(pose, cov, np.array([1.0, 0.0, 0.0]), TUN)
+    assert new == pytest.approx([1.0, 3.0, math.pi / 2])
+    assert math.sqrt(grown[1, 1]) == pytest.approx(TUN.trans_per_m + TUN.floor_m)
+    same, still = motion_step(pose, cov, np.zeros(3), TUN)
+    assert np.array_equal(same, pose) and not still.any()  # standing adds no noise
+
+
+def _picture(pose: np.ndarray, n: int = 60, seed: int = 0, wrong: float = 0.0) -> PictureMatches:
+    """Landmarks 1-3 m in front of a camera at ``pose`` and their exact pixels."""
+    rng = np.random.default_rng(seed)
+    k = np.array([[278.0, 0, 160], [0, 278.0, 120], [0, 0, 1]])
+    cam = np.array([[0, 0, 1, 0.05], [-1, 0, 0, 0], [0, -1, 0, 0.45], [0, 0, 0, 1.0]])
+    projection = k @ np.linalg.inv(cam)[:3, :]
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    local = np.column_stack(
+        [rng.uniform(1, 3, n), rng.uniform(-0.8, 0.8, n), rng.uniform(0.3, 1.5, n)]
+    )
+    points = np.column_stack(
+        [pose[0] + c * local[:, 0] - s * local[:, 1], pose[1] + s * local[:, 0] + c * local[:, 1],
+         local[:, 2]]
+    )  # fmt: skip
+    m0 = PictureMatches(points, np.zeros((n, 2)), np.arange(n), 1, points, np.zeros((n, 2)),
+                        projection, 320 * 240.0, n, (), None, 0)  # fmt: skip
+    res, _front, _ = reprojection(m0, pose)
+    pixels = res.copy()
+    bad = rng.random(n) < wrong
+    pixels[bad] = rng.uniform([0, 0], [320, 240], (int(bad.sum()), 2))
+    return PictureMatches(points, pixels, np.arange(n), 1, points, pixels, projection,
+                          320 * 240.0, n, (), None, 0)  # fmt: skip
+
+
+def test_reprojection_jacobian_is_the_numerical_one() -> None:
+    pose = np.array([0.5, -0.2, 0.4])
+    m = _picture(pose)
+    res, front, jac = reprojection(m, pose + np.array([0.02, -0.01, 0.01]), jacobian=True)
+    assert front.all() and jac is not None
+    eps = 1e-7
+    for i in range(3):
+        d = np.zeros(3)
+        d[i] = eps
+        moved, _, _ = reprojection(m, pose + np.array([0.02, -0.01, 0.01]) + d)
+        assert (moved - res) / eps == pytest.approx(jac[:, :, i], abs=1e-3)
+
+
+def test_the_picture_model_prefers_the_true_pose_and_shrugs_off_wrong_matches() -> None:
+    pose = np.array([0.5, -0.2, 0.4])
+    m = _picture(pose, wrong=0.4)
+    at_truth = picture_log_ratio(m, pose, TUN)
+    assert at_truth > picture_log_ratio(m, pose + np.array([0.2, 0.0, 0.0]), TUN) + 5
+    assert picture_log_ratio(m, pose + np.array([0.0, 0.0, 0.5]), TUN) < 1.0
+    res, front, _ = reprojection(m, pose)
+    resp, _ = mixture(m, res, front, np.eye(2) * 4.0, TUN)
+    exact = np.hypot(res[:, 0], res[:, 1]) < 1e-6
+    assert (resp[exact] > 0.9).all() and (resp[~exact] < 0.1).mean() > 0.9
+
+
+def test_a_hypothesis_walks_to_the_pose_a_picture_and_lines_show() -> None:
+    truth = np.array([2.0, 0.5, 0.7])
+    h = Hypothesis(truth + np.array([0.08, -0.06, 0.03]), np.diag([0.1**2, 0.1**2, 0.05**2]), TUN)
+    fit = h.update_picture(_picture(truth, wrong=0.3), TUN)
+    assert fit.updated and fit.inliers > 30
+    assert math.hypot(*(h.pose[:2] - truth[:2])) < 0.03
+    lines = (_line(WALLS, truth, 0), _line(WALLS, truth, 1))
+    ev = h.update_lines(WALLS, lines, TUN)
+    assert ev > 0 and h.line_support == 2
+    assert math.hypot(*(h.pose[:2] - truth[:2])) < 0.03 and abs(h.pose[2] - truth[2]) < 0.01
+    # The walls make it better than the landmarks' own error; the covariance says so.
+    assert math.sqrt(h.cov[0, 0]) < TUN.landmark_sigma_m
+    # A hypothesis elsewhere finds no support in the same picture.
+    far = Hypothesis(truth + np.array([1.5, 0.0, 0.0]), np.diag([0.05**2, 0.05**2, 0.02**2]), TUN)
+    assert not far.update_picture(_picture(truth), TUN).updated
+
+
+def _belief(**kw: object) -> Belief:
+    base: dict[str, object] = {
+        "pose": np.zeros(3), "cov": np.diag([0.02**2, 0.02**2, 0.01**2]), "probability": 0.99,
+        "other_room": 0.0, "hypotheses": 1, "support": 3, "pictures": 6, "contradicted": False,
+    }  # fmt: skip
+    base.update(kw)
+    return Belief(**base)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("changes", "status"),
+    [
+        ({}, Status.TRACKING),
+        ({"probability": 0.6}, Status.LOST),  # two places share the belief
+        ({"cov": np.diag([0.3**2, 0.02**2, 0.01**2])}, Status.LOST),  # too wide
+        ({"contradicted": True}, Status.LOST),  # the latest picture says elsewhere
+        ({"probability": 0.2, "other_room": 0.8}, Status.NOT_MAPPED),
+        ({"probability": 0.2, "other_room": 0.8, "pictures": 2}, Status.LOST),  # too early
+        ({"pose": None, "cov": None, "pictures": 9}, Status.NOT_MAPPED),
+        ({"pose": None, "cov": None, "pictures": 1}, Status.LOST),
+    ],
+)
+def test_the_status_is_a_function_of_the_belief(changes: dict, status: Status) -> None:
+    got, reason = decide(_belief(**changes), TUN)
+    assert got is status and (reason == "") == (status is Status.TRACKING)
+
+
+def test_the_lines_of_a_corner_propose_the_pose_modulo_the_rooms_symmetry() -> None:
+    truth = np.array([2.0, 0.5, 0.7])
+    lines = [_line(WALLS, truth, 0), _line(WALLS, truth, 1), _line(WALLS, truth, 2)]
+    poses = line_poses(lines, WALLS, TUN)
+    near = [p for p in poses if math.hypot(*(p[:2] - truth[:2])) < 1e-6]
+    assert near and abs(math.remainder(near[0][2] - truth[2], 2 * math.pi)) < 1e-6
+    # At the truth's quarter turn only, the truth is the one pose.
+    only = line_poses(lines, WALLS, TUN, heading=truth[2] + 0.05)
+    assert len(only) == 1 and np.allclose(only[0], truth, atol=1e-6)
+    assert line_poses(lines[:1], WALLS, TUN) == []  # one line gives no pose
+
+
+def test_the_filter_starts_from_the_lines_and_a_picture_decides() -> None:
+    truth = np.array([2.0, 0.5, 0.7])
+    f = MultiHypothesisFilter(WALLS, TUN)
+    odo = Pose2D(10.0, -3.0, 1.0)  # the odometry frame is anywhere
+    lines = tuple(_line(WALLS, truth, k) for k in (0, 1, 2))
+    f.observe(lines, odo)
+    assert len(f.hypotheses) >= 1  # the corner's poses (no picture to rank them yet)
+    f.observe(_picture(truth, seed=1, wrong=0.3), odo)
+    f.observe(lines, odo)
+    f.observe(_picture(truth, seed=2, wrong=0.3), odo)
+    b = f.belief()
+    assert b.pose is not None and math.hypot(*(b.pose[:2] - truth[:2])) < 0.02
+    assert decide(b, TUN)[0] is Status.TRACKING
