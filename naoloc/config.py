@@ -455,54 +455,12 @@ class BundleTuning(_Model):
     )
 
 
-class LocalizerTuning(_Model):
-    """The verified localizer (naoloc.mapping.localizer)."""
-
-    candidates: int = Field(5, ge=1, description="keyframes retrieved per query (TF-IDF)")
-    min_pnp_inliers: int = Field(10, ge=4, description="least inliers of a PnP pose")
-    pnp_reprojection_px: float = Field(4.0, gt=0, description="inlier threshold of PnP (px)")
-    pnp_iterations: int = Field(100, ge=1, description="RANSAC iterations of PnP per query")
-    planar_samples: int = Field(
-        2000,
-        ge=0,
-        description="random match pairs of the two-point planar RANSAC over all of a scan's "
-        "pictures at once (naoloc.mapping.planar_ransac); 0 = per-picture PnP only",
-    )
-    camera_height_tolerance_m: float = Field(
-        0.3, gt=0, description="largest difference of a PnP camera from the head's height (m)"
-    )
-    confidence_scale: float = Field(
-        25.0, gt=0, description="inliers at which the confidence reaches 1 - 1/e"
-    )
-    confident_inliers: float = Field(
-        40.0, gt=0, description="inliers of a confident estimate (behaviours may stop looking)"
-    )
-    fallback_max_confidence: float = Field(
-        0.3, ge=0, le=1, description="confidence cap of the unverified keyframe fallback"
-    )
-    fallback_epipolar_px: float = Field(
-        3.0, gt=0, description="fundamental-matrix RANSAC threshold of the fallback (px)"
-    )
-    clearance_m: float = Field(
-        0.15,
-        gt=0,
-        description="radius of the robot's free body (m): at 0.25 m, 4-8 of 200 true poses in "
-        "five unseen rooms had more than 4 landmarks that near (furniture's edges, stray "
-        "points) and were rejected; at 0.15 m none did, and half the points 0.1 m inside a "
-        "wall still have more",
-    )
-    clearance_max_landmarks: int = Field(
-        4, ge=0, description="landmarks inside the body (0-3 m up) that make a pose implausible"
-    )
-
-
 class MapTuning(_Model):
-    """Tuning of map building (landmarks, pose graph, bundle adjustment) and localizing."""
+    """Tuning of map building (landmarks, pose graph, bundle adjustment)."""
 
     landmarks: LandmarkTuning = LandmarkTuning()
     pose_graph: PoseGraphTuning = PoseGraphTuning()
     bundle: BundleTuning = BundleTuning()
-    localizer: LocalizerTuning = LocalizerTuning()
 
 
 class MapConfig(_Model):
@@ -514,7 +472,7 @@ class MapConfig(_Model):
     seed: int = Field(0, ge=0, description="seed of vocabulary and GCS")
     vocabulary_size: int = Field(256, ge=8, le=4096, description="visual words")
     tuning: MapTuning = Field(
-        MapTuning(), description="landmark, pose-graph, bundle and localizer tuning"
+        MapTuning(), description="landmark, pose-graph and bundle tuning"
     )
     akaze_threshold: float = Field(
         0.001, gt=0, le=0.1, description="A-KAZE detector threshold (lower finds more keypoints)"
@@ -530,7 +488,7 @@ class MapConfig(_Model):
         False,
         description="scale the keyframe poses by the survey's floor-line metric_scale (for "
         "surveys that keep their odometry poses); off by default: the wall poses fix the "
-        "scale, and the floor-line scale read 2-4 % off in unseen rooms (docs/RESULTS.md)",
+        "scale, and the floor-line scale read 2-4 % off in unseen rooms (docs/history/RESULTS.md)",
     )
     wall_poses: bool = Field(
         True,

@@ -135,7 +135,7 @@ def one_walk(
             "error_m": p.error_m,
             "cpu_s": p.cpu_s,
             "confidence": p.estimate.confidence,
-        }  # fmt: skip
+        }
         for p in points
     ]
     out["carried_at"] = carried_at

@@ -22,7 +22,7 @@ from naoloc.robot.keyframe import CameraInfo
 class MapData:
     """A learned room: vocabulary, GCS network, neuron poses, keyframes and landmarks.
 
-    Plain data: building (naoloc.mapping.builder), localizing (naoloc.mapping.localizer)
+    Plain data: building (naoloc.mapping.builder), localizing (naoloc.localization)
     and the file format (naoloc.mapping.mapfile) are functions of it elsewhere;
     :class:`naoloc.mapping.VisualMap` adds them as methods.
 

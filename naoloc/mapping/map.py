@@ -1,7 +1,7 @@
 """The public map object: :class:`VisualMap`, the map's data with its verbs as methods.
 
 :class:`~naoloc.mapping.data.MapData` is the plain data; building
-(naoloc.mapping.builder), localizing (naoloc.mapping.localizer) and the file format
+(naoloc.mapping.builder), localizing (naoloc.localization) and the file format
 (naoloc.mapping.mapfile) are functions of it that import nothing of each other. This
 module sits above them all and adds them as methods, so ``vmap.localize(...)`` and
 ``vmap.save(...)`` work without any of those modules importing this one (no import

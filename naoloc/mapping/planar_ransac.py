@@ -13,7 +13,7 @@ an all-inlier sample about 1 time in 80; 2-point samples of the pool, 1 in 400 e
 Hypotheses are scored by the bearing (azimuth) error of every match from its camera's
 centre, which does not depend on the lifted depth, with a loose check on range; the
 caller verifies the best ones by reprojection and refines them
-(:func:`naoloc.mapping.localizer.localize_verified`).
+(:class:`naoloc.localization.filter.MultiHypothesisFilter`).
 
 Frames: ``mats`` project points of the last robot frame (FRAME_ROBOT origin at the last
 picture) to pixels; ``points`` are in the map frame; a pose is the last robot frame's
