@@ -471,9 +471,7 @@ class MapConfig(_Model):
     epochs: int = Field(300, ge=1, le=10000, description="passes over the training images")
     seed: int = Field(0, ge=0, description="seed of vocabulary and GCS")
     vocabulary_size: int = Field(256, ge=8, le=4096, description="visual words")
-    tuning: MapTuning = Field(
-        MapTuning(), description="landmark, pose-graph and bundle tuning"
-    )
+    tuning: MapTuning = Field(MapTuning(), description="landmark, pose-graph and bundle tuning")
     akaze_threshold: float = Field(
         0.001, gt=0, le=0.1, description="A-KAZE detector threshold (lower finds more keypoints)"
     )
@@ -629,11 +627,23 @@ class FilterTuning(_Model):
         "update it (Mahalanobis, 3 degrees of freedom)",
     )
     forget_per_observation: float = Field(
-        0.03,
+        0.1,
         ge=0,
         lt=1,
         description="share of its evidence a hypothesis forgets per observation (a carried "
         "robot's old place fades)",
+    )
+    missed_pictures: int = Field(
+        2,
+        ge=2,
+        description="informative pictures in a row that explain nothing of the leading place "
+        "(whose pictures usually do) before it gives no pose: the robot was carried",
+    )
+    contradiction_nats: float = Field(
+        6.0,
+        gt=0,
+        description="a picture another place explains this much better than the leading "
+        "one (nats) counts against the leader; two in a row and it gives no pose",
     )
     null_nats: float = Field(
         20.0,

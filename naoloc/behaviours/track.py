@@ -20,9 +20,10 @@ from naoloc.behaviours.localize import Eyes, Localization, localize, robot_clock
 from naoloc.config import Config
 from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.localization.localizer import Localizer, PoseEstimate
+from naoloc.localization.observations import Odometry
 from naoloc.mapping.map import VisualMap
 from naoloc.navigation.route import pursuit, remaining
-from naoloc.robot import Robot
+from naoloc.robot import Robot, pose_of
 
 __all__ = ["WALK_YAWS", "TrackPoint", "TrackResult", "Tracker", "track", "walk_route"]
 
@@ -44,12 +45,14 @@ class TrackPoint:
         estimate: The filter's answer then.
         truth: The true pose in the map frame (simulator), else None.
         cpu_s: CPU seconds the observation cost (detection, features, filter).
+        frame: Whether a camera frame updated it (else the odometry alone moved it).
     """
 
     t: float
     estimate: PoseEstimate
     truth: Pose2D | None
     cpu_s: float
+    frame: bool = True
 
     @property
     def error_m(self) -> float | None:
@@ -117,6 +120,16 @@ class Tracker:
             robot_clock(self.robot), self.loc.pose(), truth_in_map(self.robot, self.meta), cpu
         )
 
+    def tick(self) -> TrackPoint:
+        """The pose now from the odometry alone (between frames: the belief moved by the
+        walk since the last frame, as a robot's tf publishes map -> base_link)."""
+        motion = self.robot.motion
+        self.loc.update(Odometry(pose_of(motion, True), robot_clock(self.robot)))
+        return TrackPoint(
+            robot_clock(self.robot), self.loc.pose(), truth_in_map(self.robot, self.meta), 0.0,
+            frame=False,
+        )  # fmt: skip
+
     def close(self) -> None:
         """Close the cameras this tracker opened."""
         if self._own:
@@ -148,12 +161,14 @@ def walk_route(
     max_s: float,
     on_point: Callable[[TrackPoint], None] | None = None,
     lost_steps: int = 20,
+    ticks: int = 2,
 ) -> tuple[list[TrackPoint], str]:
     """Walk along ``route`` (map frame) steering by the belief, tracking at every frame.
 
     The robot stops when the belief's pose reaches the last waypoint, when ``max_s`` of
     robot time have passed, or when the belief has been lost for ``lost_steps`` frames
-    (it is then stopped for the caller to look). It is stopped on every exit.
+    (it is then stopped for the caller to look). It is stopped on every exit. Between
+    frames, ``ticks`` odometry-only poses keep the pose live at the odometry's rate.
 
     Returns:
         The track's points and why it stopped (``arrived``, ``time``, ``lost``).
@@ -163,12 +178,19 @@ def walk_route(
     start = robot_clock(robot)
     unsure = 0
     why = "time"
+    steer = None
     try:
         while robot_clock(robot) - start < max_s:
             point = tracker.step()
             points.append(point)
             if on_point is not None:
                 on_point(point)
+            if steer is not None:  # the command stands until the next frame's: odometry poses
+                for _ in range(ticks):
+                    tick = tracker.tick()
+                    points.append(tick)
+                    if on_point is not None:
+                        on_point(tick)
             est = point.estimate
             if not est.found:
                 unsure += 1
@@ -182,8 +204,8 @@ def walk_route(
             if len(left) == 1 and math.hypot(left[0].x - here.x, left[0].y - here.y) < REACHED_M:
                 why = "arrived"
                 break
-            cmd = pursuit(here, left)
-            robot.motion.move(cmd.x, cmd.y, cmd.theta)
+            steer = pursuit(here, left)
+            robot.motion.move(steer.x, steer.y, steer.theta)
     finally:
         robot.motion.stopMove()
     return points, why

@@ -72,6 +72,8 @@ EXPLORE_STEPS_M = (-0.6, -0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45, 0.6)
 EXPLORE_MARGIN_NATS = 3.0
 # Pictures a quick score looks at (the latest ones of the window).
 QUICK_PICTURES = 8
+# A picture with fewer features says too little to judge the leading hypothesis by.
+INFORMATIVE_FEATURES = 40
 # Covariance a new hypothesis starts with before its picture corrects it (m, m, rad).
 PROPOSAL_COV = np.diag([0.3**2, 0.3**2, 0.2**2])
 
@@ -91,8 +93,8 @@ class Belief:
         hypotheses: How many hypotheses the filter holds.
         support: Pictures the best hypothesis explained.
         pictures: Pictures with features seen so far.
-        contradicted: Whether the latest informative picture proposes a pose the best
-            hypothesis does not explain.
+        contradicted: Whether the latest pictures were explained far better elsewhere than
+            by the leading hypothesis (the robot was carried, or the leader is wrong).
     """
 
     pose: np.ndarray | None
@@ -123,6 +125,7 @@ class MultiHypothesisFilter:
         self.odometry: Pose2D | None = None
         self.pictures = 0
         self.contradicted = False
+        self._behind = 0  # pictures in a row the leader explained far worse than another
 
     def step_of(self, a: Pose2D, b: Pose2D) -> np.ndarray:
         """The odometry step from ``a`` to ``b`` in FRAME_ROBOT at ``a``, turn de-scaled."""
@@ -136,14 +139,21 @@ class MultiHypothesisFilter:
             for h in self.hypotheses:
                 h.predict(step, self.tun)
         self.odometry = odometry
-        self.window.append((evidence, odometry))
-        keep = 1.0 - self.tun.forget_per_observation
+        if evidence is not None:
+            self.window.append((evidence, odometry))
+        # Odometry alone says nothing of where the robot is: only evidence ages the scores.
+        keep = 1.0 - self.tun.forget_per_observation if evidence is not None else 1.0
+        leader = max(self.hypotheses, key=lambda h: h.score) if self.hypotheses else None
+        gains = {}
         for h in self.hypotheses:
-            h.score = keep * h.score + self._update(h, evidence)
+            gains[id(h)] = self._update(h, evidence)
+            h.score = keep * h.score + gains[id(h)]
         if isinstance(evidence, PictureMatches):
             if evidence.features > 0:
                 self.pictures += 1
             self._propose(evidence)
+            if leader is not None and evidence.features >= INFORMATIVE_FEATURES:
+                self._watch(leader, evidence, gains)
         elif evidence and self.walls is not None:
             self._shift_to_lines(evidence)
             for z in self._line_poses():
@@ -228,6 +238,36 @@ class MultiHypothesisFilter:
             total += picture_log_ratio(evidence, pose, self.tun)
         return total
 
+    def _watch(self, leader: Hypothesis, m: PictureMatches, gains: dict[int, float]) -> None:
+        """Whether the leading hypothesis still explains what the robot sees: when two
+        informative pictures in a row are explained clearly (``2 * contradiction_nats``) and
+        ``contradiction_nats`` better by another hypothesis, or a new one a picture proposed,
+        or when ``missed_pictures`` in a row explain nothing of a place its pictures usually
+        explain (nav2 AMCL watches its likelihood's short-term average the same way), the
+        leader is contradicted (the robot was carried, or the leader is wrong), its
+        score is cut to the other-room alternative's and the window keeps only those two
+        observations: the evidence of what the robot sees now decides.
+        """
+        tun = self.tun
+        gain = gains.get(id(leader), 0.0)
+        fresh = [picture_log_ratio(m, h.pose, tun) for h in self.hypotheses if id(h) not in gains]
+        best = max([*gains.values(), *fresh], default=0.0)
+        behind = best > 2 * tun.contradiction_nats and best - gain > tun.contradiction_nats
+        self._behind = self._behind + 1 if behind else 0
+        # Pictures the leader used to explain (its average evidence per informative picture)
+        # and now explains nothing of, several in a row: it stopped fitting.
+        missed = gain < 1.0 and leader.usual > tun.contradiction_nats
+        leader.misses = leader.misses + 1 if missed else 0
+        for h in self.hypotheses:
+            if id(h) in gains:
+                h.usual += 0.1 * (gains[id(h)] - h.usual)
+        self.contradicted = self._behind >= 2 or leader.misses >= tun.missed_pictures
+        if self.contradicted:
+            # What was seen before the pictures stopped fitting may be of another place (a
+            # carried robot's odometry did not move): new hypotheses replay only since then.
+            while len(self.window) > 2:
+                self.window.popleft()
+
     def _shift_to_lines(self, lines: tuple[WallLine, ...]) -> None:
         """Siblings of the leading hypotheses moved so that a line they leave unexplained
         is a wall's foot (B-Human resets a hypothesis where percepts agree on another pose).
@@ -277,16 +317,13 @@ class MultiHypothesisFilter:
         :func:`naoloc.mapping.planar_ransac.planar_hypotheses`), which finds a pose no
         single picture has enough matches for.
         """
-        self.contradicted = False
         proposals: list[np.ndarray] = []
         if m.proposal is not None:
             proposals.append(m.proposal)
         proposals += self._pooled()
         for i, z in enumerate(proposals):
             anchor = m if i == 0 and m.proposal is not None else None
-            added = self._add(z, anchor, None)
-            if added and anchor is not None and len(self.hypotheses) > 1:
-                self.contradicted = True
+            self._add(z, anchor, None)
             # The walls place the robot better than the landmarks: the poses the lines
             # allow near this one, at its heading, stand beside it.
             for w in self._line_poses(near=z):

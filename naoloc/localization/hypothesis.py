@@ -149,6 +149,8 @@ class Hypothesis:
         self.support = 0  # pictures that corrected it
         self.line_support = 0  # floor lines that corrected it
         self.last_inliers = 0
+        self.usual = 0.0  # average evidence per informative picture (nats)
+        self.misses = 0  # informative pictures in a row it explained nothing of
 
     @property
     def pose(self) -> np.ndarray:
