@@ -599,13 +599,18 @@ class Session:
         On a connected session the service is registered with the robot's service
         directory (a NAO's or ``naoloc serve``'s), as qi does, until the session closes.
         """
+        from naoloc.backends.naoqi.qimessaging.client import QiSession
         from naoloc.backends.naoqi.qimessaging.meta import describe
 
+        inner = self._inner()
+        if not isinstance(inner, QiSession):
+            raise RuntimeError(
+                "registerService: a zmq connection cannot serve services; connect with "
+                "tcp:// to a NAOqi that speaks libqi's protocol"
+            )
         methods, signals = describe(obj)
         try:
-            service_id: int = self._inner().registerService(
-                name, obj, methods=methods, signals=signals
-            )
+            service_id: int = inner.registerService(name, obj, methods=methods, signals=signals)
         except NaolocError as err:
             raise RuntimeError(str(err)) from None
         return service_id

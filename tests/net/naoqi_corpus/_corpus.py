@@ -1,5 +1,8 @@
 """What every corpus script shares: the qi module (injectable), the URL and the clock speed.
 
+Scripts named ``oldsdk_*.py`` are written for the old SDK (``from naoqi import ALProxy``)
+and run under ``python -m naoloc.run``; they take the robot as ``ip_port()``.
+
 The scripts are written against the ``qi`` API as NAO programmers write them. The
 module is ``qi`` unless ``NAOLOC_QI_MODULE`` names another one with the same API (for
 example ``naoloc.qi``); the robot's URL is ``argv[1]`` (``--qi-url`` style default
@@ -23,6 +26,13 @@ def qi_module() -> Any:
 def url() -> str:
     """The robot's URL (first argument)."""
     return sys.argv[1] if len(sys.argv) > 1 else "tcp://127.0.0.1:9559"
+
+
+def ip_port() -> tuple[str, int]:
+    """The robot's address as the old SDK takes it: (ip, port)."""
+    rest = url().split("://", 1)[-1]
+    host, _, port = rest.rpartition(":")
+    return host, int(port)
 
 
 def speed() -> float:

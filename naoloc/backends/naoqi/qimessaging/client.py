@@ -498,6 +498,18 @@ class QiSession:
         server.listen(url)
         self._server = server
 
+    def local_address(self) -> str:
+        """The address of this machine that reaches the service directory.
+
+        Raises:
+            ConnectionLost: Not connected.
+        """
+        if self._main is None or self._main.closed:
+            raise ConnectionLost("not connected")
+        sock: Any = self._main._conn.sock
+        raw: Any = getattr(sock, "_sock", sock)  # a TLS socket wraps the TCP one
+        return str(raw.getsockname()[0])
+
     def registerService(self, name: str, obj: Any, **kwargs: Any) -> int:
         """Serve ``obj`` as ``name``; returns its service id.
 
@@ -523,9 +535,7 @@ class QiSession:
 
         assert self._main is not None
         if self._server is None:
-            raw: Any = getattr(self._main._conn.sock, "_sock", self._main._conn.sock)  # TLS
-            sock_name: Any = raw.getsockname()
-            self.listen(f"tcp://{sock_name[0]}:0")
+            self.listen(f"tcp://{self.local_address()}:0")
         assert self._server is not None
         directory = self._directory()
         timeout_ms = max(1, int(self._timeout_s * 1000))
