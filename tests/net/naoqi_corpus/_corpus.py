@@ -47,6 +47,27 @@ def session() -> Any:
     return s
 
 
+def keep_place(s: Any) -> Any:
+    """A function that puts the robot back where it is now, true pose and odometry heading.
+
+    For scripts that teleport (NaolocSim): the scripts after them expect the robot where
+    it was, facing the same way in FRAME_WORLD (teleporting does not tell odometry).
+    """
+    import math
+
+    sim, motion = s.service("NaolocSim"), s.service("ALMotion")
+    pose, heading = sim.true_pose(), motion.getRobotPosition(False)[2]
+
+    def back() -> None:
+        turn = heading - motion.getRobotPosition(False)[2]
+        turn = math.atan2(math.sin(turn), math.cos(turn))
+        if abs(turn) > 0.01:
+            motion.moveTo(0.0, 0.0, turn)
+        sim.teleport(*pose)
+
+    return back
+
+
 def expect_error(call: Any, *words: str) -> str:
     """Run ``call()``; it must raise a RuntimeError of one line containing ``words``."""
     try:

@@ -74,6 +74,9 @@ class AnimationPlayerFront:
             self._ctx.not_simulated(f"ALAnimationPlayer animation {name!r} (unknown to naoloc)")
             self._ctx.sleep_sim(UNKNOWN_S, self._stop)
             return
+        if len(keys) == 1:  # one joint: NAOqi's flat form
+            self._motion.angleInterpolation(keys[0][0], keys[0][1], keys[0][2], True)
+            return
         names = [k[0] for k in keys]
         self._motion.angleInterpolation(names, [k[1] for k in keys], [k[2] for k in keys], True)
 

@@ -4,9 +4,11 @@
 with :class:`naoloc.navigation.grid.FloorGrid` (A* with the robot's clearance) over
 the room's free floor as the simulator knows it (``SimControl.is_free``, sampled once
 per room at :data:`CELL_M`), then walks the waypoints with ALMotion.moveTo, one leg at
-a time from the robot's true pose (a NAO re-plans from its odometry and sonars). It
-returns True within :data:`REACHED_M` of the goal, False when no path exists, a walk
-failed or the navigation was stopped (``stopNavigateTo``, ``ALMotion.stopMove``).
+a time from the robot's true pose (a NAO re-plans from its odometry and sonars), and
+takes up to :data:`CORRECTIONS` short legs more when the walk strayed. It returns True
+within :data:`REACHED_M` of the goal, False when no path exists (it then goes as near
+as it can), a walk failed or the navigation was stopped (``stopNavigateTo``,
+``ALMotion.stopMove``).
 
 ``moveAlong(trajectory)`` follows NAOqi's trajectory description:
 ``["Holonomic", ["Line", [x, y]], finalTheta, revolutions]``,
@@ -30,6 +32,7 @@ from naoloc.navigation.grid import FREE, FloorGrid, NoPath
 CELL_M: Final = 0.1  # the planner's grid cell
 CLEARANCE_M: Final = 0.2  # kept from walls and furniture
 REACHED_M: Final = 0.15
+CORRECTIONS: Final = 2  # short extra legs when the walk ended farther than REACHED_M
 ARC_STEP_RAD: Final = 0.4
 
 
@@ -109,10 +112,25 @@ class NavigationFront:
                 heading = here.theta
             target = Pose2D(point.x, point.y, heading)
             if not self._walk_to(target):
+                self._ctx.log("naoloc serve: ALNavigation.navigateTo: a walk stopped short")
                 return False
             here = target
         end = self._pose()
-        return math.hypot(end.x - goal.x, end.y - goal.y) <= REACHED_M
+        missed = math.hypot(end.x - goal.x, end.y - goal.y)
+        for _ in range(CORRECTIONS):  # the walk strays from odometry: step to the goal again
+            if (
+                missed <= REACHED_M
+                or missed > 1.0
+                or not self._walk_to(
+                    Pose2D(goal.x, goal.y, goal.theta if gtheta is not None else end.theta)
+                )
+            ):
+                break
+            end = self._pose()
+            missed = math.hypot(end.x - goal.x, end.y - goal.y)
+        if missed > REACHED_M:
+            self._ctx.log(f"naoloc serve: ALNavigation.navigateTo: ended {missed:.2f} m away")
+        return missed <= REACHED_M
 
     def moveAlong(self, trajectory: Any) -> bool:
         """Follow a NAOqi trajectory (Holonomic Line/Circle, Composed); True when done."""
