@@ -113,3 +113,34 @@ def test_naoloc_qi_registers_with_naoloc_serve(transport: str) -> None:
         finally:
             client.close()
         assert "Traceback" not in server.stderr()
+
+
+def test_naoloc_localization_registers_on_a_robots_session(tmp_path: Any) -> None:
+    """A naoloc process offers NaolocLocalization on a NAO's session (``naoloc serve``
+    stands in for the NAO; it serves a NaolocLocalization of its own, so this one takes
+    another name)."""
+    import qi
+
+    from naoloc.backends.naoqi.home import register
+    from naoloc.config import load_config
+    from naoloc.robot.registry import connect
+
+    with served(FAKE, "libqi") as nao:
+        cfg = load_config(nao.client_config())
+        robot = connect(cfg)
+        session = nqi.Session()
+        session.connect(nao.url)
+        client = qi.Session()
+        try:
+            register(session, robot, cfg, tmp_path, name="NaolocLocalizationHere")
+            client.connect(nao.url)
+            service = client.service("NaolocLocalizationHere")
+            assert service.isDataAvailable() is False
+            with pytest.raises(RuntimeError, match="learnHome first"):
+                service.localize()
+            with pytest.raises(RuntimeError, match="not localized yet"):
+                service.getRobotPosition()
+        finally:
+            client.close()
+            session.close()
+            robot.close()

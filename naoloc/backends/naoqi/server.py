@@ -74,7 +74,9 @@ from naoloc.robot import Robot, rules
 DEADMAN_S: Final = 0.4
 _CHECK_EVERY_S: Final = 0.05
 RobotThread = RobotLoop  # the robot's thread (kept under its old name for callers)
-_WALK_METHODS: Final = frozenset({"moveTo", "move", "moveToward", "waitUntilMoveIsFinished"})
+_WALK_METHODS: Final = frozenset(
+    {"moveTo", "move", "moveToward", "waitUntilMoveIsFinished", "walkTo", "setWalkTargetVelocity"}
+)
 _JOINT_METHODS: Final = frozenset(
     {"angleInterpolation", "angleInterpolationWithSpeed", "openHand", "closeHand"}
 )

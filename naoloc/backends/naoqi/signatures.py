@@ -155,6 +155,15 @@ _SERVICES: dict[str, dict[str, tuple[Overload, ...]]] = {
         "getJointNames": _o("[s]", "s"),
         "getSensorNames": _o("[s]"),
         "getSummary": _o("s"),
+        # NAOqi 1.x names, still called by old SDK scripts
+        "walkTo": (Overload("b", ("d", "d", "d")), Overload("b", ("d", "d", "d", "m"))),
+        "walkInit": _o("v"),
+        "setWalkTargetVelocity": _o("v", "d", "d", "d", "d"),
+        "waitUntilWalkIsFinished": _o("v"),
+        "walkIsActive": _o("b"),
+        "stopWalk": _o("b"),
+        "setWalkArmsEnabled": _o("v", "b", "b"),
+        "getWalkArmsEnabled": _o("[b]"),
     },
     VIDEO: {
         "subscribeCamera": _o("s", "s", "i", "i", "i", "i"),
@@ -418,10 +427,13 @@ SERVICES[WATCHDOG] = {"ping": _o("b")}
 
 # Calls that start a walk that keeps going after the call returns (dead-man applies),
 # and blocking walks (dead-man applies while they run).
-STARTS_MOTION: Final = frozenset({(MOTION, "move"), (MOTION, "moveToward")})
+STARTS_MOTION: Final = frozenset(
+    {(MOTION, "move"), (MOTION, "moveToward"), (MOTION, "setWalkTargetVelocity")}
+)
 BLOCKING_WALKS: Final = frozenset(
     {
         (MOTION, "moveTo"),
+        (MOTION, "walkTo"),
         (NAVIGATION, "navigateTo"),
         (NAVIGATION, "moveAlong"),
         (LOCALIZATION, "learnHome"),
@@ -435,6 +447,7 @@ ENDS_MOTION: Final = frozenset(
         (MOTION, "stopMove"),
         (MOTION, "killMove"),
         (MOTION, "killAll"),
+        (MOTION, "stopWalk"),
         (MOTION, "rest"),
         (MOTION, "waitUntilMoveIsFinished"),
         (POSTURE, "stopMove"),

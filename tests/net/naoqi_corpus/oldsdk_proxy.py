@@ -25,6 +25,10 @@ task = motion.pCall("moveTo", 1.0, 0.0, 0.0)
 assert motion.wait(task, 200) is False  # still walking
 motion.stop(task)
 assert motion.wait(task, 5000) is True
+assert motion.walkTo(0.1, 0.0, 0.0) is True  # NAOqi 1.x names still work
+motion.setWalkTargetVelocity(0.5, 0.0, 0.0, 1.0)
+assert motion.walkIsActive()
+motion.stopWalk()
 said = tts.post.say("hello")  # a posted call of any module
 tts.wait(said, 0)
 names = motion.getBodyNames("Head")
