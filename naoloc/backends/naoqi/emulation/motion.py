@@ -346,13 +346,19 @@ class MotionFront:
         self._new_walk()
         self._ctx.post(self._b.moveToward, *(v * scale for v in values))
 
+    def _posted_walks(self) -> list[Task]:
+        """Walks started with ``post``/``pCall`` that are still running (or about to)."""
+        return [t for t in self._ctx.tasks.running("post") if t.name in ("moveTo", "walkTo")]
+
     def waitUntilMoveIsFinished(self) -> None:
-        """Block until the moveTo task ends."""
+        """Block until the moveTo task ends (also one just posted: ``post.moveTo``)."""
+        for task in self._posted_walks():
+            task.done.wait()
         self._blocking("waitUntilMoveIsFinished", "wait", "waitUntilMoveIsFinished")
 
     def moveIsActive(self) -> bool:
-        """True while a walk runs."""
-        return bool(self._run("moveIsActive"))
+        """True while a walk runs (also one just posted)."""
+        return bool(self._posted_walks()) or bool(self._run("moveIsActive"))
 
     def stopMove(self) -> bool:
         """End the walk now (a blocking moveTo returns False); True."""
