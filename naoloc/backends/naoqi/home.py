@@ -97,8 +97,8 @@ class HomeLocalization:
         from naoloc.behaviours.go_home import go_home
 
         result = go_home(self._robot, self._need_map(), self._cfg)
-        if result.final.estimate.found:
-            self._fix = (result.final.estimate.pose(), self._odometry())
+        if result.final.found:
+            self._fix = (result.final.pose(), self._odometry())
         return bool(result.reached)
 
     def position(self) -> list[float]:
