@@ -8,8 +8,9 @@ protocol's poses), two at a time. Nothing is written into the repository.
     MUJOCO_GL=egl .venv/bin/python tools/eval_go_home.py -n 20
     MUJOCO_GL=egl .venv/bin/python tools/eval_go_home.py -n 20 --set world.sim.light=0.3
 
-Prints one line per start, then per room: starts within 0.3 m of home, the median true
-error, walks, path length and wall time.
+Prints one line per start, then per room: starts within 0.3 m and 0.1 m of home, the
+median true error, the median ratio of robot time to the time the planned path takes at a
+NAO's 0.1 m/s, path length and wall time.
 """
 
 from __future__ import annotations
@@ -102,15 +103,21 @@ def main() -> int:
             err = res.get("error_m", float("nan"))
             errors.append(err if err is not None else float("nan"))
             print(f"  start {[round(v, 2) for v in start]}: reached {res.get('reached')} "
-                  f"error {err} m walks {res.get('tries')} path {res.get('path_m')} m "
+                  f"error {err} m looks {res.get('tries')} path {res.get('path_m')} m "
+                  f"robot {res.get('robot_s')} s (walk {res.get('walk_s')} s) "
                   f"{res.get('failed', '')}", flush=True)  # fmt: skip
         e = np.array(errors, dtype=float)
         ok = int(np.sum(np.nan_to_num(e, nan=np.inf) <= 0.3))
+        close = int(np.sum(np.nan_to_num(e, nan=np.inf) <= 0.1))
+        ratios = [r["robot_s"] / r["walk_s"] for r in results
+                  if r.get("walk_s") and r.get("robot_s") is not None]  # fmt: skip
         row = {
             "seed": seed,
             "size_m": list(cfg.world.room.size_m),
             "starts": len(starts),
             "within_0_3m": ok,
+            "within_0_1m": close,
+            "time_ratio_median": round(float(np.median(ratios)), 2) if ratios else None,
             "median_error_m": round(float(np.median(np.nan_to_num(e, nan=np.inf))), 4),
             "reached": int(sum(1 for r in results if r.get("reached"))),
             "median_path_m": round(float(np.median([r.get("path_m", 0.0) for r in results])), 2),

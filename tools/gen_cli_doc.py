@@ -96,6 +96,7 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "walked_m": "distance walked by odometry (m)",
         "robot_s": "the robot's time spent (s)",
         "walk_s": "time to walk the planned path at a NAO's 0.1 m/s (s)",
+        "start": "where the first look put the robot [x, y, theta], map frame",
         "reason": "why it stopped without reaching home",
         "error_m": "true distance from the map origin at the end (m); simulator only",
         "truth": "true final pose [x, y, theta], map frame; simulator only",

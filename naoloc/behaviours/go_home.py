@@ -93,6 +93,9 @@ class GoHomeResult:
             "robot_s": round(self.robot_s, 2),
             "walk_s": round(self.walk_s, 2),
         }
+        if self.first.estimate.found:
+            e = self.first.estimate
+            out["start"] = [round(e.x, 4), round(e.y, 4), round(e.theta, 4)]
         if self.reason:
             out["reason"] = self.reason
         if self.truth is not None and self.error_m is not None:

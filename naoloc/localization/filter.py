@@ -33,7 +33,7 @@ from naoloc.localization.hypothesis import (
     motion_step,
 )
 from naoloc.localization.line_poses import line_poses
-from naoloc.localization.pictures import PictureMatches, picture_log_ratio
+from naoloc.localization.pictures import PictureMatches, matched_only, picture_log_ratio
 from naoloc.localization.walls import WallMap, fit_line
 from naoloc.mapping.planar_ransac import planar_hypotheses
 from naoloc.perception.floorline import WallLine
@@ -92,6 +92,8 @@ class Belief:
         other_room: The other-room alternative's weight.
         hypotheses: How many hypotheses the filter holds.
         support: Pictures the best hypothesis explained.
+        score: The best hypothesis' evidence, nats over the other-room alternative's 0.
+        seen_score: Its pictures' part, which alone weighs against the other room.
         pictures: Pictures with features seen so far.
         contradicted: Whether the latest pictures were explained far better elsewhere than
             by the leading hypothesis (the robot was carried, or the leader is wrong).
@@ -103,6 +105,8 @@ class Belief:
     other_room: float
     hypotheses: int
     support: int
+    score: float
+    seen_score: float
     pictures: int
     contradicted: bool
 
@@ -148,6 +152,7 @@ class MultiHypothesisFilter:
         for h in self.hypotheses:
             gains[id(h)] = self._update(h, evidence)
             h.score = keep * h.score + gains[id(h)]
+            h.seen_score = keep * h.seen_score + self._identity(h, evidence)
         if isinstance(evidence, PictureMatches):
             if evidence.features > 0:
                 self.pictures += 1
@@ -309,6 +314,13 @@ class MultiHypothesisFilter:
             return h.update_lines(self.walls, evidence, self.tun)
         return 0.0
 
+    def _identity(self, h: Hypothesis, evidence: Evidence) -> float:
+        """What an observation says of the map's room being the robot's at ``h``: a
+        picture's ratio-tested matches at its pose (:func:`matched_only`); lines, nothing."""
+        if not isinstance(evidence, PictureMatches) or evidence.matched.shape[0] == 0:
+            return 0.0
+        return picture_log_ratio(matched_only(evidence), h.pose, self.tun)
+
     def _propose(self, m: PictureMatches) -> None:
         """New hypotheses where the pictures put the robot, unless one explains them.
 
@@ -399,18 +411,20 @@ class MultiHypothesisFilter:
         h = Hypothesis(z, PROPOSAL_COV if cov is None else cov, self.tun)
         keep = 1.0 - self.tun.forget_per_observation
         events = list(self.window)
-        score = 0.0
+        score = seen = 0.0
         if anchor is not None:
             score = h.update_picture(anchor, self.tun).evidence
+            seen = self._identity(h, anchor)
             events = events[:-1]
         for age, (evidence, odo) in enumerate(reversed(events), start=1 if anchor else 0):
             step = self.step_of(self.odometry, odo)
             near = math.hypot(step[0], step[1]) < NEAR_M and abs(step[2]) < NEAR_RAD
             probe = h if near else Hypothesis(*motion_step(h.pose, h.cov, step, self.tun), self.tun)
             score += keep**age * self._update(probe, evidence)
+            seen += keep**age * self._identity(probe, evidence)
         if h.support + h.line_support == 0:
             return None
-        h.score = score
+        h.score, h.seen_score = score, seen
         return h
 
     def _prune(self) -> None:
@@ -430,12 +444,16 @@ class MultiHypothesisFilter:
         """The best hypothesis and how much the evidence favours it."""
         null = self.tun.null_nats
         if not self.hypotheses:
-            return Belief(None, None, 0.0, 1.0, 0, 0, self.pictures, self.contradicted)
-        scores = np.array([h.score for h in self.hypotheses] + [null])
-        top = float(scores.max())
-        weights = np.exp(scores - top)
+            return Belief(None, None, 0.0, 1.0, 0, 0, 0.0, 0.0, self.pictures, self.contradicted)
+        # Which place of the map: every observation's evidence. Whether the map's room at
+        # all: the pictures' alone (any room's walls give floor lines a corner can fit).
+        scores = np.array([h.score for h in self.hypotheses])
+        weights = np.exp(scores - scores.max())
         weights /= weights.sum()
-        best = int(np.argmax(scores[:-1]))
+        best = int(np.argmax(scores))
+        seen = self.hypotheses[best].seen_score
+        other = 1.0 / (1.0 + math.exp(min(700.0, seen - null)))
+        weights = np.append(weights * (1.0 - other), other)
         h = self.hypotheses[best]
         # The belief's spread about the best pose: its own covariance, the hypotheses near
         # it by their weight (moment matching), and the map's irreducible error.
@@ -459,6 +477,8 @@ class MultiHypothesisFilter:
             float(weights[-1]),
             len(self.hypotheses),
             h.support,
+            h.score,
+            h.seen_score,
             self.pictures,
             self.contradicted,
         )

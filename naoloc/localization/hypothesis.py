@@ -35,7 +35,6 @@ from naoloc.localization.pictures import (
     EVIDENCE_CAP,
     PictureMatches,
     mixture,
-    picture_log_ratio,
     reprojection,
 )
 from naoloc.localization.walls import WallMap, fit_line
@@ -149,6 +148,7 @@ class Hypothesis:
         self.support = 0  # pictures that corrected it
         self.line_support = 0  # floor lines that corrected it
         self.last_inliers = 0
+        self.seen_score = 0.0  # the pictures' part of the score (nats)
         self.usual = 0.0  # average evidence per informative picture (nats)
         self.misses = 0  # informative pictures in a row it explained nothing of
 
@@ -261,11 +261,11 @@ class Hypothesis:
                 break
         per = np.bincount(m.group, weights=resp, minlength=m.features)
         inliers = int(np.sum(per > 0.5))
+        evidence = float(predictive or 0.0)
         if inliers < tun.min_inliers:
-            return PictureFit(inliers, picture_log_ratio(m, self.pose, tun), False)
+            return PictureFit(inliers, evidence, False)
         self.state = x
         self.full = 0.5 * (cur + cur.T)
-        evidence = picture_log_ratio(m, self.pose, tun)
         self.support += 1
         self.last_inliers = inliers
         return PictureFit(inliers, evidence, True)

@@ -176,6 +176,8 @@ class Localizer:
         evidence = {
             "pictures": b.pictures,
             "support": b.support,
+            "score": round(b.score, 2),
+            "picture_score": round(b.seen_score, 2),
             "hypotheses": b.hypotheses,
             "probability": round(b.probability, 4),
             "other_room": round(b.other_room, 4),

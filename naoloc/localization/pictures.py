@@ -35,6 +35,7 @@ __all__ = [
     "LandmarkIndex",
     "PictureMatches",
     "match_picture",
+    "matched_only",
     "mixture",
     "picture_log_ratio",
     "reprojection",
@@ -283,6 +284,20 @@ def mixture(
     per = np.bincount(m.group, weights=hit, minlength=m.features)
     resp = hit / (per[m.group] + wrong)
     return resp, np.log((per + wrong) / wrong)
+
+
+def matched_only(m: PictureMatches) -> PictureMatches:
+    """The picture's retrieval matches alone (each feature's one ratio-tested landmark).
+
+    Any pose finds a few of the many nearest-descriptor candidates by chance; ratio-tested
+    matches agree with a pose only where the pictures and the map show the same place, so
+    they alone weigh whether this is the mapped room at all.
+    """
+    n = m.matched.shape[0]
+    return PictureMatches(
+        m.matched, m.matched_pixels, np.arange(n), 1, m.matched, m.matched_pixels,
+        m.projection, m.area_px, n, m.retrieved, m.proposal, m.proposal_inliers,
+    )  # fmt: skip
 
 
 def picture_log_ratio(m: PictureMatches, pose: np.ndarray, tun: FilterTuning) -> float:

@@ -136,7 +136,9 @@ def test_a_hypothesis_walks_to_the_pose_a_picture_and_lines_show() -> None:
 def _belief(**kw: object) -> Belief:
     base: dict[str, object] = {
         "pose": np.zeros(3), "cov": np.diag([0.02**2, 0.02**2, 0.01**2]), "probability": 0.99,
-        "other_room": 0.0, "hypotheses": 1, "support": 3, "pictures": 6, "contradicted": False,
+        "other_room": 0.0, "hypotheses": 1, "support": 3, "score": 50.0, "seen_score": 40.0,
+        "pictures": 6,
+        "contradicted": False,
     }  # fmt: skip
     base.update(kw)
     return Belief(**base)  # type: ignore[arg-type]
