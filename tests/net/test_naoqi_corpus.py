@@ -4,7 +4,9 @@ Each script in ``tests/naoqi_corpus/`` is run as its own process against a serve
 loopback, as a NAO programmer would run it; it exits 0 and prints ``OK`` when every
 NAOqi behaviour it relies on holds. Most run against one server at ``--speed 4``;
 ``walk_sleep.py`` also runs at ``--speed 1`` (a real NAO's pace). ``NAOLOC_QI_MODULE``
-chooses the qi module (``qi`` here; ``naoloc.qi`` can run the same scripts).
+chooses the qi module (``qi`` here; ``naoloc.qi`` can run the same scripts). The servers
+run with ``--command-timeout 0``: a NAOqi keeps a ``move`` going while its script sleeps,
+where ``naoloc serve`` by default stops a walk whose client is silent for 0.5 s.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ pytestmark = [
 CORPUS = Path(__file__).parent / "naoqi_corpus"
 SCRIPTS = sorted(p.name for p in CORPUS.glob("*.py") if not p.name.startswith("_"))
 FAST = 4.0
+NAOQI_MODE = ["--command-timeout", "0"]  # NAOqi's own behaviour: no command timeout
 CONFIG = {"robot": {"backend": "fake"}, "world": {"room": {"size_m": [8.0, 8.0], "seed": 1}}}
 
 
@@ -51,7 +54,7 @@ def run_script(
 
 @pytest.fixture(scope="module")
 def fast_server() -> Iterator[ServedProcess]:
-    with served(CONFIG, "libqi", speed=FAST) as server:
+    with served(CONFIG, "libqi", speed=FAST, args=NAOQI_MODE) as server:
         yield server
 
 
@@ -71,7 +74,7 @@ NEEDS_OBJECTS = {"memory_events.py"}  # ALMemory.subscriber returns an object: n
 
 @pytest.fixture(scope="module")
 def zmq_server() -> Iterator[ServedProcess]:
-    with served(CONFIG, "zmq", speed=FAST) as server:
+    with served(CONFIG, "zmq", speed=FAST, args=NAOQI_MODE) as server:
         yield server
 
 
@@ -84,6 +87,6 @@ def test_corpus_script_through_naoloc_qi_over_zmq(name: str, zmq_server: ServedP
 
 
 def test_walk_sleep_at_real_time() -> None:
-    with served(CONFIG, "libqi", speed=1.0) as server:
+    with served(CONFIG, "libqi", speed=1.0, args=NAOQI_MODE) as server:
         result = run_script("walk_sleep.py", server, 1.0)
     assert result.returncode == 0, f"{result.stdout}\n{result.stderr}"

@@ -67,7 +67,15 @@ def set_login(session: Any, user: str, password: str) -> None:
     session.setClientAuthenticatorFactory(_AuthenticatorFactory(user, password))
 
 
-def bind_service(name: str, target: Any, caller: Callable[[str, int], str] | None = None) -> Any:
+Runner = Callable[[str, str, Callable[[], None]], bool]
+
+
+def bind_service(
+    name: str,
+    target: Any,
+    caller: Callable[[str, int], str] | None = None,
+    run: Runner | None = None,
+) -> Any:
     """A qi-bound object serving ``SERVICES[name]`` by forwarding to ``target.invoke``.
 
     Args:
@@ -75,6 +83,9 @@ def bind_service(name: str, target: Any, caller: Callable[[str, int], str] | Non
         target: An object with ``invoke(caller, method, args)``; its naoloc errors reach
             the client as one line ``"<ErrorType>: <message>"`` (no traceback).
         caller: ``caller(method, overload)`` names the client of a call (None = "libqi").
+        run: ``run(caller, method, job)`` runs a call off libqi's threads (a
+            :class:`~.qimessaging.workers.CallPool`), the method answering a future:
+            blocking calls then never take every libqi thread; None = on libqi's thread.
 
     Returns:
         A multi-threaded instance ready for ``qi.Session.registerService`` (calls to one
@@ -86,30 +97,50 @@ def bind_service(name: str, target: Any, caller: Callable[[str, int], str] | Non
         for k, overload in enumerate(overloads):
             namespace[f"{method}__{k}"] = qi.bind(
                 overload.returns, list(overload.params), methodName=method
-            )(_forwarder(target, method, k, overload.returns, caller))
+            )(_forwarder(target, method, k, overload.returns, caller, run))
     cls = qi.multiThreaded()(type(f"Qi{name}", (), namespace))
     return cls()
 
 
 def _forwarder(
-    target: Any, method: str, overload: int, returns: str, caller: Callable[[str, int], str] | None
+    target: Any,
+    method: str,
+    overload: int,
+    returns: str,
+    caller: Callable[[str, int], str] | None,
+    run: Runner | None = None,
 ) -> Any:
     as_tuple = returns.startswith("(")
     qi = import_qi()
 
+    def invoke(who: str, args: tuple[Any, ...]) -> Any:
+        value = target.invoke(who, method, list(args))
+        return tuple(value) if as_tuple else value
+
+    def failed(err: NaolocError) -> str:
+        return f"{type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''}"
+
     def call(self: Any, *args: Any) -> Any:
         who = caller(method, overload) if caller is not None else LIBQI_CALLER
+        if run is not None:
+            promise = qi.Promise()
+
+            def job() -> None:
+                try:
+                    promise.setValue(invoke(who, args))
+                except NaolocError as err:
+                    promise.setError(failed(err))
+                except Exception as err:  # a bug answers this one call
+                    promise.setError(f"RobotError: {type(err).__name__}: {err}".splitlines()[0])
+
+            if run(who, method, job):
+                return promise.future()
         try:
-            value = target.invoke(who, method, list(args))
+            return invoke(who, args)
         except NaolocError as err:
             promise = qi.Promise()
-            promise.setError(
-                f"{type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''}"
-            )
+            promise.setError(failed(err))
             return promise.future()
-        if as_tuple:
-            return tuple(value)
-        return value
 
     call.__name__ = method
     return call
@@ -170,6 +201,10 @@ class LibqiServer:
         parts = urlsplit(url)
         if parts.scheme != "tcp" or not parts.hostname or parts.port is None:
             raise BackendError(f"libqi serving needs tcp://HOST:PORT, got {url!r}")
+        from naoloc.backends.naoqi.qimessaging.workers import CallPool
+        from naoloc.backends.naoqi.signatures import URGENT
+
+        self._pool = CallPool(16, per_client=4, name="naoloc-libqi-call")
         self._session = qi.Session()
         self._session.listenStandalone("tcp://127.0.0.1:0")
         self._relay: Any = None
@@ -184,7 +219,9 @@ class LibqiServer:
                 if name == MEMORY:
                     endpoint = _MemoryEndpoint(endpoint, self._subscribers)
                     core.memory.add_listener(self._subscribers.emit)
-                bound = bind_service(name, endpoint, self._caller_for(name))
+                bound = bind_service(
+                    name, endpoint, self._caller_for(name), self._runner(name, URGENT)
+                )
                 self._service_ids[name] = int(self._session.registerService(name, bound))
             self._learn_action_ids(inner, names)
             try:
@@ -228,6 +265,16 @@ class LibqiServer:
 
         return caller
 
+    def _runner(self, name: str, urgent: frozenset[tuple[str, str]]) -> Runner:
+        pool = self._pool
+
+        def run(who: str, method: str, job: Callable[[], None]) -> bool:
+            if (name, method) in urgent and pool.submit_urgent(who, job):
+                return True
+            return pool.submit(who, job)
+
+        return run
+
     def endpoints(self) -> list[str]:
         """The URL clients connect to (the relay's)."""
         if self._relay is None:
@@ -244,6 +291,7 @@ class LibqiServer:
         if session is not None:
             with contextlib.suppress(Exception):
                 session.close()
+        self._pool.close(1.0)
 
 
 class _MemoryEndpoint:

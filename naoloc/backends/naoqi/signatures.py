@@ -331,6 +331,18 @@ ENDS_MOTION: Final = frozenset(
         (POSTURE, "applyPosture"),
     }
 )
+# Calls a server runs at once on a path of their own, never behind other clients' work:
+# the ways to stop the robot, and the heartbeat that feeds the dead-man.
+URGENT: Final = frozenset(
+    {
+        (MOTION, "stopMove"),
+        (MOTION, "killMove"),
+        (MOTION, "killAll"),
+        (MOTION, "rest"),
+        (POSTURE, "stopMove"),
+        (WATCHDOG, "ping"),
+    }
+)
 
 _INT32 = (-(1 << 31), (1 << 31) - 1)
 

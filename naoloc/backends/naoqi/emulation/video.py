@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import threading
+import time
 from dataclasses import dataclass
 from typing import Any, Final
 
@@ -42,13 +43,19 @@ CAMERA_PARAMETERS: Final[dict[int, int]] = {
 
 @dataclass
 class Subscriber:
-    """One subscriber: its backend handle and what the client asked for."""
+    """One subscriber: its backend handle, what the client asked for, and whose it is.
+
+    ``orphaned`` is when its owner left (time.monotonic), None while the owner is
+    connected; a client that names the handle adopts it (a reconnecting client).
+    """
 
     backend_handle: str
     camera: int
     resolution: int
     colorspace: int
     fps: int
+    owner: str = ""
+    orphaned: float | None = None
 
 
 class VideoFront:
@@ -75,11 +82,38 @@ class VideoFront:
         return self._ctx.run(getattr(self._b, method), *args)
 
     def _sub(self, nameId: Any) -> Subscriber:
+        caller = self._ctx.caller
         with self._lock:
             sub = self._subs.get(nameId) if isinstance(nameId, str) else None
+            if sub is not None and sub.orphaned is not None and caller:
+                sub.owner, sub.orphaned = caller, None  # adopted (e.g. a reconnected client)
         if sub is None:
             raise HandleError(f"no camera subscriber named {nameId!r}")
         return sub
+
+    def orphan(self, caller: str) -> int:
+        """``caller`` left: its subscribers are released after a grace (see release_orphans)."""
+        now = time.monotonic()
+        with self._lock:
+            subs = [s for s in self._subs.values() if s.owner == caller and s.orphaned is None]
+            for sub in subs:
+                sub.orphaned = now
+        return len(subs)
+
+    def release_orphans(self, older_than_s: float = 0.0) -> int:
+        """Unsubscribe subscribers whose owner left more than ``older_than_s`` ago."""
+        now = time.monotonic()
+        with self._lock:
+            gone = [
+                (h, s) for h, s in self._subs.items()
+                if s.orphaned is not None and now - s.orphaned >= older_than_s
+            ]  # fmt: skip
+            for handle, _ in gone:
+                del self._subs[handle]
+        for _, sub in gone:
+            with contextlib.suppress(RobotError):
+                self._run("unsubscribe", sub.backend_handle)
+        return len(gone)
 
     def subscribeCamera(
         self, name: Any, cameraIndex: Any, resolution: Any, colorSpace: Any, fps: Any
@@ -95,6 +129,10 @@ class VideoFront:
         camera = rules.camera_index(cameraIndex)
         res, cs, rate = rules.subscription(resolution, colorSpace, fps)
         with self._lock:
+            full = len(self._subs) >= rules.MAX_SUBSCRIBERS
+        if full:  # subscribers of clients that left make room at once
+            self.release_orphans()
+        with self._lock:
             if len(self._subs) >= rules.MAX_SUBSCRIBERS:
                 raise RobotError(
                     f"too many camera subscribers ({rules.MAX_SUBSCRIBERS}); unsubscribe some"
@@ -103,7 +141,7 @@ class VideoFront:
             while handle in self._subs:
                 n += 1
                 handle = f"{name}_{n}"
-            self._subs[handle] = Subscriber("", camera, res, cs, rate)
+            self._subs[handle] = Subscriber("", camera, res, cs, rate, self._ctx.caller)
         try:
             backend = self._run("subscribeCamera", handle, camera, res, cs, rules.backend_fps(rate))
         except BaseException:
