@@ -167,8 +167,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--tls-cert", type=Path, metavar="PEM", help="qimessaging tcps://: certificate")
     p.add_argument("--tls-key", type=Path, metavar="PEM", help="its key, if not in --tls-cert")
     p.add_argument(
-        "--command-timeout", type=_pose, default=0.5, metavar="S",
-        help="stop a velocity walk whose client is silent this long (0 = never, as NAOqi)",
+        "--command-timeout", type=_pose, default=None, metavar="S",
+        help="stop a velocity walk whose client is silent this long (default 0.4 s; 0 = never, "
+        "as NAOqi)",
     )  # fmt: skip
     _add_live(p)
     p = add("demo", config=False)

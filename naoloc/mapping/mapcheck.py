@@ -12,8 +12,8 @@ Order of the checks, cheapest and most dangerous first:
 3. The metadata JSON: its size, its nesting depth (a deeply nested document is refused
    before the JSON parser recurses), its structure and the types of its fields.
 4. The arrays: finiteness (NaN only in the whole rows where the format means "none", and
-   there only when the rest of the map agrees: a neuron without a pose wins no image,
-   has no view direction, and at least one neuron has a pose), value ranges, shapes
+   there only when the rest of the map agrees: a neuron without a pose wins no wall
+   picture, has no view direction, and some neuron has a pose), value ranges, shapes
    consistent with each other and with the metadata (feature kind, descriptor width,
    vocabulary size, binary words of 0/1 bits).
 
@@ -271,6 +271,16 @@ def check_features(a: dict[str, np.ndarray], meta: dict[str, Any], name: str) ->
     return str(kind)
 
 
+def check_posed_winners(a: dict[str, np.ndarray], walls: int, name: str) -> None:
+    """Every neuron that wins a wall picture (the first ``walls`` keyframes, whose poses
+    make the neurons' poses) has a pose: NaN there is damage, not "none"."""
+    winners = a["winners"][:walls]
+    posed = ~np.isnan(a["neuron_poses"]).any(axis=1)
+    if winners.size and not posed[winners].all():
+        bad = int(winners[~posed[winners]][0])
+        raise fail(name, f"neuron {bad} wins wall pictures but has no pose (NaN)")
+
+
 def check_values(a: dict[str, np.ndarray], name: str) -> None:
     """Finiteness and value ranges of the arrays (shapes are checked before)."""
     finite = [
@@ -292,10 +302,7 @@ def check_values(a: dict[str, np.ndarray], name: str) -> None:
         raise fail(name, "no neuron has a pose (neuron_poses is all NaN)")
     if (np.isnan(a["neuron_views"]) == posed).any():
         raise fail(name, "neuron_views is NaN where neuron_poses is not, or the reverse")
-    winners = a["winners"]
-    if winners.size and not posed[winners].all():
-        raise fail(name, f"neuron {int(winners[~posed[winners]][0])} wins images but has "
-                   "no pose (NaN)")  # fmt: skip
+
     if (a["vocab_idf"] < 0).any():
         raise fail(name, "negative IDF")
     cams = a["keyframe_cameras"]

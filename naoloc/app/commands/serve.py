@@ -20,7 +20,8 @@ file; off loopback qimessaging needs both a login and TLS (``tcps://`` with
 ``--tls-cert``). Clients can never (un)register services.
 
 The dead-man stops a velocity walk whose client makes no call for
-``--command-timeout`` seconds (default 0.5; 0 = never, as a real NAOqi).
+``--command-timeout`` seconds (default 0.4, so it has stopped within 0.5 s; 0 = never,
+as a real NAOqi).
 """
 
 from __future__ import annotations
@@ -132,9 +133,25 @@ def read_login(ask: bool) -> dict[str, str] | None:
     return {user: password}
 
 
+def few_malloc_arenas() -> None:
+    """Let glibc's malloc use two arenas, not one per thread (up to 8 per core).
+
+    Every connection has threads of its own, and memory freed in a thread's arena mostly
+    stays with the process: a server that took 31 x 512 KiB values three times kept 25 MB
+    more each time; with two arenas it keeps nothing (tools/bench_attack.py).
+    """
+    if not sys.platform.startswith("linux"):
+        return
+    import contextlib
+    import ctypes
+
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL(None).mallopt(-8, 2)  # M_ARENA_MAX (glibc); ignored elsewhere
+
+
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """Serve until SIGINT/SIGTERM; return the summary printed as the last JSON line."""
-    from naoloc.backends.naoqi.server import RobotThread, VirtualNaoqi
+    from naoloc.backends.naoqi.server import COMMAND_TIMEOUT_S, RobotThread, VirtualNaoqi
     from naoloc.backends.naoqi.session import resolve_transport
     from naoloc.robot.registry import connect
     from naoloc.viz.live import live_from_args, watch
@@ -157,9 +174,10 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     if not 0.0 < speed <= 1000.0:
         raise BackendError(f"--speed must be in (0, 1000], got {speed:g}")
     timeout = getattr(args, "command_timeout", None)
-    timeout = 0.5 if timeout is None else float(timeout)
+    timeout = COMMAND_TIMEOUT_S if timeout is None else float(timeout)
     if not 0.0 <= timeout <= 60.0:
         raise BackendError(f"--command-timeout must be in [0, 60] s, got {timeout:g}")
+    few_malloc_arenas()  # before the server's threads exist
     live = live_from_args(args)
     stop = threading.Event()
 

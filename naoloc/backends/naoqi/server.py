@@ -14,7 +14,7 @@ or a blocking ``moveTo``) owns it. The walk is stopped at once when the owner's
 connection closes, when a heartbeating owner (every zmq client; a libqi client
 that calls ``NaolocWatchdog.ping``) is silent for more than ``deadman_s`` (0.4 s), and
 when the owner of a velocity walk (``move``, ``moveToward``) makes no call for
-``command_timeout_s`` (0.5 s) while none of its calls runs: a frozen client (SIGSTOP,
+``command_timeout_s`` (0.4 s) while none of its calls runs: a frozen client (SIGSTOP,
 a hung script) leaves no robot walking, as the ROS 2 ``cmd_vel`` timeout. A real NAOqi
 has no such timeout (``move`` walks until told otherwise); ``naoloc serve
 --command-timeout 0`` serves that behaviour. Other clients' traffic never keeps a
@@ -71,7 +71,7 @@ from naoloc.errors import BackendError, NaolocError, RobotError
 from naoloc.robot import Robot, rules
 
 DEADMAN_S: Final = 0.4
-COMMAND_TIMEOUT_S: Final = 0.5  # a velocity walk's owner silent this long: stop (frozen)
+COMMAND_TIMEOUT_S: Final = 0.4  # a velocity walk's owner silent this long: stop (frozen)
 RELEASE_GRACE_S: Final = 2.0  # a left client's camera subscribers wait this long
 _CHECK_EVERY_S: Final = 0.05
 RobotThread = RobotLoop  # the robot's thread (kept under its old name for callers)

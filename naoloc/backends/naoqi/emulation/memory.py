@@ -44,7 +44,7 @@ STATIC_KEYS: Final[dict[str, Any]] = {
 }
 MAX_KEY_CHARS: Final = 1024
 MAX_VALUE_BYTES: Final = 1024 * 1024  # one value, estimated in memory
-MAX_TOTAL_BYTES: Final = 32 * 1024 * 1024  # every value, estimated in memory
+MAX_TOTAL_BYTES: Final = 16 * 1024 * 1024  # every value, estimated in memory
 MAX_KEYS: Final = 10_000
 _ITEM_BYTES: Final = 64  # a Python object and its reference, roughly
 _SENSOR = "Device/SubDeviceList/{}/Position/Sensor/Value"
