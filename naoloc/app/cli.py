@@ -153,7 +153,8 @@ def build_parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     p.add_argument(
         "--allow-remote", action="store_true",
-        help="allow binding to a non-loopback address (zmq needs CURVE keys then)",
+        help="allow binding to a non-loopback address (zmq needs CURVE keys then; qimessaging "
+        "--login over tcps://)",
     )  # fmt: skip
     p.add_argument(
         "--speed", type=_pose, default=1.0, metavar="K",

@@ -229,7 +229,7 @@ class LibqiServer:
                     (parts.hostname, parts.port),
                     (str(inner_parts.hostname), int(inner_parts.port or 0)),
                     on_alive=core.touch,
-                    on_gone=core.gone,
+                    on_gone=self._gone(core),
                     log=log,
                 )
             except OSError as err:
@@ -264,6 +264,13 @@ class LibqiServer:
             return str(self._relay.caller_of(*ids))
 
         return caller
+
+    def _gone(self, core: Any) -> Callable[[str], None]:
+        def gone(caller: str) -> None:
+            self._pool.drop(caller)  # its queued calls never start
+            core.gone(caller)
+
+        return gone
 
     def _runner(self, name: str, urgent: frozenset[tuple[str, str]]) -> Runner:
         pool = self._pool

@@ -40,6 +40,7 @@ class FrontContext:
     _local: threading.local = field(default_factory=threading.local)
     _said: set[str] = field(default_factory=set)
     _left: dict[str, threading.Event] = field(default_factory=dict)
+    _gone: dict[str, None] = field(default_factory=dict)  # callers that left, oldest first
     _left_lock: threading.Lock = field(default_factory=threading.Lock)
 
     def _left_event(self) -> threading.Event | None:
@@ -47,12 +48,20 @@ class FrontContext:
         if not caller:
             return None
         with self._left_lock:
+            if caller in self._gone:  # a call of a client that already left: no waiting
+                done = threading.Event()
+                done.set()
+                return done
             return self._left.setdefault(caller, threading.Event())
 
     def left(self, caller: str) -> None:
-        """``caller`` disconnected: its blocking waits (``sleep_sim``) end now."""
+        """``caller`` disconnected: its blocking waits (``sleep_sim``) end now, and so do
+        those of its calls that start later (queued before it left)."""
         with self._left_lock:
             event = self._left.pop(caller, None)
+            self._gone[caller] = None
+            while len(self._gone) > 10_000:  # ids are never reused: forget the oldest
+                del self._gone[next(iter(self._gone))]
         if event is not None:
             event.set()
 
