@@ -123,7 +123,7 @@ class ServedRobot:
         self._log = log
         self._own_loop = thread is None
         self.loop = thread or RobotLoop()
-        self.ctx = FrontContext(run=self._run, speed=speed or 1.0, log=log)
+        self.ctx = FrontContext(run=self._run, submit=self._submit, speed=speed or 1.0, log=log)
         self.clock: SimClock | None = None
         if speed is not None and isinstance(robot.sim, ClockHost):
             clock = SimClock(self.loop, speed, log)
@@ -171,6 +171,16 @@ class ServedRobot:
     def _run(self, function: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
         self.calls += 1
         return self.loop.run(function, *args, caller=self.ctx.caller or "server", **kwargs)
+
+    def _submit(self, function: Callable[..., Any], *args: Any) -> None:
+        self.calls += 1
+        name = getattr(function, "__name__", "call")
+        self.loop.submit(
+            function,
+            *args,
+            caller=self.ctx.caller or "server",
+            report=lambda err: self._log(f"naoloc serve: {name} failed on the robot: {err}"),
+        )
 
     def _joint_angles(self, names: list[str], use_sensors: bool) -> list[float]:
         return [float(v) for v in self._run(self.robot.motion.getAngles, names, use_sensors)]

@@ -29,9 +29,12 @@ class FrontContext:
         log: One-line notices (stderr of ``naoloc serve``).
         tasks: The task table shared by every service.
         caller: The client of the current call (per thread).
+        submit: ``submit(function, *args)`` queues a call on the robot thread for the
+            current client and returns at once (None = run it and wait).
     """
 
     run: Callable[..., Any]
+    submit: Callable[..., None] | None = None
     speed: float = 1.0
     clocked: bool = False
     cycle_s: float = 0.02
@@ -78,6 +81,14 @@ class FrontContext:
     @caller.setter
     def caller(self, value: str) -> None:
         self._local.caller = value
+
+    def post(self, function: Callable[..., Any], *args: Any) -> None:
+        """Run ``function(*args)`` on the robot thread without waiting for it (NAOqi's
+        non-blocking calls); the calling client's order of calls is kept."""
+        if self.submit is None:
+            self.run(function, *args)
+        else:
+            self.submit(function, *args)
 
     def sleep_sim(self, seconds: float, stop: threading.Event | None = None) -> bool:
         """Wait ``seconds`` of simulated time; False when ``stop`` was set first.

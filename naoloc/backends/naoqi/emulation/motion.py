@@ -13,15 +13,40 @@ logged once: whole-body balance (``wb*``) and Cartesian control
 from __future__ import annotations
 
 import threading
-from typing import Any
+import time
+from typing import Any, Final
 
 from naoloc.backends.naoqi.emulation.context import FrontContext
+from naoloc.backends.naoqi.emulation.posture import REST_S, WAKE_UP_S, hold_until
 from naoloc.backends.naoqi.emulation.tasks import Task
 from naoloc.constants import JOINT_NAMES
 from naoloc.errors import RobotError
 from naoloc.robot import rules
 
+# NAO's step period (s) at MaxStepFrequency 0 and 1 (NAOqi's walk: about 0.6 s to 0.42 s).
+STEP_PERIOD_SLOW_S: Final = 0.6
+STEP_PERIOD_FAST_S: Final = 0.42
+
 _CHAINS_WITH_FLAGS = ("LArm", "RArm", "Arms", "LLeg", "RLeg", "Legs", "Head", "Body", "All", "Move")
+
+
+def _legacy_frequency(args: tuple[Any, ...]) -> tuple[tuple[Any, ...], float]:
+    """Take ``["Frequency", f]`` out of a moveToward moveConfig; the rest and f (default 1).
+
+    Raises:
+        RobotError: Frequency is not a number in [0, 1].
+    """
+    if len(args) != 4 or not isinstance(args[3], list | tuple):
+        return args, 1.0
+    rest, frequency = [], 1.0
+    for pair in args[3]:
+        if isinstance(pair, list | tuple) and len(pair) == 2 and pair[0] == "Frequency":
+            frequency = rules.finite(pair[1], "moveConfig Frequency")
+            if not 0.0 <= frequency <= 1.0:
+                raise RobotError(f"moveConfig Frequency must be in [0, 1], got {frequency}")
+        else:
+            rest.append(pair)
+    return (*args[:3], rest), frequency
 
 
 def _chain(name: Any, what: str) -> str:
@@ -82,14 +107,26 @@ class MotionFront:
         self._run("setAngles", list(JOINT_NAMES), angles, 1.0)
 
     # ------------------------------------------------------------------ stiffness
+    def _timed(self, name: str, seconds: float) -> None:
+        """Run the backend's ``name`` as a posture task held for a NAO's ``seconds``."""
+        task = self._ctx.tasks.start(name, "posture", self._stopper("walk"), self._ctx.caller)
+        try:
+            started = time.monotonic()
+            self._run(name)
+            hold_until(self._ctx, started, seconds, task.stopped)
+        finally:
+            self._ctx.tasks.end(task)
+
     def wakeUp(self) -> None:
-        """Motors on, walk-ready posture; blocking."""
-        self._blocking("wakeUp", "posture", "wakeUp")
+        """Motors on, walk-ready posture; blocking (a NAO's 2.5 s from rest, else at once)."""
+        awake = bool(self._run("robotIsWakeUp"))
+        self._timed("wakeUp", 0.0 if awake else WAKE_UP_S)
 
     def rest(self) -> None:
-        """Stop, crouch, motors off; blocking."""
+        """Stop, crouch, motors off; blocking (a NAO's 3 s when awake, else at once)."""
         self._new_walk()
-        self._blocking("rest", "posture", "rest")
+        awake = bool(self._run("robotIsWakeUp"))
+        self._timed("rest", REST_S if awake else 0.0)
 
     def robotIsWakeUp(self) -> bool:
         """True when the leg joints are stiff."""
@@ -283,17 +320,31 @@ class MotionFront:
     def move(self, *args: Any) -> None:
         """Walk at a velocity (m/s, m/s, rad/s; FRAME_ROBOT) until changed; non-blocking.
 
-        The moveConfig of ``move(x, y, theta, moveConfig)`` is checked, then not used.
+        Returns at once, as NAOqi does: the walk starts on the robot thread after the
+        answer, in the order of the caller's calls. The moveConfig of ``move(x, y,
+        theta, moveConfig)`` is checked, then not used.
         """
         values, _ = rules.velocity(args, False, "move")
         self._new_walk()
-        self._run("move", *values)
+        self._ctx.post(self._b.move, *values)
 
     def moveToward(self, *args: Any) -> None:
-        """Walk at a normalised velocity (each in [-1, 1]); non-blocking."""
-        values, _ = rules.velocity(args, True, "moveToward")
+        """Walk at a normalised velocity (each in [-1, 1]); non-blocking, returns at once.
+
+        moveConfig takes NAOqi's walk parameters and the SDK examples' ``Frequency``
+        (legacy name of ``MaxStepFrequency``, in [0, 1]). The step frequency scales the
+        speed: the simulated walk keeps its step period, so a fraction ``f`` walks at
+        ``STEP_PERIOD_FAST_S / step period`` of full speed, the step period going from
+        ``STEP_PERIOD_SLOW_S`` (f = 0) to ``STEP_PERIOD_FAST_S`` (f = 1). The other
+        parameters are checked, then not used.
+        """
+        args, frequency = _legacy_frequency(args)
+        values, config = rules.velocity(args, True, "moveToward")
+        frequency = config.get("MaxStepFrequency", frequency)
+        period = STEP_PERIOD_SLOW_S + (STEP_PERIOD_FAST_S - STEP_PERIOD_SLOW_S) * frequency
+        scale = STEP_PERIOD_FAST_S / period
         self._new_walk()
-        self._run("moveToward", *values)
+        self._ctx.post(self._b.moveToward, *(v * scale for v in values))
 
     def waitUntilMoveIsFinished(self) -> None:
         """Block until the moveTo task ends."""
@@ -315,10 +366,11 @@ class MotionFront:
         self._run("stopMove")
 
     def killAll(self) -> None:
-        """Stop every motion task: walks and joint interpolations."""
+        """Stop every motion task: walks, joint interpolations and posture changes."""
         self._new_walk()
         self._run("stopMove")
         self._ctx.tasks.stop_all("joints")
+        self._ctx.tasks.stop_all("posture")
 
     def killTask(self, motionTaskID: Any) -> bool:
         """Stop one task by id; True when it was running."""

@@ -223,7 +223,12 @@ class Channel:
         except ProtocolError as err:
             print(f"naoloc: dropped a bad event from {self.url}: {err}", file=sys.stderr)
             return
-        args = tuple(value) if isinstance(value, tuple | list) and sig.kind == "(" else (value,)
+        if sig.kind == "m":  # a dynamic signal: libqi sends its arguments as one tuple
+            args = tuple(value) if isinstance(value, tuple) else (value,)
+        elif isinstance(value, tuple | list) and sig.kind == "(":
+            args = tuple(value)
+        else:
+            args = (value,)
         for callback, _ in links:
             self.session._dispatch(callback, args)
 
