@@ -19,6 +19,7 @@ from collections.abc import Iterator
 
 import pytest
 
+from naoloc.backends.naoqi.qimessaging import codec
 from naoloc.backends.naoqi.qimessaging.client import QiSession
 from naoloc.backends.naoqi.testing import ServedProcess, served
 from naoloc.errors import ConnectionLost
@@ -252,3 +253,21 @@ def test_zmq_threads_stay_bounded_and_a_flooder_does_not_drop_another() -> None:
             stop.set()
             sampler.join()
         assert max(peak) <= before + 8, f"threads {before} -> peak {max(peak)}"
+
+
+@pytest.mark.skipif(not HAS_QI, reason="qi not installed")
+def test_libqi_behind_the_relay_never_decodes_a_bomb() -> None:
+    with served(attacks.FAKE, "libqi") as server:  # libqi alone: 14.5 s and 1.5 GB a message
+        cpu, memory = attacks.preauth_cost(server, 4096, messages=2)
+        assert cpu < 0.1 and memory < 10.0, (cpu, memory)
+        sid, action, _ = attacks.method_address(server.url, "ALMemory", "insertData")
+        raw = attacks.RawQi(server.url)
+        try:
+            raw.read()  # the login's answer
+            value = attacks.nested_map(4096)[9:]  # the dynamic [[()]] value alone
+            raw.call(sid, 1, action, codec.encode_bytes("s", "k") + value)
+            header, body = raw.read(5.0)
+            assert header.type == 3 and b"more elements" in body
+        finally:
+            raw.close()
+        _victim_ok(server)

@@ -212,6 +212,7 @@ class LibqiServer:
             inner = next(str(e) for e in self._session.endpoints() if str(e).startswith("tcp://"))
             inner_parts = urlsplit(inner)
             self._ids: dict[tuple[str, str, int], tuple[int, int]] = {}
+            self._params: dict[tuple[int, int], str] = {}  # (service, action) -> "(...)"
             self._service_ids: dict[str, int] = {}
             self._subscribers = _MemorySubscribers()
             for name in names:
@@ -231,6 +232,7 @@ class LibqiServer:
                     on_alive=core.touch,
                     on_gone=self._gone(core),
                     log=log,
+                    screen=self._screen,
                 )
             except OSError as err:
                 raise BackendError(f"cannot listen on {url}: {err.strerror or err}") from None
@@ -250,9 +252,11 @@ class LibqiServer:
                 }
                 for method, overloads in SERVICES[name].items():
                     for k, overload in enumerate(overloads):
-                        uid = by_shape.get((method, "(" + "".join(overload.params) + ")"))
+                        params = "(" + "".join(overload.params) + ")"
+                        uid = by_shape.get((method, params))
                         if uid is not None:
                             self._ids[(name, method, k)] = (self._service_ids[name], uid)
+                            self._params[(self._service_ids[name], uid)] = params
         finally:
             client.close()
 
@@ -264,6 +268,24 @@ class LibqiServer:
             return str(self._relay.caller_of(*ids))
 
         return caller
+
+    def _screen(
+        self, service: int, obj: int, action: int, flags: int, payload: bytes
+    ) -> str | None:
+        """Why libqi must not decode this call (naoloc's element budget), or None."""
+        from naoloc.backends.naoqi.qimessaging import codec
+        from naoloc.errors import ProtocolError
+
+        if obj != 1:
+            return None
+        params = self._params.get((service, action))
+        if params is None and not flags & 1:
+            return None  # not one of ours (the directory, generic actions): fixed types
+        try:
+            codec.decode("m" if flags & 1 else params or "m", payload, exact=False)
+        except ProtocolError as err:
+            return f"ProtocolError: {err}"
+        return None
 
     def _gone(self, core: Any) -> Callable[[str], None]:
         def gone(caller: str) -> None:
