@@ -63,6 +63,7 @@ from naoloc.backends.naoqi.signatures import (
     SYSTEM,
     TOUCH,
     TTS,
+    URGENT,
     VIDEO,
     WATCHDOG,
     select_overload,
@@ -154,6 +155,7 @@ class ServedRobot:
             SYSTEM: companions.SystemFront(robot_name),
             SPEECH_RECOGNITION: companions.SpeechRecognitionFront(ctx),
         }
+        self._stopping = threading.local()  # .now: this thread runs a stop (URGENT)
         self._seen_lock = threading.Lock()
         self._last_seen: dict[str, float] = {}
         self._heartbeating: set[str] = set()
@@ -170,7 +172,10 @@ class ServedRobot:
     # ------------------------------------------------------------------ robot access
     def _run(self, function: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
         self.calls += 1
-        return self.loop.run(function, *args, caller=self.ctx.caller or "server", **kwargs)
+        urgent = bool(getattr(self._stopping, "now", False))  # a stop jumps the queue
+        return self.loop.run(
+            function, *args, caller=self.ctx.caller or "server", urgent=urgent, **kwargs
+        )
 
     def _submit(self, function: Callable[..., Any], *args: Any) -> None:
         self.calls += 1
@@ -231,6 +236,7 @@ class ServedRobot:
         self.touch(caller, heartbeat=service == WATCHDOG)
         with self._seen_lock:
             self._busy[caller] = self._busy.get(caller, 0) + 1
+        self._stopping.now = (service, method) in URGENT
         try:
             checked = select_overload(service, method, list(args))
             result = self._dispatch(caller, service, method, checked)
@@ -244,6 +250,7 @@ class ServedRobot:
             self._log(f"naoloc serve: {line}")
             raise RobotError(line.split(": ", 1)[1]) from None
         finally:
+            self._stopping.now = False
             with self._seen_lock:
                 left = self._busy.pop(caller, 1) - 1
                 if left:
@@ -341,7 +348,7 @@ class ServedRobot:
             return False
         self._owner = None
         try:
-            self.loop.run(self.robot.motion.stopMove, caller="deadman")
+            self.loop.run(self.robot.motion.stopMove, caller="deadman", urgent=True)
         except NaolocError as err:
             self._log(f"naoloc serve: dead-man stop failed: {err}")
             return False
