@@ -18,7 +18,7 @@ Beyond the paper, each stop also photographs the room across its interior
 ahead and the far walls, 1-7 m away. The wall pictures alone show every wall from the
 circuit's 1 m, so a robot near a wall, looking across the room at walls 5 m off, matched
 nothing; the far pictures go to a separate sink and build-map gives them to the verified
-localizer only (docs/RESULTS.md, "Issue 12, eleventh step").
+localizer only (docs/history/RESULTS.md, "Issue 12, eleventh step").
 """
 
 from __future__ import annotations
@@ -52,12 +52,12 @@ from naoloc.config import Config
 from naoloc.errors import MotionError
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
 from naoloc.perception.floorline import WallLine
+from naoloc.perception.wall_gate import in_front_range
 from naoloc.robot import Robot, pose_of
 from naoloc.robot.camera import Camera, clamp_head, lens_of, look, stand
 from naoloc.robot.keyframe import Keyframe
 
 FRONT_LOOKAHEAD_M = 1.0  # start looking at the front wall this far before the corner
-FRONT_RANGE_M = 2.6  # the front wall's line is trusted up to this distance
 MAX_EXTRA_STEPS = 8  # steps a side may take beyond its planned count (odometry too short)
 
 FrameSink = Callable[[Keyframe, int, Pose2D], None]
@@ -373,7 +373,7 @@ def _walk_laps(
                 walked += length_now
                 steps += 1
                 side_line = eye.measure(side_normal)
-                good = trusted(side_line, offset)
+                good = trusted(side_line, offset, side_normal)
                 if good is not None:
                     deviations.append(good.distance - offset)
                 vision.append(
@@ -438,7 +438,7 @@ def trusted_front(
         distance scale errs 10 %; a rug's edge or a low piece of furniture would not
         agree), else None.
     """
-    if line is None or line.distance > FRONT_RANGE_M or line.distance < 0.5 * offset:
+    if line is None or not in_front_range(line.distance) or line.distance < 0.5 * offset:
         return None
     if abs(line.distance - offset - remaining) > 0.25 * length + 0.3:
         return None

@@ -22,6 +22,7 @@ from naoloc.config import CameraConfig
 from naoloc.constants import FRAME_ROBOT
 from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.perception.floorline import WallLine, detect_wall_line, detect_wall_lines
+from naoloc.perception.wall_gate import in_front_range, side_line_angle
 from naoloc.robot import Robot
 from naoloc.robot.camera import Camera
 from naoloc.robot.lens import Lens
@@ -29,12 +30,10 @@ from naoloc.robot.lens import Lens
 BOTTOM_CAMERA = 1
 MAX_LATERAL_M = 0.12  # largest sideways correction per step
 MAX_TURN_RAD = 0.25  # largest heading correction per step
-MAX_DEVIATION_M = 0.6  # a side line farther than this from the offset is not trusted
 FRONT_PITCH = -0.35  # head pitch for the front wall (the bottom camera sees 0.4 m to far ahead)
 MIN_SCALE_BASELINE_M = 0.4  # front-distance change needed for one scale sample
 MIN_SCALE_SIDES = 2
 MAX_SCALE_SPREAD = 0.1  # relative median absolute deviation of the per-side ratios
-SCALE_RANGE_M = 2.1  # front lines used for the scale (farther ones are biased short)
 
 
 class FloorEye:
@@ -107,9 +106,10 @@ class FloorEye:
         self.camera.close()
 
 
-def trusted(line: WallLine | None, offset: float) -> WallLine | None:
-    """``line`` when its distance is plausible for a wall kept at ``offset`` m, else None."""
-    if line is None or abs(line.distance - offset) > MAX_DEVIATION_M:
+def trusted(line: WallLine | None, offset: float, side_normal: float) -> WallLine | None:
+    """``line`` when it is plausible for the side wall kept at ``offset`` m in the direction
+    ``side_normal`` (rad), by :func:`naoloc.perception.wall_gate.side_line_angle`, else None."""
+    if line is None or side_line_angle(line.distance, line.normal, offset, side_normal) is None:
         return None
     return line
 
@@ -130,7 +130,7 @@ def corrected_step(
         ends ``offset`` from the wall (sideways correction at most :data:`MAX_LATERAL_M`)
         and parallel to it (turn at most :data:`MAX_TURN_RAD`).
     """
-    line = trusted(line, offset)
+    line = trusted(line, offset, side_normal)
     if line is None:
         return Pose2D(step, 0.0, 0.0), False
     toward = line.distance - offset
@@ -164,7 +164,7 @@ def metric_scale(samples: list[FrontSample]) -> tuple[float | None, list[float]]
     On each side, the front measurements' wall distances against the odometry's
     displacement (projected on the wall's normal) fall on a line whose slope is one
     sample (least squares over all of the side's measurements within
-    :data:`SCALE_RANGE_M`).
+    :data:`naoloc.perception.wall_gate.FRONT_RANGE_M`).
 
     Returns:
         ``(median ratio, the per-side ratios)``; the ratio is None with fewer than
@@ -173,7 +173,7 @@ def metric_scale(samples: list[FrontSample]) -> tuple[float | None, list[float]]
     """
     by_side: dict[int, list[FrontSample]] = {}
     for s in samples:
-        if s.line.distance > SCALE_RANGE_M:
+        if not in_front_range(s.line.distance):
             continue
         by_side.setdefault(s.side, []).append(s)
     ratios = []

@@ -112,3 +112,22 @@ class FrontContext:
         if what not in self._said:
             self._said.add(what)
             self.log(f"naoloc serve: {what} is not simulated; the call is accepted and ignored")
+
+
+def forwarded(ctx: FrontContext, backend: Any, name: str) -> Callable[..., Any]:
+    """``backend.<name>`` as a call that runs on the robot thread (a front's fallback).
+
+    Raises:
+        AttributeError: ``name`` is private, or not a callable of ``backend``.
+    """
+    if name.startswith("_"):
+        raise AttributeError(name)
+    target = getattr(backend, name)
+    if not callable(target):
+        raise AttributeError(name)
+
+    def call(*args: Any) -> Any:
+        return ctx.run(target, *args)
+
+    call.__name__ = name
+    return call

@@ -1,64 +1,36 @@
-"""ALMotion in front of a simulated backend: NAOqi's arguments, errors, tasks and coverage.
+"""ALMotion served: the simulated robot's own ALMotion with NAOqi's tasks, threads and clock.
 
-The backend (``robot.motion`` of the fake or MuJoCo robot) supplies walking, joints,
-stiffness and odometry; this front checks every argument with :mod:`.rules`, expands
-names, runs blocking calls as tasks (see :mod:`.tasks`), and adds the methods that are
-pure bookkeeping (flags, configs, summaries) or composed of backend calls
-(angleInterpolation, stiffnessInterpolation, openHand...). Not simulated, accepted and
-logged once: whole-body balance (``wb*``) and Cartesian control
-(``positionInterpolations``, ``transformInterpolations``, ``setPositions``,
-``setTransforms``): they block for their duration without moving the body.
+ALMotion's call surface and NAOqi's argument rules are the backend's
+(:class:`naoloc.backends.simulated.motion.SimulatedMotion`, the same in process and
+served): every call this front does not define runs there, on the robot thread. The
+front adds what only a served robot has: blocking calls run as tasks other clients can
+list and kill (see :mod:`.tasks`), ``move``/``moveToward`` answer at once and walk in the
+caller's order, wakeUp/rest/posture changes take a NAO's time on the wall clock, calls
+composed over time (angleInterpolation, stiffnessInterpolation), ALMotion/MoveFailed, and
+the calls that are accepted but not simulated (logged once): whole-body balance (``wb*``)
+and Cartesian control (``positionInterpolations``, ``transformInterpolations``,
+``setPositions``, ``setTransforms``): they block for their duration without moving the
+body.
 """
 
 from __future__ import annotations
 
 import threading
 import time
-from typing import Any, Final
+from collections.abc import Callable
+from typing import Any
 
-from naoloc.backends.naoqi.emulation.context import FrontContext
+from naoloc.backends.naoqi.emulation.context import FrontContext, forwarded
 from naoloc.backends.naoqi.emulation.posture import REST_S, WAKE_UP_S, hold_until
 from naoloc.backends.naoqi.emulation.tasks import Task
+from naoloc.backends.simulated.motion import walk_fractions
 from naoloc.constants import JOINT_NAMES
 from naoloc.errors import RobotError
 from naoloc.robot import rules
 
-# NAO's step period (s) at MaxStepFrequency 0 and 1 (NAOqi's walk: about 0.6 s to 0.42 s).
-STEP_PERIOD_SLOW_S: Final = 0.6
-STEP_PERIOD_FAST_S: Final = 0.42
-
-_CHAINS_WITH_FLAGS = ("LArm", "RArm", "Arms", "LLeg", "RLeg", "Legs", "Head", "Body", "All", "Move")
-
-
-def _legacy_frequency(args: tuple[Any, ...]) -> tuple[tuple[Any, ...], float]:
-    """Take ``["Frequency", f]`` out of a moveToward moveConfig; the rest and f (default 1).
-
-    Raises:
-        RobotError: Frequency is not a number in [0, 1].
-    """
-    if len(args) != 4 or not isinstance(args[3], list | tuple):
-        return args, 1.0
-    rest, frequency = [], 1.0
-    for pair in args[3]:
-        if isinstance(pair, list | tuple) and len(pair) == 2 and pair[0] == "Frequency":
-            frequency = rules.finite(pair[1], "moveConfig Frequency")
-            if not 0.0 <= frequency <= 1.0:
-                raise RobotError(f"moveConfig Frequency must be in [0, 1], got {frequency}")
-        else:
-            rest.append(pair)
-    return (*args[:3], rest), frequency
-
-
-def _chain(name: Any, what: str) -> str:
-    if name not in _CHAINS_WITH_FLAGS:
-        raise RobotError(
-            f"{what}: unknown chain name {name!r}; valid: {', '.join(_CHAINS_WITH_FLAGS)}"
-        )
-    return str(name)
-
 
 class MotionFront:
-    """ALMotion with NAOqi's rules in front of a backend's ``motion``.
+    """ALMotion of a served robot: the backend's ``motion`` with NAOqi's tasks and clock.
 
     Args:
         backend: The backend's ALMotion (fake or MuJoCo).
@@ -70,14 +42,11 @@ class MotionFront:
         self._ctx = ctx
         self._lock = threading.Lock()
         self._walk_gen = 0
-        self._move_arms = {"LArm": True, "RArm": True}
-        self._collision = {"LArm": True, "RArm": True}
-        self._external = {"All": True, "Move": True, "Arms": True, "LArm": True, "RArm": True}
-        self._flags: dict[str, bool] = {"fall": True, "smart": True}
-        self._breath: dict[str, bool] = {}
-        self._idle: dict[str, bool] = {}
-        self._motion_config: dict[str, Any] = {}
         self.on_move_failed: Any = None  # called with NAOqi's MoveFailed value on a failed walk
+
+    def __getattr__(self, name: str) -> Callable[..., Any]:
+        """Any other ALMotion call: the backend's, on the robot thread."""
+        return forwarded(self._ctx, self._b, name)
 
     # ------------------------------------------------------------------ helpers
     def _run(self, method: str, *args: Any) -> Any:
@@ -128,23 +97,6 @@ class MotionFront:
         awake = bool(self._run("robotIsWakeUp"))
         self._timed("rest", REST_S if awake else 0.0)
 
-    def robotIsWakeUp(self) -> bool:
-        """True when the leg joints are stiff."""
-        return bool(self._run("robotIsWakeUp"))
-
-    def setStiffnesses(self, names: Any, stiffnesses: Any) -> None:
-        """Stiffness in [0, 1] (clipped) of joints, chains or groups; non-blocking."""
-        joints = rules.expand_names(names)
-        values = rules.per_joint(stiffnesses, len(joints), "stiffnesses")
-        self._run("setStiffnesses", joints, [min(1.0, max(0.0, v)) for v in values])
-
-    def getStiffnesses(self, jointName: Any) -> list[float]:
-        """Stiffness in [0, 1] of each expanded joint."""
-        joints = rules.expand_names(jointName)
-        if not hasattr(self._b, "getStiffnesses"):
-            raise RobotError("getStiffnesses is not available on this backend")
-        return [float(v) for v in self._run("getStiffnesses", joints)]
-
     def stiffnessInterpolation(self, names: Any, stiffnessLists: Any, timeLists: Any) -> None:
         """Set stiffness at key times (s); blocking for the last time."""
         joints = rules.expand_names(names)
@@ -169,37 +121,6 @@ class MotionFront:
             self._ctx.tasks.end(task)
 
     # ------------------------------------------------------------------ joints
-    def setAngles(self, names: Any, angles: Any, fractionMaxSpeed: Any) -> None:
-        """Move joints toward angles (rad) at a speed fraction (one, or one per joint)."""
-        joints = rules.expand_names(names)
-        values = rules.per_joint(angles, len(joints), "angles")
-        if isinstance(fractionMaxSpeed, list | tuple):
-            fractions = [
-                rules.fraction(f)
-                for f in rules.per_joint(fractionMaxSpeed, len(joints), "speed fractions")
-            ]
-        else:
-            fractions = [rules.fraction(fractionMaxSpeed)] * len(joints)
-        groups: dict[float, tuple[list[str], list[float]]] = {}
-        for joint, value, frac in zip(joints, values, fractions, strict=True):
-            group = groups.setdefault(frac, ([], []))
-            group[0].append(joint)
-            group[1].append(value)
-        for frac, (js, vs) in groups.items():
-            self._run("setAngles", js, vs, frac)
-
-    def changeAngles(self, names: Any, changes: Any, fractionMaxSpeed: Any) -> None:
-        """Move joints by ``changes`` (rad) from their commanded angles; non-blocking."""
-        joints = rules.expand_names(names)
-        deltas = rules.per_joint(changes, len(joints), "changes")
-        now = self._run("getAngles", joints, False)
-        self.setAngles(joints, [a + d for a, d in zip(now, deltas, strict=True)], fractionMaxSpeed)
-
-    def getAngles(self, names: Any, useSensors: Any) -> list[float]:
-        """Joint angles (rad) in the order of the expanded names."""
-        joints = rules.expand_names(names)
-        return [float(v) for v in self._run("getAngles", joints, bool(useSensors))]
-
     def angleInterpolationWithSpeed(
         self, names: Any, targetAngles: Any, maxSpeedFraction: Any
     ) -> None:
@@ -268,13 +189,11 @@ class MotionFront:
 
     def openHand(self, handName: Any) -> None:
         """Open a hand (LHand or RHand); blocking."""
-        hand = rules.hand_name(handName)
-        self._blocking("openHand", "joints", "angleInterpolationWithSpeed", [hand], [1.0], 0.5)
+        self._blocking("openHand", "joints", "openHand", handName)
 
     def closeHand(self, handName: Any) -> None:
         """Close a hand (LHand or RHand); blocking."""
-        hand = rules.hand_name(handName)
-        self._blocking("closeHand", "joints", "angleInterpolationWithSpeed", [hand], [0.0], 0.5)
+        self._blocking("closeHand", "joints", "closeHand", handName)
 
     # ------------------------------------------------------------------ walking
     def moveInit(self) -> None:
@@ -331,28 +250,16 @@ class MotionFront:
     def moveToward(self, *args: Any) -> None:
         """Walk at a normalised velocity (each in [-1, 1]); non-blocking, returns at once.
 
-        moveConfig takes NAOqi's walk parameters and the SDK examples' ``Frequency``
-        (legacy name of ``MaxStepFrequency``, in [0, 1]). The step frequency scales the
-        speed: the simulated walk keeps its step period, so a fraction ``f`` walks at
-        ``STEP_PERIOD_FAST_S / step period`` of full speed, the step period going from
-        ``STEP_PERIOD_SLOW_S`` (f = 0) to ``STEP_PERIOD_FAST_S`` (f = 1). The other
-        parameters are checked, then not used.
+        The moveConfig (with the SDK examples' ``Frequency``) scales the speed as
+        :func:`naoloc.backends.simulated.motion.walk_fractions` says.
         """
-        args, frequency = _legacy_frequency(args)
-        values, config = rules.velocity(args, True, "moveToward")
-        frequency = config.get("MaxStepFrequency", frequency)
-        period = STEP_PERIOD_SLOW_S + (STEP_PERIOD_FAST_S - STEP_PERIOD_SLOW_S) * frequency
-        scale = STEP_PERIOD_FAST_S / period
+        fractions = walk_fractions(args)  # errors reach the caller before anything is queued
         self._new_walk()
-        self._ctx.post(self._b.moveToward, *(v * scale for v in values))
+        self._ctx.post(self._b.moveToward, *fractions)
 
     def waitUntilMoveIsFinished(self) -> None:
         """Block until the moveTo task ends."""
         self._blocking("waitUntilMoveIsFinished", "wait", "waitUntilMoveIsFinished")
-
-    def moveIsActive(self) -> bool:
-        """True while a walk runs."""
-        return bool(self._run("moveIsActive"))
 
     def stopMove(self) -> bool:
         """End the walk now (a blocking moveTo returns False); True."""
@@ -385,50 +292,7 @@ class MotionFront:
         rules.expand_names(resourceNames)
         return not self._ctx.tasks.running("joints")
 
-    def getRobotPosition(self, useSensors: Any) -> list[float]:
-        """``[x, y, theta]`` in FRAME_WORLD (odometry)."""
-        return [float(v) for v in self._run("getRobotPosition", bool(useSensors))]
-
-    def getNextRobotPosition(self) -> list[float]:
-        """Where the current move ends, FRAME_WORLD."""
-        return [float(v) for v in self._run("getNextRobotPosition")]
-
-    def getRobotVelocity(self) -> list[float]:
-        """``[vx, vy, wz]`` in FRAME_ROBOT."""
-        return [float(v) for v in self._run("getRobotVelocity")]
-
-    def getMoveConfig(self, config: Any) -> list[list[Any]]:
-        """``[[name, value], ...]`` of the walk's "Default", "Min" or "Max" parameters."""
-        column = {"Default": 0, "Min": 1, "Max": 2}.get(config)
-        if column is None:
-            raise RobotError(f"config must be Default, Min or Max, got {config!r}")
-        return [[k, float(v[column])] for k, v in rules.MOVE_CONFIG_KEYS.items()]
-
-    def setMoveArmsEnabled(self, leftArmEnabled: Any, rightArmEnabled: Any) -> None:
-        """Whether the arms swing while walking (stored; the simulated arms do not swing)."""
-        self._move_arms.update(LArm=bool(leftArmEnabled), RArm=bool(rightArmEnabled))
-
-    def getMoveArmsEnabled(self, chainName: Any) -> bool:
-        """Arm swing flag of "LArm", "RArm" or "Arms" (both)."""
-        if chainName == "Arms":
-            return all(self._move_arms.values())
-        if chainName not in self._move_arms:
-            raise RobotError(f"chain name must be LArm, RArm or Arms, got {chainName!r}")
-        return self._move_arms[chainName]
-
     # ------------------------------------------------------------------ Cartesian
-    def getPosition(self, name: Any, frame: Any, useSensorValues: Any) -> list[float]:
-        """6D position ``[x, y, z, wx, wy, wz]`` of a chain, sensor or joint in a frame."""
-        if not hasattr(self._b, "getPosition"):
-            raise RobotError("getPosition is not available on this backend yet")
-        return [float(v) for v in self._run("getPosition", name, frame, bool(useSensorValues))]
-
-    def getTransform(self, name: Any, frame: Any, useSensorValues: Any) -> list[float]:
-        """4x4 transform (row-major, 16 floats) of a chain, sensor or joint in a frame."""
-        if not hasattr(self._b, "getTransform"):
-            raise RobotError("getTransform is not available on this backend yet")
-        return [float(v) for v in self._run("getTransform", name, frame, bool(useSensorValues))]
-
     def _cartesian(self, method: str, times: Any) -> None:
         self._ctx.not_simulated(f"ALMotion.{method} (Cartesian control)")
         flat: list[float] = []
@@ -487,92 +351,7 @@ class MotionFront:
         """Not simulated; accepted."""
         self._ctx.not_simulated("ALMotion.wbEnableEffectorControl (whole-body balance)")
 
-    # ------------------------------------------------------------------ reflexes, config
-    def setCollisionProtectionEnabled(self, pChainName: Any, pEnable: Any) -> bool:
-        """Self-collision protection of "LArm", "RArm" or "Arms"; True when set."""
-        chain = _chain(pChainName, "setCollisionProtectionEnabled")
-        for arm in ("LArm", "RArm") if chain == "Arms" else (chain,):
-            if arm not in self._collision:
-                return False
-            self._collision[arm] = bool(pEnable)
-        return True
-
-    def getCollisionProtectionEnabled(self, pChainName: Any) -> bool:
-        """Self-collision protection flag of an arm."""
-        chain = _chain(pChainName, "getCollisionProtectionEnabled")
-        if chain == "Arms":
-            return all(self._collision.values())
-        return self._collision.get(chain, False)
-
-    def setExternalCollisionProtectionEnabled(self, pName: Any, pEnable: Any) -> None:
-        """External-collision protection of "All", "Move", "Arms", "LArm" or "RArm" (stored)."""
-        if pName not in self._external:
-            raise RobotError(f"name must be one of {', '.join(self._external)}, got {pName!r}")
-        if pName == "All":
-            for key in self._external:
-                self._external[key] = bool(pEnable)
-        else:
-            self._external[pName] = bool(pEnable)
-
-    def getExternalCollisionProtectionEnabled(self, pName: Any) -> bool:
-        """External-collision protection flag."""
-        if pName not in self._external:
-            raise RobotError(f"name must be one of {', '.join(self._external)}, got {pName!r}")
-        return self._external[pName]
-
-    def setFallManagerEnabled(self, pEnable: Any) -> None:
-        """Fall manager flag (stored; the simulated NAO does not fall)."""
-        self._flags["fall"] = bool(pEnable)
-
-    def getFallManagerEnabled(self) -> bool:
-        """Fall manager flag."""
-        return self._flags["fall"]
-
-    def setSmartStiffnessEnabled(self, pEnable: Any) -> None:
-        """Smart stiffness flag (stored)."""
-        self._flags["smart"] = bool(pEnable)
-
-    def getSmartStiffnessEnabled(self) -> bool:
-        """Smart stiffness flag."""
-        return self._flags["smart"]
-
-    def setBreathEnabled(self, pChain: Any, pIsEnabled: Any) -> None:
-        """Breathing animation flag of a chain (stored; not animated)."""
-        self._breath[_chain(pChain, "setBreathEnabled")] = bool(pIsEnabled)
-
-    def getBreathEnabled(self, pChain: Any) -> bool:
-        """Breathing flag of a chain."""
-        return self._breath.get(_chain(pChain, "getBreathEnabled"), False)
-
-    def setIdlePostureEnabled(self, pChain: Any, pIsEnabled: Any) -> None:
-        """Idle posture flag of a chain (stored)."""
-        self._idle[_chain(pChain, "setIdlePostureEnabled")] = bool(pIsEnabled)
-
-    def getIdlePostureEnabled(self, pChain: Any) -> bool:
-        """Idle posture flag of a chain."""
-        return self._idle.get(_chain(pChain, "getIdlePostureEnabled"), False)
-
-    def setMotionConfig(self, config: Any) -> None:
-        """Store ``[[name, value], ...]`` motion options (none changes the simulation)."""
-        try:
-            pairs = [(str(k), v) for k, v in config]
-        except (TypeError, ValueError):
-            raise RobotError(f"config must be [[name, value], ...], got {config!r}") from None
-        self._motion_config.update(pairs)
-
-    # ------------------------------------------------------------------ body facts
-    def getBodyNames(self, name: Any) -> list[str]:
-        """Joint names of a joint, chain or group ("Body", "JointActuators", ...)."""
-        return rules.expand_names(name)
-
-    def getJointNames(self, name: Any) -> list[str]:
-        """As getBodyNames."""
-        return rules.expand_names(name)
-
-    def getSensorNames(self) -> list[str]:
-        """Names of the joints with position sensors."""
-        return list(JOINT_NAMES)
-
+    # ------------------------------------------------------------------ summary
     def getSummary(self) -> str:
         """A text summary: joint angles and stiffness, running tasks."""
         angles = self._run("getAngles", list(JOINT_NAMES), True)
