@@ -202,6 +202,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
                 users=users,
                 certfile=str(cert) if cert else None,
                 keyfile=str(key) if key else None,
+                cfg=cfg,
             ) as server:
                 print(f"naoloc serve: listening on {server.endpoint} ({transport})", flush=True)
                 while not stop.wait(0.2):

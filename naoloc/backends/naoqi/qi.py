@@ -588,15 +588,33 @@ class Session:
             raise RuntimeError(str(err)) from None
         self._session = inner
 
+    def listen(self, url: str) -> None:
+        """A connected session: serve the services it registers at ``url`` (qi's
+        ``Session.listen``; by default they are served on the address that reaches the
+        robot, any free port)."""
+        try:
+            self._inner().listen(url)
+        except NaolocError as err:
+            raise RuntimeError(str(err)) from None
+
     def registerService(self, name: str, obj: Any) -> int:
-        """Serve ``obj`` (methods marked with :func:`bind`, Signal/Property attributes)."""
+        """Serve ``obj`` (methods marked with :func:`bind`, Signal/Property attributes).
+
+        On a connected session the service is registered with the robot's service
+        directory (a NAO's or ``naoloc serve``'s), as qi does, until the session closes.
+        """
+        from naoloc.backends.naoqi.qimessaging.client import QiSession
         from naoloc.backends.naoqi.qimessaging.meta import describe
 
+        inner = self._inner()
+        if not isinstance(inner, QiSession):
+            raise RuntimeError(
+                "registerService: a zmq connection cannot serve services; connect with "
+                "tcp:// to a NAOqi that speaks libqi's protocol"
+            )
         methods, signals = describe(obj)
         try:
-            service_id: int = self._inner().registerService(
-                name, obj, methods=methods, signals=signals
-            )
+            service_id: int = inner.registerService(name, obj, methods=methods, signals=signals)
         except NaolocError as err:
             raise RuntimeError(str(err)) from None
         return service_id

@@ -32,9 +32,11 @@ from __future__ import annotations
 
 import contextlib
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, Final
 
 from naoloc.backends.naoqi.emulation import companions
@@ -46,25 +48,33 @@ from naoloc.backends.naoqi.emulation.video import VideoFront
 from naoloc.backends.naoqi.session import Transport, new_session
 from naoloc.backends.naoqi.signatures import (
     ANIMATED_SPEECH,
+    ANIMATION_PLAYER,
     AWARENESS,
     BATTERY,
     BLOCKING_WALKS,
     ENDS_MOTION,
+    FACE_DETECTION,
+    LANDMARK_DETECTION,
     LEDS,
     LIFE,
+    LOCALIZATION,
     MEMORY,
     MODULE_METHODS,
     MOTION,
+    NAVIGATION,
     POSTURE,
     SERVICES,
     SIM,
+    SONAR,
     SPEECH_RECOGNITION,
     STARTS_MOTION,
     SYSTEM,
     TOUCH,
+    TRACKER,
     TTS,
     URGENT,
     VIDEO,
+    VIDEO_RECORDER,
     WATCHDOG,
     select_overload,
 )
@@ -76,7 +86,9 @@ COMMAND_TIMEOUT_S: Final = 0.4  # a velocity walk's owner silent this long: stop
 RELEASE_GRACE_S: Final = 2.0  # a left client's camera subscribers wait this long
 _CHECK_EVERY_S: Final = 0.05
 RobotThread = RobotLoop  # the robot's thread (kept under its old name for callers)
-_WALK_METHODS: Final = frozenset({"moveTo", "move", "moveToward", "waitUntilMoveIsFinished"})
+_WALK_METHODS: Final = frozenset(
+    {"moveTo", "move", "moveToward", "waitUntilMoveIsFinished", "walkTo", "setWalkTargetVelocity"}
+)
 _JOINT_METHODS: Final = frozenset(
     {"angleInterpolation", "angleInterpolationWithSpeed", "openHand", "closeHand"}
 )
@@ -105,6 +117,10 @@ class ServedRobot:
             call running before the walk stops; None = never (NAOqi's behaviour).
         log: Where one-line notices go (stderr by default).
         robot_name: What ALSystem.robotName answers.
+        cfg: The served config: with it, NaolocLocalization is served (its home map and
+            survey are kept in ``record_dir``/home).
+        record_dir: Where ALVideoRecorder's files and the home map go (default: a
+            ``naoloc-serve`` folder in the system's temporary folder).
     """
 
     def __init__(
@@ -117,6 +133,8 @@ class ServedRobot:
         command_timeout_s: float | None = COMMAND_TIMEOUT_S,
         log: Callable[[str], None] = _stderr,
         robot_name: str = "nao",
+        cfg: Any = None,
+        record_dir: Path | None = None,
     ) -> None:
         self.robot = robot
         self.deadman_s = deadman_s
@@ -156,6 +174,7 @@ class ServedRobot:
             SPEECH_RECOGNITION: companions.SpeechRecognitionFront(ctx),
         }
         self._stopping = threading.local()  # .now: this thread runs a stop (URGENT)
+        self._add_scripted_services(robot, cfg, record_dir)
         self._seen_lock = threading.Lock()
         self._last_seen: dict[str, float] = {}
         self._heartbeating: set[str] = set()
@@ -168,6 +187,30 @@ class ServedRobot:
         self.calls = 0
         self.errors = 0
         self.deadman_stops = 0
+
+    def _add_scripted_services(self, robot: Robot, cfg: Any, record_dir: Path | None) -> None:
+        """The services NAO scripts open first (issue 32): sensors, navigation, media,
+        vision stand-ins and NaolocLocalization."""
+        from naoloc.backends.naoqi.emulation import media, navigation, sensors, vision
+
+        ctx, folder = self.ctx, record_dir or Path(tempfile.gettempdir()) / "naoloc-serve"
+        self.fronts[ANIMATION_PLAYER] = media.AnimationPlayerFront(ctx, self.motion)
+        self.fronts[VIDEO_RECORDER] = media.VideoRecorderFront(ctx, self.video, folder)
+        self.fronts[FACE_DETECTION] = vision.FaceDetectionFront(ctx, self.memory)
+        self.fronts[LANDMARK_DETECTION] = vision.LandMarkDetectionFront(ctx, self.memory)
+        self.fronts[TRACKER] = vision.TrackerFront(ctx, self.motion)
+        inertial = sensors.InertialUnit(
+            lambda: self.motion.getPosition("Torso", 1, True), ctx.speed
+        )
+        self.memory.add_provider(sensors.INERTIAL_KEYS, inertial.read)
+        if robot.sim is not None:
+            self.fronts[SONAR] = sensors.SonarFront(ctx, robot.sim, self.memory)
+            self.fronts[NAVIGATION] = navigation.NavigationFront(ctx, robot.sim, self.motion)
+        if cfg is not None:
+            from naoloc.backends.naoqi.home import HomeLocalization, LocalizationFront
+
+            home = HomeLocalization(robot, cfg, folder / "home")
+            self.fronts[LOCALIZATION] = LocalizationFront(home, self._run)
 
     # ------------------------------------------------------------------ robot access
     def _run(self, function: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
@@ -376,6 +419,13 @@ class ServedRobot:
     def stop(self) -> None:
         """Stop the dead-man thread, the robot's motion, and the clock. Safe to call twice."""
         self._stop.set()
+        for front in self.fronts.values():  # sonar thread, a running recording
+            close = getattr(front, "close", None)
+            if callable(close):
+                try:
+                    close()
+                except NaolocError as err:
+                    self._log(f"naoloc serve: {err}")
         if self._thread is not None:
             self._thread.join(timeout=2.0)
             self._thread = None
@@ -432,6 +482,8 @@ class VirtualNaoqi:
         users: qimessaging only: logins ``{user: password}`` (None = no login asked).
         certfile: qimessaging only: PEM certificate (and key) for ``tcps://``.
         keyfile: qimessaging only: PEM key when not inside ``certfile``.
+        cfg: The served config (serves NaolocLocalization).
+        record_dir: Where recordings and the home map go.
     """
 
     def __init__(
@@ -449,11 +501,19 @@ class VirtualNaoqi:
         users: dict[str, str] | None = None,
         certfile: str | None = None,
         keyfile: str | None = None,
+        cfg: Any = None,
+        record_dir: Path | None = None,
     ) -> None:
         self.core = ServedRobot(
-            robot, thread=thread, speed=speed, deadman_s=deadman_s,
-            command_timeout_s=command_timeout_s, log=log,
-        )  # fmt: skip
+            robot,
+            thread=thread,
+            speed=speed,
+            deadman_s=deadman_s,
+            command_timeout_s=command_timeout_s,
+            log=log,
+            cfg=cfg,
+            record_dir=record_dir,
+        )
         self.transport = transport
         self._relay: Any = None
         self._session: Any = None

@@ -257,9 +257,19 @@ class MotionFront:
         self._new_walk()
         self._ctx.post(self._b.moveToward, *fractions)
 
+    def _posted_walks(self) -> list[Task]:
+        """Walks started with ``post``/``pCall`` that are still running (or about to)."""
+        return [t for t in self._ctx.tasks.running("post") if t.name in ("moveTo", "walkTo")]
+
     def waitUntilMoveIsFinished(self) -> None:
-        """Block until the moveTo task ends."""
+        """Block until the moveTo task ends (also one just posted: ``post.moveTo``)."""
+        for task in self._posted_walks():
+            task.done.wait()
         self._blocking("waitUntilMoveIsFinished", "wait", "waitUntilMoveIsFinished")
+
+    def moveIsActive(self) -> bool:
+        """True while a walk runs (also one just posted)."""
+        return bool(self._posted_walks()) or bool(self._run("moveIsActive"))
 
     def stopMove(self) -> bool:
         """End the walk now (a blocking moveTo returns False); True."""
@@ -369,3 +379,36 @@ class MotionFront:
         tasks = self._ctx.tasks.running()
         lines += [f"  {t.name} (id {t.id})" for t in tasks] or ["  none"]
         return "\n".join(lines)
+
+    # ------------------------------------------------------------------ NAOqi 1.x names
+    def walkTo(self, *args: Any) -> bool:
+        """Deprecated NAOqi 1.x name of moveTo (old SDK scripts call it)."""
+        return self.moveTo(*args)
+
+    def walkInit(self) -> None:
+        """Deprecated name of moveInit."""
+        self.moveInit()
+
+    def setWalkTargetVelocity(self, x: Any, y: Any, theta: Any, frequency: Any) -> None:
+        """Deprecated: moveToward(x, y, theta, [["Frequency", frequency]])."""
+        self.moveToward(x, y, theta, [["Frequency", frequency]])
+
+    def waitUntilWalkIsFinished(self) -> None:
+        """Deprecated name of waitUntilMoveIsFinished."""
+        self.waitUntilMoveIsFinished()
+
+    def walkIsActive(self) -> bool:
+        """Deprecated name of moveIsActive."""
+        return self.moveIsActive()
+
+    def stopWalk(self) -> bool:
+        """Deprecated name of stopMove."""
+        return self.stopMove()
+
+    def setWalkArmsEnabled(self, leftArmEnabled: Any, rightArmEnabled: Any) -> None:
+        """Deprecated name of setMoveArmsEnabled."""
+        self.setMoveArmsEnabled(leftArmEnabled, rightArmEnabled)
+
+    def getWalkArmsEnabled(self) -> list[bool]:
+        """Deprecated: ``[left, right]`` arm swing flags."""
+        return [self.getMoveArmsEnabled("LArm"), self.getMoveArmsEnabled("RArm")]

@@ -19,6 +19,8 @@ import contextlib
 import itertools
 import socket
 import ssl
+import struct
+import sys
 import threading
 import time
 from collections import deque
@@ -373,3 +375,13 @@ class Connection:
         """Wait for the reader thread (not from itself)."""
         if self._thread.is_alive() and self._thread is not threading.current_thread():
             self._thread.join(timeout_s)
+
+
+def send_timeout(sock: socket.socket, seconds: float) -> None:
+    """Make blocking sends give up after ``seconds`` (a client that never reads)."""
+    whole = int(seconds)
+    value = struct.pack("ll", whole, int((seconds - whole) * 1e6))
+    if sys.platform == "win32":
+        value = struct.pack("L", int(seconds * 1000))
+    with contextlib.suppress(OSError):
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDTIMEO, value)

@@ -4,9 +4,13 @@ Real libqi clients (the ``qi`` package, NAOqi tools) connect to it as to a NAO: 
 authenticate (service 0), find services in the directory (service 1) and call
 methods described by MetaObjects built from :mod:`naoloc.backends.naoqi.signatures`
 (or a table given at registration). Every connection is its own caller
-(``qim-<n>``), so the virtual NAOqi's dead-man tells clients apart. Clients cannot
-register or unregister services. Every incoming message is validated before it is
-trusted; a bad payload gets an error reply, a bad header closes that connection.
+(``qim-<n>``), so the virtual NAOqi's dead-man tells clients apart. Clients may
+register services of their own under new names once logged in (as on a NAO: an
+old-SDK ALBroker's modules, NaolocLocalization from another process), at most
+:data:`MAX_CLIENT_SERVICES` in all and :data:`MAX_SERVICES_PER_CLIENT` each; they are
+listed until their connection closes, and the server's own services cannot be replaced
+or unregistered. Every incoming message is validated before it is trusted; a bad
+payload gets an error reply, a bad header closes that connection.
 
 Bounded work, per client (each limit answers a NAOqi-style error and logs one line,
 at most one a second per kind):
@@ -23,20 +27,19 @@ at most one a second per kind):
 - replies and events wait in a per-connection queue of :data:`MAX_QUEUED_BYTES`:
   a slow reader's events are dropped, then it is disconnected; no sending thread
   ever waits for it;
-- at most :data:`MAX_OBJECTS` objects and :data:`MAX_LINKS` signal links per client,
-  all released (with the client's queued calls) when it leaves.
+- at most :data:`MAX_OBJECTS` objects, :data:`MAX_LINKS` signal links and
+  :data:`MAX_SERVICES_PER_CLIENT` registered services per client, all released (with
+  the client's queued calls) when it leaves.
 """
 
 from __future__ import annotations
 
 import contextlib
 import hashlib
-import hmac
 import itertools
 import os
 import socket
 import ssl
-import struct
 import sys
 import threading
 import time
@@ -46,7 +49,11 @@ from dataclasses import dataclass, field
 from typing import Any, Final
 
 from naoloc.backends.naoqi.qimessaging import capability, codec, message, tls
-from naoloc.backends.naoqi.qimessaging.connection import Connection, parse_url
+from naoloc.backends.naoqi.qimessaging.connection import Connection, parse_url, send_timeout
+from naoloc.backends.naoqi.qimessaging.directory import (
+    ClientServices,
+    directory_meta,
+)
 from naoloc.backends.naoqi.qimessaging.memory import MemoryHub
 from naoloc.backends.naoqi.qimessaging.message import Header
 from naoloc.backends.naoqi.qimessaging.meta import (
@@ -56,7 +63,6 @@ from naoloc.backends.naoqi.qimessaging.meta import (
     PROPERTY,
     REGISTER_EVENT,
     REGISTER_EVENT_WITH_SIGNATURE,
-    SERVICE_INFO_SIGNATURE,
     SET_PROPERTY,
     TERMINATE,
     UNREGISTER_EVENT,
@@ -64,6 +70,7 @@ from naoloc.backends.naoqi.qimessaging.meta import (
     Method,
     build,
     describe,
+    signature_table,
 )
 from naoloc.backends.naoqi.qimessaging.proxy import fit
 from naoloc.backends.naoqi.qimessaging.signature import parse
@@ -88,7 +95,7 @@ AUTH_FAIL_DELAY_S: Final = 1.0  # a wrong login is answered (and closed) this mu
 CLOSE_WAIT_S: Final = 1.0  # close() waits this long for running calls
 SD_NAME: Final = "ServiceDirectory"
 MEMORY: Final = "ALMemory"
-_REFUSED: Final = "naoloc serve does not accept service (un)registration from clients"
+_REFUSED: Final = "naoloc serve's own services cannot be unregistered by clients"
 
 
 @dataclass
@@ -115,46 +122,6 @@ class _Client:
     queued_bytes: int = 0
     links: dict[tuple[int, int, int], set[int]] = field(default_factory=dict)
     exported: set[tuple[int, int]] = field(default_factory=set)
-
-
-def _send_timeout(sock: socket.socket, seconds: float) -> None:
-    """Make blocking sends give up after ``seconds`` (a client that never reads)."""
-    whole = int(seconds)
-    value = struct.pack("ll", whole, int((seconds - whole) * 1e6))
-    if sys.platform == "win32":
-        value = struct.pack("L", int(seconds * 1000))
-    with contextlib.suppress(OSError):
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDTIMEO, value)
-
-
-def _directory_meta() -> MetaObject:
-    info = SERVICE_INFO_SIGNATURE
-    meta = build([])
-    for uid, name, params, returns in (
-        (100, "service", "(s)", info),
-        (101, "services", "()", f"[{info}]"),
-        (102, "registerService", f"({info})", "I"),
-        (103, "unregisterService", "(I)", "v"),
-        (104, "serviceReady", "(I)", "v"),
-        (105, "updateServiceInfo", f"({info})", "v"),
-        (108, "machineId", "()", "s"),
-    ):
-        meta.methods[uid] = Method(uid, name, parse(params), parse(returns))
-    meta.signals[106] = ("serviceAdded", parse("(Is)"))
-    meta.signals[107] = ("serviceRemoved", parse("(Is)"))
-    return meta
-
-
-def _table(name: str) -> list[tuple[str, str, str]]:
-    from naoloc.backends.naoqi.signatures import SERVICES
-
-    if name not in SERVICES:
-        raise BackendError(f"no signatures for service {name!r}; pass methods=[...]")
-    return [
-        (method, "(" + "".join(o.params) + ")", o.returns)
-        for method, overloads in SERVICES[name].items()
-        for o in overloads
-    ]
 
 
 class QiServer:
@@ -203,13 +170,14 @@ class QiServer:
         self._thread: threading.Thread | None = None
         seed = f"{socket.gethostname()}-{os.getpid()}"
         self.machine_id = str(uuid.uuid5(uuid.NAMESPACE_DNS, seed))
-        self._services[1] = _Served(SD_NAME, 1, self, _directory_meta())
+        self._services[1] = _Served(SD_NAME, 1, self, directory_meta())
         self._objects: dict[tuple[int, int], _Served] = {}
         self._object_ids = itertools.count(2)
         self._core: Any = None
         self._in_flight = 0
         self._memory: MemoryHub | None = None
         self._notice = Notices()
+        self._external = ClientServices()  # services clients registered (under self._lock)
         self.protocol_errors = 0
         self.refused: dict[str, int] = {}  # limit name -> times it refused something
 
@@ -334,7 +302,7 @@ class QiServer:
 
     def _handshake(self, sock: socket.socket) -> socket.socket | tls.TlsSocket | None:
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        _send_timeout(sock, SEND_TIMEOUT_S)
+        send_timeout(sock, SEND_TIMEOUT_S)
         if self._tls is None:
             return sock
         try:
@@ -375,6 +343,7 @@ class QiServer:
         *,
         methods: Iterable[tuple[str, str, str]] | None = None,
         signals: dict[str, str] | None = None,
+        service_id: int | None = None,
     ) -> int:
         """Serve ``target`` as ``name``; returns its service id (2, 3, ...).
 
@@ -386,16 +355,19 @@ class QiServer:
             signals: ``{name: tuple signature}``: ``target.<name>`` is a
                 :class:`~naoloc.backends.naoqi.session.Signal` whose emissions reach
                 subscribed clients.
+            service_id: The id another service directory gave it (a client session
+                serving its own services); None = the next id of this server.
 
         Raises:
             BackendError: The name is taken or has no signatures.
         """
         with self._lock:
-            if any(s.name == name for s in self._services.values()):
+            taken = any(s.name == name for s in self._services.values())
+            if taken or self._external.find(name) or service_id in self._services:
                 raise BackendError(f"service {name!r} is already registered")
-        table = list(methods) if methods is not None else _table(name)
+        table = list(methods) if methods is not None else signature_table(name)
         meta = build(table, signals=(signals or {}).items(), description=name)
-        service_id = next(self._ids)
+        service_id = next(self._ids) if service_id is None else service_id
         served = _Served(name, service_id, target, meta)
         self._hook_signals(served)
         with self._lock:
@@ -527,6 +499,10 @@ class QiServer:
             exported, client.exported = list(client.exported), set()
         for key in exported:
             self._drop(key)
+        with self._lock:
+            registered = self._external.of(client.caller)
+        for service_id in registered:  # as libqi: a client's services go with it
+            self._unregister_external(service_id)
         if reason.startswith(("slow reader", "protocol error", "socket error: timed")):
             self._limit("closed", f"client {client.caller} disconnected: {reason}")
         gone = getattr(self._core, "gone", None)
@@ -658,7 +634,7 @@ class QiServer:
             self.protocol_errors += 1
             self._error(client, header, f"bad capability map: {err}")
             return
-        if self._users is not None and not self._login_ok(request):
+        if self._users is not None and not capability.login_ok(self._users, request):
             self._limit("login", f"refused a login from {client.peer} (wrong user or password)")
             if self._closed.wait(AUTH_FAIL_DELAY_S):
                 return
@@ -674,16 +650,6 @@ class QiServer:
         client.conn.max_payload = MAX_INCOMING
         reply = capability.server_reply(request, capability.STATE_DONE)
         self._reply(client, header, parse("{sm}"), reply)
-
-    def _login_ok(self, request: dict[str, Any]) -> bool:
-        """True when the request's user and token match a login (constant-time compare)."""
-        assert self._users is not None
-        user, token = request.get("auth_user"), request.get("auth_token")
-        if not isinstance(user, str) or not isinstance(token, str):
-            return False
-        expected = self._users.get(user)
-        match = hmac.compare_digest(token.encode(), (expected or "\0").encode())
-        return expected is not None and match
 
     def _generic(
         self, client: _Client, header: Header, served: _Served, method: Method, args: list[Any]
@@ -731,7 +697,7 @@ class QiServer:
             return
         try:
             if served.service_id == 1:
-                value = self._directory(method.name, args)
+                value = self._directory(client, method.name, args)
             elif served.name == MEMORY and method.name == "subscriber" and self._memory:
                 value = self._memory.new(args[0] if args else None)
             elif hasattr(served.target, "invoke"):
@@ -748,19 +714,61 @@ class QiServer:
             text = f"{type(err).__name__}: {err}".splitlines()[0]
             self._error(client, header, f"RobotError: {served.name}.{method.name}: {text}")
 
-    def _directory(self, name: str, args: list[Any]) -> Any:
+    def _directory(self, client: _Client, name: str, args: list[Any]) -> Any:
         with self._lock:
             served = list(self._services.values())
+            external = self._external.infos()
         if name == "service":
             found = next((s for s in served if s.name == args[0]), None)
-            if found is None:
+            if found is not None:
+                return self._info(found)
+            info = next((i for i in external if i[0] == args[0]), None)
+            if info is None:
                 raise RobotError(f"Cannot find service '{args[0]}' in index")
-            return self._info(found)
+            return info
         if name == "services":
-            return [self._info(s) for s in served]
+            return [self._info(s) for s in served] + external
         if name == "machineId":
             return self.machine_id
-        raise RobotError(_REFUSED)
+        if name == "registerService":
+            return self._register_external(client, tuple(args[0]))
+        if name == "serviceReady":
+            return None
+        if name == "unregisterService":
+            service_id = int(args[0])
+            if any(i[1] == service_id for i in external):
+                self._unregister_external(service_id)
+                return None
+            if service_id in (s.service_id for s in served):
+                raise RobotError(_REFUSED)
+            raise RobotError(f"no service #{service_id} to unregister")
+        raise RobotError(f"ServiceDirectory.{name} is not offered by naoloc serve")
+
+    def _register_external(self, client: _Client, info: tuple[Any, ...]) -> int:
+        """A client's own service: listed here, called at the endpoints it gives."""
+        name = info[0]
+        if not isinstance(name, str) or not name:
+            raise RobotError("registerService: a service needs a name")
+        with self._lock:
+            if self._clients.get(client.conn) is not client:
+                raise RobotError("registerService: the client has left")
+            if any(s.name == name for s in self._services.values()) or self._external.find(name):
+                raise RobotError(f'Service "{name}" is already registered')
+            full = self._external.refusal(client.caller)
+            if not full:
+                service_id = next(self._ids)
+                self._external.add(client.caller, service_id, info)
+        if full:
+            self._limit("services", f"client {client.caller}: registerService {name!r}: {full}")
+            raise RobotError(f"registerService: {full}")
+        self._emit(self._services[1], 106, (service_id, name))
+        return service_id
+
+    def _unregister_external(self, service_id: int) -> None:
+        with self._lock:
+            info = self._external.pop(service_id)
+        if info is not None:
+            self._emit(self._services[1], 107, (service_id, info[0]))
 
     def _reply(self, client: _Client, header: Header, sig: Any, value: Any) -> None:
         try:
