@@ -45,7 +45,7 @@ class RobotConfig(_Model):
     password: SecretStr | None = Field(
         None, description="NAOqi 2.9+ (tcps://) password; never written to any file"
     )
-    timeout_s: float = Field(5.0, gt=0, description="timeout of one remote call, seconds")
+    timeout_s: float = Field(5.0, gt=0, le=3600, description="timeout of one remote call (s)")
     move_timeout_s: float = Field(
         300.0, gt=0, description="naoqi only: timeout of one blocking motion call, seconds"
     )
@@ -54,6 +54,9 @@ class RobotConfig(_Model):
     )
     curve_keys: str | None = Field(
         None, description="zmq transport: folder of CURVE certificates (needed off loopback)"
+    )
+    tls_trust: str | None = Field(
+        None, description="qimessaging tcps://: null (pin first use), sha256:HEX, a PEM, insecure"
     )
 
 
@@ -207,7 +210,7 @@ class CameraRealismConfig(_Model):
 class SimConfig(_Model):
     """Simulator settings."""
 
-    timestep_s: float = Field(0.005, gt=0, le=0.05, description="physics step (s)")
+    timestep_s: float = Field(0.005, ge=0.001, le=0.05, description="physics step (s)")
     realtime: bool = Field(False, description="pace simulated time to the wall clock")
     light: float = Field(1.0, gt=0, le=4, description="scale of the room lights' intensity")
     seed: int = Field(0, ge=0, description="seed of the simulator's own randomness")
@@ -814,10 +817,8 @@ def _format_error(source: str, err: ValidationError) -> str:
     return f"{source}: {path}: {msg}{suffix}"
 
 
-# Sane ranges of keys whose Field has none (key path -> inclusive [low, high]); applied
-# to every item of a list value; a key missing from the config is skipped.
+# Ranges of keys whose Field has none (path -> inclusive [low, high]), per list item.
 _SANE_RANGES: dict[str, tuple[float, float]] = {
-    "robot.timeout_s": (0.0, 3600.0),
     "robot.move_timeout_s": (0.0, 86400.0),
     "world.odometry.heading_bias_rad_per_m": (-1.0, 1.0),
     "world.start_pose": (-100.0, 100.0),
@@ -842,7 +843,7 @@ def _check_ranges(values: dict[str, Any], source: str) -> None:
 def _validate(data: Any, source: str) -> Config:
     if data is None:
         data = {}
-    check_values(data, source)  # finite numbers, bounded sizes and nesting, before pydantic
+    check_values(data, source, model=Config)  # finite, bounded, no `step_m: true`, no 10**12
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: the top level must be a mapping, got {type(data).__name__}")
     try:

@@ -1,4 +1,10 @@
-"""Bounded YAML loading and value checks for config files (no bombs, no recursion, no NaN).
+"""Bounded input: YAML config files (no bombs, no recursion, no NaN, no duplicate keys),
+and the regular files every input is read from.
+
+:func:`open_regular` opens an input only when it is a regular file (a device node, a
+FIFO or a folder gets a one-line refusal, and opening never waits for a FIFO's writer);
+:func:`refuse_non_regular` is its counterpart for outputs (an output never replaces a
+device node). Readers then read no more than their format's limit.
 
 :func:`load_yaml` reads at most :data:`MAX_CONFIG_BYTES` bytes and parses them with a
 ``yaml.SafeLoader`` that refuses, while composing, more than :data:`MAX_NODES` nodes and
@@ -6,7 +12,8 @@ nesting deeper than :data:`MAX_DEPTH`; before anything is constructed it counts 
 aliases expand to (a "billion laughs" file is a few hundred bytes that expand to 10**9
 values) and refuses more than :data:`MAX_EXPANDED` values or a recursive alias. Integers
 with more than :data:`MAX_INT_CHARS` characters are never converted (Python refuses more
-than 4300 digits with a ValueError; a seed never needs more than 64 bits).
+than 4300 digits with a ValueError; a seed never needs more than 64 bits). A mapping
+that names a key twice is refused (YAML says keys are unique; PyYAML keeps the last).
 
 :func:`check_values` walks plain data (from YAML or a dict) and names the key path of the
 first value that is not finite, too long or too deep. :func:`short_repr` never formats
@@ -16,14 +23,70 @@ more than a bounded part of a value, so an error message stays short and cheap.
 from __future__ import annotations
 
 import math
+import os
 import reprlib
+import stat
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any, Final
+from typing import IO, Any, Final
 
 import yaml
 
-from naoloc.errors import ConfigError
+from naoloc.errors import ConfigError, NaolocError
+
+_KINDS: Final = (
+    (stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"),
+)  # fmt: skip
+
+
+def _kind(mode: int) -> str:
+    return next((name for test, name in _KINDS if test(mode)), "not a regular file")
+
+
+def open_regular(path: Path, what: str, error: type[NaolocError] = ConfigError) -> IO[bytes]:
+    """Open ``path`` for reading if it is a regular file (never waits on a FIFO).
+
+    Args:
+        path: The input.
+        what: What it should be, for messages (e.g. ``"config file"``).
+        error: The error type raised.
+
+    Raises:
+        NaolocError: (``error``) ``path: no such <what>``, ``path: is a folder, not a
+            <what>``, ``path: is a FIFO, not a <what>``, or why it cannot be read.
+    """
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
+    try:
+        fd = os.open(path, flags)
+    except FileNotFoundError:
+        raise error(f"{path}: no such {what}") from None
+    except IsADirectoryError:
+        raise error(f"{path}: is a folder, not a {what}") from None
+    except OSError as err:
+        raise error(f"{path}: cannot read: {err.strerror or err}") from None
+    mode = os.fstat(fd).st_mode
+    if not stat.S_ISREG(mode):
+        os.close(fd)
+        raise error(f"{path}: is {_kind(mode)}, not a {what}")
+    if hasattr(os, "set_blocking"):
+        os.set_blocking(fd, True)
+    return os.fdopen(fd, "rb")
+
+
+def refuse_non_regular(path: Path, error: type[NaolocError] = ConfigError) -> None:
+    """Refuse an output path that exists and is not a regular file (a device, a FIFO...).
+
+    Outputs are written beside and moved into place, which would replace a device node
+    with a file.
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return  # missing (or a dangling link): a new file
+    if not stat.S_ISREG(mode):
+        raise error(f"{path}: is {_kind(mode)}; naoloc writes only regular files")
+
 
 MAX_CONFIG_BYTES: Final = 256 * 1024
 MAX_NODES: Final = 20_000
@@ -72,6 +135,18 @@ class _BoundedLoader(yaml.SafeLoader):
         super().__init__(stream)
         self._nodes = 0
         self._depth = 0
+
+    def construct_mapping(self, node: Any, deep: bool = False) -> Any:
+        seen: set[Any] = set()
+        for key_node, _ in node.value if isinstance(node, yaml.MappingNode) else ():
+            if isinstance(key_node, yaml.ScalarNode) and key_node.tag != "tag:yaml.org,2002:merge":
+                if key_node.value in seen:
+                    raise _Refused(
+                        f"the key {short_repr(key_node.value, 40)} appears twice",
+                        key_node.start_mark,
+                    )
+                seen.add(key_node.value)
+        return super().construct_mapping(node, deep=deep)
 
     def compose_node(self, parent: Any, index: Any) -> Any:
         self._nodes += 1
@@ -151,12 +226,8 @@ def read_text(path: Path) -> str:
         ConfigError: Missing, unreadable, not a regular file, too large, not UTF-8.
     """
     try:
-        with path.open("rb") as stream:
-            if not path.is_file():
-                raise ConfigError(f"{path}: not a regular file")
+        with open_regular(path, "config file") as stream:
             raw = stream.read(MAX_CONFIG_BYTES + 1)
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: no such config file") from None
     except OSError as err:
         raise ConfigError(f"{path}: cannot read: {err.strerror or err}") from None
     if len(raw) > MAX_CONFIG_BYTES:
@@ -203,17 +274,24 @@ def _path(parts: list[str]) -> str:
     return ".".join(parts) or "<root>"
 
 
-def check_values(data: Any, source: str, parts: list[str] | None = None) -> None:
+def check_values(
+    data: Any, source: str, parts: list[str] | None = None, *, model: Any = None
+) -> None:
     """Refuse non-finite numbers, over-long integers and strings, and deep nesting.
 
     Args:
         data: Plain data: dicts, lists, tuples, scalars.
         source: The file (or ``<dict>``) named first in the message.
         parts: Key path of ``data`` (for recursion).
+        model: A pydantic model class ``data`` is for: also :func:`check_numbers`.
 
     Raises:
         ConfigError: ``source: key.path: problem`` for the first bad value.
     """
+    if model is not None:
+        check_values(data, source)
+        check_numbers(data, model, source)
+        return
     parts = parts or []
     if len(parts) > MAX_DEPTH:
         raise ConfigError(f"{source}: {_path(parts[:3])}...: nested deeper than {MAX_DEPTH} levels")
@@ -244,3 +322,40 @@ def check_values(data: Any, source: str, parts: list[str] | None = None) -> None
             f"{source}: {_path(parts)}: a string of {len(data)} characters is too long "
             f"(at most {MAX_STR_CHARS})"
         )
+
+
+MAX_COUNT: Final = 1_000_000  # any integer setting but a seed (counts, sizes, iterations)
+
+
+def check_numbers(data: Any, model: Any, source: str, parts: list[str] | None = None) -> None:
+    """Refuse a boolean where ``model`` (a pydantic model class) expects a number, and an
+    integer setting over :data:`MAX_COUNT` (seeds excepted): ``step_m: true`` would read
+    as 1.0 m, and a count of 10**12 never finishes.
+
+    Raises:
+        ConfigError: ``source: key.path: problem``.
+    """
+    import typing
+
+    fields = getattr(model, "model_fields", None)
+    if fields is None or not isinstance(data, dict):
+        return
+    parts = parts or []
+    for name, value in data.items():
+        field = fields.get(name)
+        if field is None:
+            continue
+        where = _path([*parts, str(name)])
+        kinds = set(typing.get_args(field.annotation)) or {field.annotation}
+        inner = {a for k in kinds for a in typing.get_args(k)} | kinds
+        numeric = bool(inner & {int, float}) and bool not in inner
+        values = value if isinstance(value, list | tuple) else [value]
+        if numeric and any(isinstance(v, bool) for v in values):
+            raise ConfigError(f"{source}: {where}: a number is expected, got a boolean")
+        if not str(name).endswith("seed") and any(
+            isinstance(v, int) and not isinstance(v, bool) and abs(v) > MAX_COUNT for v in values
+        ):
+            raise ConfigError(f"{source}: {where}: {short_repr(value, 40)} is over {MAX_COUNT}")
+        sub = next((k for k in kinds if hasattr(k, "model_fields")), None)
+        if sub is not None:
+            check_numbers(value, sub, source, [*parts, str(name)])

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import faulthandler
 import os
+import tempfile
 from typing import TextIO
 
 import pytest
@@ -20,6 +21,8 @@ _LOG = pytest.StashKey[TextIO]()
 
 @pytest.hookimpl(trylast=True)  # after pytest's own faulthandler plugin has enabled it
 def pytest_configure(config: pytest.Config) -> None:
+    # TLS clients pin robots' certificates under XDG_CONFIG_HOME: never the user's own.
+    os.environ["XDG_CONFIG_HOME"] = tempfile.mkdtemp(prefix="naoloc-test-config-")
     path = os.environ.get("NAOLOC_TEST_CRASH_LOG")
     if not path:
         return

@@ -59,6 +59,21 @@ def _positive(text: str) -> float:
     return value
 
 
+def _count(low: int, high: int) -> Any:
+    """An argparse type: an integer in ``[low, high]`` (a usage error otherwise)."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{value} is outside [{low}, {high}]")
+        return value
+
+    return parse
+
+
 CONFIG_HELP = "a YAML file, or a shipped config: paper_room, lab_room, nao"
 LIVE_PORT = 8765
 
@@ -126,9 +141,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="changed: anywhere, in the room with world.room.changes (default: 30 %% of the "
         "furniture moved up to 0.5 m, 2 boxes added); the map is of the room as surveyed",
     )  # fmt: skip
-    p.add_argument("-n", type=int, default=40, help="test poses (random protocol)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the test poses")
-    p.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
+    p.add_argument("-n", type=_count(1, 100_000), default=40, help="test poses (random protocol)")
+    p.add_argument("--seed", type=_count(0, 2**63 - 1), default=0, help="seed of the test poses")
+    p.add_argument(
+        "--workers", type=_count(1, 1024), default=None, help="processes (default: cores)"
+    )
     p.add_argument(
         "--studies", default="none", metavar="LIST",
         help="extra studies: none, all, or a comma list of compare,robustness",
@@ -157,11 +174,24 @@ def build_parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     p.add_argument(
         "--allow-remote", action="store_true",
-        help="allow binding to a non-loopback address (zmq needs CURVE keys then)",
+        help="allow binding to a non-loopback address (zmq needs CURVE keys then; qimessaging "
+        "--login over tcps://)",
     )  # fmt: skip
     p.add_argument(
         "--speed", type=_pose, default=1.0, metavar="K",
         help="simulated seconds per wall second (default 1.0, as a NAO)",
+    )  # fmt: skip
+    p.add_argument(
+        "--login", action="store_true",
+        help="qimessaging: clients log in (user NAOLOC_SERVE_USER, default nao; password "
+        "NAOLOC_SERVE_PASSWORD or typed at a prompt); needed off loopback",
+    )  # fmt: skip
+    p.add_argument("--tls-cert", type=Path, metavar="PEM", help="qimessaging tcps://: certificate")
+    p.add_argument("--tls-key", type=Path, metavar="PEM", help="its key, if not in --tls-cert")
+    p.add_argument(
+        "--command-timeout", type=_pose, default=None, metavar="S",
+        help="stop a velocity walk whose client is silent this long (default 0.4 s; 0 = never, "
+        "as NAOqi)",
     )  # fmt: skip
     _add_live(p)
     p = add("demo", config=False)

@@ -46,6 +46,7 @@ from naoloc.data.outputs import staging_path
 from naoloc.errors import DatasetError, NaolocError
 from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.robot.keyframe import CameraInfo, Keyframe, check_camera
+from naoloc.safe_yaml import refuse_non_regular
 
 FORMAT_NAME = "naoloc-survey"
 # 2: chunked and indexed, written to NAME.partial.mcap, with the naoloc.status record.
@@ -225,6 +226,8 @@ class DatasetWriter:
         # Until the first frame the file has a hidden name, so that a run that writes no
         # frame leaves an older partial file of an earlier run as it was.
         self._tmp_path = staging_path(self.partial_path)
+        for final in (self.path, self.partial_path):  # moved into place later: never a device
+            refuse_non_regular(final, DatasetError)
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self._file: IO[bytes] = open(self._tmp_path, "wb")  # noqa: SIM115 - see close()

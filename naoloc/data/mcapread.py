@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from naoloc.errors import DatasetError
+from naoloc.safe_yaml import open_regular
 
 MAGIC = b"\x89MCAP0\r\n"
 # Upper bounds on what a file may declare (a survey frame is well under 10 MB).
@@ -56,14 +57,7 @@ def read_records(path: Path) -> Iterator[Any]:
     Raises:
         DatasetError: Missing, not MCAP, or corrupt (a CRC, length or record does not check).
     """
-    try:
-        stream = open(path, "rb")  # noqa: SIM115 - closed below
-    except FileNotFoundError:
-        raise DatasetError(f"{path}: no such dataset") from None
-    except IsADirectoryError:
-        raise DatasetError(f"{path}: is a folder, not a dataset") from None
-    except OSError as err:
-        raise DatasetError(f"{path}: cannot read: {err.strerror}") from None
+    stream = open_regular(Path(path), "dataset", DatasetError)  # never a FIFO or a device
     with stream:
         yield from _Walker(path, stream).records()
 

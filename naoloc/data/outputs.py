@@ -5,6 +5,8 @@ it into place with :func:`os.replace` (atomic on POSIX) only once every output o
 exists. A run that fails or is interrupted before that leaves the previous outputs, and
 the config copy that describes them, exactly as they were. A command that fills a whole
 folder (``evaluate``) holds :func:`folder_lock` on it, so two runs never mix their files.
+An output path that names something other than a regular file (a device node, a FIFO, a
+folder) is refused before anything is written: the move would replace it.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from pathlib import Path
 from typing import IO, TYPE_CHECKING
 
 from naoloc.errors import OutputBusy
+from naoloc.safe_yaml import refuse_non_regular
 
 if TYPE_CHECKING:
     from naoloc.config import Config
@@ -48,7 +51,12 @@ def staged(*paths: Path) -> Iterator[list[Path]]:
 
     Yields:
         The temporary paths, in the same order.
+
+    Raises:
+        ConfigError: A final path exists and is not a regular file.
     """
+    for p in paths:
+        refuse_non_regular(p)
     temps = [staging_path(p) for p in paths]
     for p in paths:
         p.parent.mkdir(parents=True, exist_ok=True)

@@ -11,7 +11,9 @@ Order of the checks, cheapest and most dangerous first:
    size, so a header cannot make numpy allocate more than the directory promised.
 3. The metadata JSON: its size, its nesting depth (a deeply nested document is refused
    before the JSON parser recurses), its structure and the types of its fields.
-4. The arrays: finiteness (NaN only where the format means "none"), value ranges, shapes
+4. The arrays: finiteness (NaN only in the whole rows where the format means "none", and
+   there only when the rest of the map agrees: a neuron without a pose wins no wall
+   picture, has no view direction, and some neuron has a pose), value ranges, shapes
    consistent with each other and with the metadata (feature kind, descriptor width,
    vocabulary size, binary words of 0/1 bits).
 
@@ -24,6 +26,7 @@ from __future__ import annotations
 import io
 import json
 import math
+import os
 import re
 import zipfile
 from collections.abc import Mapping
@@ -34,6 +37,7 @@ import numpy as np
 
 from naoloc.errors import MapFormatError
 from naoloc.perception.features import DESCRIPTOR_WIDTH, FEATURE_KINDS
+from naoloc.safe_yaml import open_regular
 
 #: Largest map file accepted, and largest total of its members' uncompressed sizes, bytes.
 #: The largest map the config allows (5000 neurons, 4096 words, thousands of images) is
@@ -87,15 +91,15 @@ def read_members(source: str | Path | bytes) -> tuple[dict[str, np.ndarray], str
     name = "<bytes>" if isinstance(source, bytes) else str(source)
     if isinstance(source, bytes):
         size = len(source)
-        stream: IO[bytes] | str | Path = io.BytesIO(source)
+        stream: IO[bytes] = io.BytesIO(source)
     else:
-        try:
-            size = Path(source).stat().st_size
-        except FileNotFoundError:
-            raise MapFormatError(f"{name}: no such map file") from None
-        except OSError as err:
-            raise MapFormatError(f"{name}: cannot read map file: {err.strerror}") from None
-        stream = source
+        stream = open_regular(Path(source), "map file", MapFormatError)
+        size = os.fstat(stream.fileno()).st_size
+    with stream:
+        return _read_zip(stream, size, name)
+
+
+def _read_zip(stream: IO[bytes], size: int, name: str) -> tuple[dict[str, np.ndarray], str]:
     if size > MAX_MAP_BYTES:
         raise fail(name, f"file of {size} bytes exceeds the {MAX_MAP_BYTES} byte limit")
     try:
@@ -267,6 +271,16 @@ def check_features(a: dict[str, np.ndarray], meta: dict[str, Any], name: str) ->
     return str(kind)
 
 
+def check_posed_winners(a: dict[str, np.ndarray], walls: int, name: str) -> None:
+    """Every neuron that wins a wall picture (the first ``walls`` keyframes, whose poses
+    make the neurons' poses) has a pose: NaN there is damage, not "none"."""
+    winners = a["winners"][:walls]
+    posed = ~np.isnan(a["neuron_poses"]).any(axis=1)
+    if winners.size and not posed[winners].all():
+        bad = int(winners[~posed[winners]][0])
+        raise fail(name, f"neuron {bad} wins wall pictures but has no pose (NaN)")
+
+
 def check_values(a: dict[str, np.ndarray], name: str) -> None:
     """Finiteness and value ranges of the arrays (shapes are checked before)."""
     finite = [
@@ -283,6 +297,12 @@ def check_values(a: dict[str, np.ndarray], name: str) -> None:
         nan = np.isnan(v)
         if np.isinf(v).any() or (nan.any(axis=1) != nan.all(axis=1)).any():
             raise fail(name, f"array {key} holds infinity or partly NaN rows")
+    posed = ~np.isnan(a["neuron_poses"]).any(axis=1)
+    if not posed.any():
+        raise fail(name, "no neuron has a pose (neuron_poses is all NaN)")
+    if (np.isnan(a["neuron_views"]) == posed).any():
+        raise fail(name, "neuron_views is NaN where neuron_poses is not, or the reverse")
+
     if (a["vocab_idf"] < 0).any():
         raise fail(name, "negative IDF")
     cams = a["keyframe_cameras"]

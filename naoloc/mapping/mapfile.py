@@ -238,6 +238,7 @@ def read_map(source: str | Path | bytes) -> MapData:
     far = user_meta.get("far_pictures", 0)
     if isinstance(far, bool) or not isinstance(far, int) or not 0 <= far < len(arrays["winners"]):
         raise _fail(name, f"far_pictures {str(far)[:20]!r} is not a count below the keyframes'")
+    mapcheck.check_posed_winners(arrays, len(arrays["winners"]) - far, name)
     binary = kind != "sift"
     gcs = GCSNetwork(
         arrays["gcs_weights"], arrays["gcs_triangles"], int(counts[0]), int(counts[1]),

@@ -7,7 +7,9 @@ with ``naoloc.qi`` (``NAOLOC_QI_MODULE``); ``oldsdk_*.py`` scripts (``from naoqi
 ALProxy``) run under ``python -m naoloc.run`` on Python 3. Servers: libqi, qimessaging
 (naoloc's own libqi protocol) and zmq (naoloc.qi only; no objects or client services
 there, see ``ZMQ_CANNOT``), at ``--speed 4``; ``walk_sleep.py`` also runs at a real NAO's
-pace and ``localization_service.py`` in a small room at ``--speed 20``.
+pace and ``localization_service.py`` in a small room at ``--speed 20``. The servers run
+with ``--command-timeout 0``: a NAOqi keeps a ``move`` going while its script sleeps,
+where ``naoloc serve`` by default stops a walk whose client is silent for 0.4 s.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ pytestmark = [pytest.mark.net]
 CORPUS = Path(__file__).parent / "naoqi_corpus"
 SCRIPTS = sorted(p.name for p in CORPUS.glob("*.py") if not p.name.startswith("_"))
 FAST = 4.0
+NAOQI_MODE = ["--command-timeout", "0"]  # NAOqi's own behaviour: no command timeout
 CONFIG = {"robot": {"backend": "fake"}, "world": {"room": {"size_m": [8.0, 8.0], "seed": 1}}}
 SMALL_ROOM = {"robot": {"backend": "fake"}, "world": {"room": {"size_m": [4.0, 3.0], "seed": 1}}}
 OWN_SERVER = {"localization_service.py"}  # a survey: its own small room, fast clock
@@ -101,7 +104,7 @@ def run_script(
 def server(request: pytest.FixtureRequest) -> Iterator[ServedProcess]:
     if request.param == "libqi" and not HAS_QI:
         pytest.skip("libqi serving needs the qi package")
-    with served(CONFIG, request.param, speed=FAST) as process:
+    with served(CONFIG, request.param, speed=FAST, args=NAOQI_MODE) as process:
         yield process
 
 
@@ -122,7 +125,7 @@ def test_corpus_script(name: str, client: str, server: ServedProcess) -> None:
 
 def test_walk_sleep_at_real_time() -> None:
     transport, client = ("libqi", "qi") if HAS_QI else ("qimessaging", "naoloc.qi")
-    with served(CONFIG, transport, speed=1.0) as process:
+    with served(CONFIG, transport, speed=1.0, args=NAOQI_MODE) as process:
         result = run_script("walk_sleep.py", process, 1.0, client)
     assert result.returncode == 0, f"{result.stdout}\n{result.stderr}"
 
@@ -134,7 +137,7 @@ def test_walk_sleep_at_real_time() -> None:
 def test_naoloc_localization_service(transport: str, client: str) -> None:
     if "qi" in (transport, client) and not HAS_QI:
         pytest.skip("the qi package is not installed")
-    with served(SMALL_ROOM, transport, speed=20.0) as process:
+    with served(SMALL_ROOM, transport, speed=20.0, args=NAOQI_MODE) as process:
         result = run_script("localization_service.py", process, 20.0, client)
     assert result.returncode == 0, f"{result.stdout}\n{result.stderr}\n{process.stderr()[-2000:]}"
     assert "OK" in result.stdout

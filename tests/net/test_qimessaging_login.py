@@ -10,6 +10,7 @@ from __future__ import annotations
 import importlib.util
 import shutil
 import subprocess
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -18,7 +19,7 @@ import pytest
 import naoloc.qi as nqi
 from naoloc.backends.naoqi.qimessaging.client import QiSession
 from naoloc.backends.naoqi.qimessaging.server import QiServer
-from naoloc.errors import BackendError, ConnectionLost
+from naoloc.errors import BackendError, ConnectionLost, RobotError
 
 pytestmark = pytest.mark.net
 
@@ -140,3 +141,57 @@ def test_tls_survives_concurrent_callers(tls_url: str) -> None:
         assert got == [2 * x for x in range(400)]
     finally:
         session.close()
+
+
+class _Greeter:
+    def greet(self, name: str) -> str:
+        return f"hello {name}"
+
+
+def _names(session: QiSession) -> set[str]:
+    return {s["name"] for s in session.services()}
+
+
+def test_client_services_need_the_login_and_go_with_their_client() -> None:
+    """Clients may register services of their own (as on a NAO), only once logged in, at
+    most MAX_SERVICES_PER_CLIENT each; the directory drops them when their client leaves."""
+    import socket
+
+    from naoloc.backends.naoqi.qimessaging import codec, message
+    from naoloc.backends.naoqi.qimessaging.directory import MAX_SERVICES_PER_CLIENT
+    from naoloc.backends.naoqi.qimessaging.meta import SERVICE_INFO_SIGNATURE
+
+    server = QiServer(users={"nao": "s3cret"})
+    server.listen("tcp://127.0.0.1:0")  # a login over plain TCP is allowed on loopback
+    url = server.endpoints()[0]
+    owner, caller = QiSession(), QiSession()
+    try:
+        host, port = url.split("//")[1].rsplit(":", 1)
+        with socket.create_connection((host, int(port))) as sock:
+            info = ("Intruder", 0, "m", 1, ["tcp://127.0.0.1:1"], "", b"")
+            payload = codec.encode_bytes(f"({SERVICE_INFO_SIGNATURE})", (info,))
+            sock.sendall(message.pack_header(1, len(payload), message.CALL, 0, 1, 1, 102) + payload)
+            sock.settimeout(5)
+            answer = message.unpack_header(sock.recv(message.HEADER_SIZE))
+            assert answer.type == message.ERROR  # before the login: refused, not listed
+        owner.set_login("nao", "s3cret")
+        owner.connect(url)
+        caller.set_login("nao", "s3cret")
+        caller.connect(url)
+        assert "Intruder" not in _names(caller)
+        owner.registerService("Greeter", _Greeter(), methods=[("greet", "(s)", "s")])
+        assert caller.service("Greeter").greet("nao") == "hello nao"
+        for i in range(1, MAX_SERVICES_PER_CLIENT):
+            owner.registerService(f"Greeter{i}", _Greeter(), methods=[("greet", "(s)", "s")])
+        with pytest.raises(RobotError, match=f"at most {MAX_SERVICES_PER_CLIENT} services"):
+            owner.registerService("OneTooMany", _Greeter(), methods=[("greet", "(s)", "s")])
+        assert server.refused.get("services") == 1
+        owner.close()
+        deadline = time.monotonic() + 5
+        while "Greeter" in _names(caller) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not {n for n in _names(caller) if n.startswith("Greeter")}
+    finally:
+        owner.close()
+        caller.close()
+        server.close()

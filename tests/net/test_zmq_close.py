@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import threading
+import time
 from collections.abc import Iterator
 
 import pytest
@@ -22,6 +23,7 @@ pytestmark = pytest.mark.net
 
 class _Echo:
     def echo(self, value: object) -> object:
+        time.sleep(0.05)  # the caller's addCallback comes first, so it runs on the I/O thread
         return value
 
 

@@ -253,3 +253,37 @@ def test_a_far_picture_count_beyond_the_keyframes_is_refused(small_map: VisualMa
         raw = np.frombuffer(json.dumps(meta).encode(), np.uint8)
         with pytest.raises(MapFormatError, match="far_pictures"):
             load_map(_rewrite(data, {"meta_json": raw}))
+
+
+def _resealed(data: bytes, edit: dict[str, np.ndarray]) -> bytes:
+    """The map with ``edit`` applied and its checksum made to match (a crafted file)."""
+    from naoloc.mapping.mapfile import checksum
+
+    arrays = dict(np.load(io.BytesIO(data)))
+    arrays.update(edit)
+    meta = json.loads(arrays["meta_json"].tobytes())
+    meta["checksum"] = checksum({k: v for k, v in arrays.items() if k != "meta_json"})
+    meta_json = np.frombuffer(json.dumps(meta).encode(), np.uint8)
+    return _rewrite(data, {**edit, "meta_json": meta_json})
+
+
+def test_a_crafted_map_with_nan_or_infinite_values_is_refused(small_map: VisualMap) -> None:
+    data = map_bytes(small_map)
+    load_map(_resealed(data, {}))  # resealing alone keeps a good map good
+    poses, views = small_map.neuron_poses.copy(), small_map.neuron_views.copy()
+    poses[int(small_map.winners[0])] = np.nan
+    with pytest.raises(MapFormatError, match="neuron_views is NaN"):
+        load_map(_resealed(data, {"neuron_poses": poses}))
+    both = views.copy()
+    both[int(small_map.winners[0])] = np.nan
+    with pytest.raises(MapFormatError, match="wins wall pictures but has no pose"):
+        load_map(_resealed(data, {"neuron_poses": poses, "neuron_views": both}))
+    with pytest.raises(MapFormatError, match="no neuron has a pose"):
+        load_map(_resealed(data, {
+            "neuron_poses": np.full_like(poses, np.nan), "neuron_views": np.full_like(views, np.nan)
+        }))  # fmt: skip
+    for key in ("keyframe_poses", "histograms", "refined_poses"):
+        bad = getattr(small_map, key).copy()
+        bad.flat[0] = np.inf
+        with pytest.raises(MapFormatError, match=f"{key} holds"):
+            load_map(_resealed(data, {key: bad}))

@@ -43,7 +43,10 @@ def create(cfg: Config) -> Robot:
         if rc.password is not None
         else os.environ.get("NAOLOC_NAO_PASSWORD")
     )
-    link = Link(rc.url, transport, user=rc.user, password=password, curve_keys=rc.curve_keys)
+    link = Link(
+        rc.url, transport, user=rc.user, password=password, curve_keys=rc.curve_keys,
+        tls_trust=rc.tls_trust,
+    )  # fmt: skip
     link.open()
     try:
         sim = None

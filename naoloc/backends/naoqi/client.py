@@ -64,6 +64,8 @@ class Link:
         user: NAOqi 2.9+ login (libqi and qimessaging), or None.
         password: NAOqi 2.9+ password, or None.
         curve_keys: zmq only: CURVE certificate folder, or None.
+        tls_trust: qimessaging over tcps://: how the robot's certificate is checked
+            (None = pinned on first use; see :mod:`~.qimessaging.trust`).
     """
 
     def __init__(
@@ -74,6 +76,7 @@ class Link:
         user: str | None = None,
         password: str | None = None,
         curve_keys: str | None = None,
+        tls_trust: str | None = None,
     ) -> None:
         parse_url(url, what="robot.url", allow_any_port=False, default_port=9559)
         if transport == "zmq" and url.startswith("tcps://"):
@@ -81,6 +84,7 @@ class Link:
         self.url = url
         self.transport = transport
         self._user, self._password, self._curve = user, password, curve_keys
+        self._tls_trust = tls_trust
         self._session: Any = None
         self._proxies: dict[str, Any] = {}
         self._services: set[str] = set()
@@ -103,7 +107,12 @@ class Link:
         self._heartbeat.start()
 
     def _connect(self, timeout_s: float) -> Any:
-        session = new_session(self.transport, curve_keys=self._curve, connect_timeout_s=timeout_s)
+        session = new_session(
+            self.transport,
+            curve_keys=self._curve,
+            connect_timeout_s=timeout_s,
+            tls_trust=self._tls_trust,
+        )
         try:
             if self.transport == "qimessaging" and self._user:
                 session.set_login(self._user, self._password or "")

@@ -67,7 +67,15 @@ def set_login(session: Any, user: str, password: str) -> None:
     session.setClientAuthenticatorFactory(_AuthenticatorFactory(user, password))
 
 
-def bind_service(name: str, target: Any, caller: Callable[[str, int], str] | None = None) -> Any:
+Runner = Callable[[str, str, Callable[[], None]], bool]
+
+
+def bind_service(
+    name: str,
+    target: Any,
+    caller: Callable[[str, int], str] | None = None,
+    run: Runner | None = None,
+) -> Any:
     """A qi-bound object serving ``SERVICES[name]`` by forwarding to ``target.invoke``.
 
     Args:
@@ -75,6 +83,9 @@ def bind_service(name: str, target: Any, caller: Callable[[str, int], str] | Non
         target: An object with ``invoke(caller, method, args)``; its naoloc errors reach
             the client as one line ``"<ErrorType>: <message>"`` (no traceback).
         caller: ``caller(method, overload)`` names the client of a call (None = "libqi").
+        run: ``run(caller, method, job)`` runs a call off libqi's threads (a
+            :class:`~.qimessaging.workers.CallPool`), the method answering a future:
+            blocking calls then never take every libqi thread; None = on libqi's thread.
 
     Returns:
         A multi-threaded instance ready for ``qi.Session.registerService`` (calls to one
@@ -86,30 +97,50 @@ def bind_service(name: str, target: Any, caller: Callable[[str, int], str] | Non
         for k, overload in enumerate(overloads):
             namespace[f"{method}__{k}"] = qi.bind(
                 overload.returns, list(overload.params), methodName=method
-            )(_forwarder(target, method, k, overload.returns, caller))
+            )(_forwarder(target, method, k, overload.returns, caller, run))
     cls = qi.multiThreaded()(type(f"Qi{name}", (), namespace))
     return cls()
 
 
 def _forwarder(
-    target: Any, method: str, overload: int, returns: str, caller: Callable[[str, int], str] | None
+    target: Any,
+    method: str,
+    overload: int,
+    returns: str,
+    caller: Callable[[str, int], str] | None,
+    run: Runner | None = None,
 ) -> Any:
     as_tuple = returns.startswith("(")
     qi = import_qi()
 
+    def invoke(who: str, args: tuple[Any, ...]) -> Any:
+        value = target.invoke(who, method, list(args))
+        return tuple(value) if as_tuple else value
+
+    def failed(err: NaolocError) -> str:
+        return f"{type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''}"
+
     def call(self: Any, *args: Any) -> Any:
         who = caller(method, overload) if caller is not None else LIBQI_CALLER
+        if run is not None:
+            promise = qi.Promise()
+
+            def job() -> None:
+                try:
+                    promise.setValue(invoke(who, args))
+                except NaolocError as err:
+                    promise.setError(failed(err))
+                except Exception as err:  # a bug answers this one call
+                    promise.setError(f"RobotError: {type(err).__name__}: {err}".splitlines()[0])
+
+            if run(who, method, job):
+                return promise.future()
         try:
-            value = target.invoke(who, method, list(args))
+            return invoke(who, args)
         except NaolocError as err:
             promise = qi.Promise()
-            promise.setError(
-                f"{type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''}"
-            )
+            promise.setError(failed(err))
             return promise.future()
-        if as_tuple:
-            return tuple(value)
-        return value
 
     call.__name__ = method
     return call
@@ -171,6 +202,10 @@ class LibqiServer:
         parts = urlsplit(url)
         if parts.scheme != "tcp" or not parts.hostname or parts.port is None:
             raise BackendError(f"libqi serving needs tcp://HOST:PORT, got {url!r}")
+        from naoloc.backends.naoqi.qimessaging.workers import CallPool
+        from naoloc.backends.naoqi.signatures import URGENT
+
+        self._pool = CallPool(16, per_client=4, name="naoloc-libqi-call")
         self._session = qi.Session()
         self._session.listenStandalone("tcp://127.0.0.1:0")
         self._relay: Any = None
@@ -178,6 +213,7 @@ class LibqiServer:
             inner = next(str(e) for e in self._session.endpoints() if str(e).startswith("tcp://"))
             inner_parts = urlsplit(inner)
             self._ids: dict[tuple[str, str, int], tuple[int, int]] = {}
+            self._params: dict[tuple[int, int], str] = {}  # (service, action) -> "(...)"
             self._service_ids: dict[str, int] = {}
             self._subscribers = _MemorySubscribers()
             for name in names:
@@ -185,7 +221,9 @@ class LibqiServer:
                 if name == MEMORY:
                     endpoint = _MemoryEndpoint(endpoint, self._subscribers)
                     core.memory.add_listener(self._subscribers.emit)
-                bound = bind_service(name, endpoint, self._caller_for(name))
+                bound = bind_service(
+                    name, endpoint, self._caller_for(name), self._runner(name, URGENT)
+                )
                 self._service_ids[name] = int(self._session.registerService(name, bound))
             self._learn_action_ids(inner, names)
             try:
@@ -193,8 +231,9 @@ class LibqiServer:
                     (parts.hostname, parts.port),
                     (str(inner_parts.hostname), int(inner_parts.port or 0)),
                     on_alive=core.touch,
-                    on_gone=core.gone,
+                    on_gone=self._gone(core),
                     log=log,
+                    screen=self._screen,
                     protected=frozenset(self._service_ids.values()),
                 )
             except OSError as err:
@@ -215,9 +254,11 @@ class LibqiServer:
                 }
                 for method, overloads in SERVICES[name].items():
                     for k, overload in enumerate(overloads):
-                        uid = by_shape.get((method, "(" + "".join(overload.params) + ")"))
+                        params = "(" + "".join(overload.params) + ")"
+                        uid = by_shape.get((method, params))
                         if uid is not None:
                             self._ids[(name, method, k)] = (self._service_ids[name], uid)
+                            self._params[(self._service_ids[name], uid)] = params
         finally:
             client.close()
 
@@ -229,6 +270,41 @@ class LibqiServer:
             return str(self._relay.caller_of(*ids))
 
         return caller
+
+    def _screen(
+        self, service: int, obj: int, action: int, flags: int, payload: bytes
+    ) -> str | None:
+        """Why libqi must not decode this call (naoloc's element budget), or None."""
+        from naoloc.backends.naoqi.qimessaging import codec
+        from naoloc.errors import ProtocolError
+
+        if obj != 1:
+            return None
+        params = self._params.get((service, action))
+        if params is None and not flags & 1:
+            return None  # not one of ours (the directory, generic actions): fixed types
+        try:
+            codec.decode("m" if flags & 1 else params or "m", payload, exact=False)
+        except ProtocolError as err:
+            return f"ProtocolError: {err}"
+        return None
+
+    def _gone(self, core: Any) -> Callable[[str], None]:
+        def gone(caller: str) -> None:
+            self._pool.drop(caller)  # its queued calls never start
+            core.gone(caller)
+
+        return gone
+
+    def _runner(self, name: str, urgent: frozenset[tuple[str, str]]) -> Runner:
+        pool = self._pool
+
+        def run(who: str, method: str, job: Callable[[], None]) -> bool:
+            if (name, method) in urgent and pool.submit_urgent(who, job):
+                return True
+            return pool.submit(who, job)
+
+        return run
 
     def endpoints(self) -> list[str]:
         """The URL clients connect to (the relay's)."""
@@ -246,6 +322,7 @@ class LibqiServer:
         if session is not None:
             with contextlib.suppress(Exception):
                 session.close()
+        self._pool.close(1.0)
 
 
 class _MemoryEndpoint:

@@ -493,10 +493,14 @@ class Session:
     Args:
         transport: ``qimessaging``, ``zmq`` or None (choose from the URL: ``zmq://``,
             or a zmq greeting, means zmq; anything else qimessaging).
+        tls_trust: ``tcps://``: how the robot's certificate is checked before the login
+            is sent: None = pinned on first use, ``sha256:<hex>``, a CA or certificate
+            PEM path, or ``insecure`` (libqi's way: anyone on the path gets the password).
     """
 
-    def __init__(self, transport: str | None = None) -> None:
+    def __init__(self, transport: str | None = None, tls_trust: str | None = None) -> None:
         self._transport = transport
+        self._tls_trust = tls_trust
         self._session: Any = None
         self._login: tuple[str, str] | None = None
         self.connected = Signal("()")
@@ -519,7 +523,7 @@ class Session:
             RuntimeError: Nothing answers, or the login is refused.
         """
         transport, real_url = _transport_for(url, self._transport)
-        inner = _shim.new_session(transport)  # type: ignore[arg-type]
+        inner = _shim.new_session(transport, tls_trust=self._tls_trust)  # type: ignore[arg-type]
         if self._login is not None:
             if transport != "qimessaging":
                 raise RuntimeError("a login (NAOqi 2.9+) needs a tcps:// NAOqi, not zmq")

@@ -16,7 +16,13 @@ action). The relay
   ``unregisterService`` of the served NAOqi's own services with an error instead of
   forwarding it;
 - drops replies to a client that stopped reading once :data:`MAX_UNREAD_BYTES` wait
-  for it, so a slow reader cannot make the server hold unbounded memory.
+  for it, so a slow reader cannot make the server hold unbounded memory;
+- screens what libqi would decode, because libqi's decoder has no element budget (a 4 KB
+  capability map of nested lists of ``()`` cost it 14.5 s of CPU and 1.5 GB): before the
+  login a message is at most :data:`MAX_PREAUTH_BYTES` and its capability map is decoded
+  here first within :data:`MAX_PREAUTH_ITEMS` elements (or the connection is closed);
+  after it, calls whose signature the server knows (``screen``) and capability messages
+  are decoded here within naoloc's budget, and refused with an error if they exceed it.
 """
 
 from __future__ import annotations
@@ -32,12 +38,20 @@ from collections import deque
 from collections.abc import Callable
 from typing import Final
 
+from naoloc.backends.naoqi.qimessaging import codec
+from naoloc.errors import ProtocolError
+
 MAGIC: Final = 0x42DEAD42
 HEADER: Final = struct.Struct("<IIIHBBIII")
 HEADER_SIZE: Final = 28
 MAX_PAYLOAD: Final = 50 << 20  # libqi's default limit
 MAX_UNREAD_BYTES: Final = 32 << 20  # replies waiting for one client before new ones are dropped
-TYPE_CALL, TYPE_REPLY, TYPE_ERROR, TYPE_POST = 1, 2, 3, 4
+MAX_PREAUTH_BYTES: Final = 16 * 1024  # a message before the login
+MAX_PREAUTH_ITEMS: Final = 1024  # elements of a capability map
+TYPE_CALL, TYPE_REPLY, TYPE_ERROR, TYPE_POST, TYPE_CAPABILITY = 1, 2, 3, 4, 6
+SERVICE_SERVER, ACTION_AUTHENTICATE = 0, 8
+# screen(service, object, action, flags, payload) -> why the call is refused, or None
+Screen = Callable[[int, int, int, int, bytes], "str | None"]
 _REFUSED: Final = "clients of naoloc serve cannot unregister its own services"
 MAX_REGISTRATIONS: Final = 16  # registerService calls per client connection
 SERVICE_DIRECTORY: Final = 1
@@ -64,6 +78,7 @@ class _Conn:
         self.to_client = bytearray()
         self.to_upstream = bytearray()
         self.closed = False
+        self.authenticated = False  # libqi answered its login
         self.registrations = 0
 
 
@@ -76,6 +91,7 @@ class QiRelay:
         on_alive: ``on_alive(conn_name)`` for every message from a client.
         on_gone: ``on_gone(conn_name)`` when a client's connection closes.
         log: One-line notices.
+        screen: Checks a call's payload before libqi decodes it (None = calls unscreened).
         protected: Service ids clients may not unregister (the served NAOqi's own).
     """
 
@@ -86,9 +102,11 @@ class QiRelay:
         on_alive: Callable[[str], None],
         on_gone: Callable[[str], None],
         log: Callable[[str], None],
+        screen: Screen | None = None,
         protected: frozenset[int] = frozenset(),
     ) -> None:
         self._upstream = upstream
+        self._screen = screen
         self._protected = protected | {SERVICE_DIRECTORY}
         self._on_alive = on_alive
         self._on_gone = on_gone
@@ -215,14 +233,16 @@ class QiRelay:
         self._want(conn)
 
     @staticmethod
-    def _messages(buffer: bytearray) -> list[tuple[tuple[int, ...], bytes]]:
+    def _messages(
+        buffer: bytearray, limit: int = MAX_PAYLOAD
+    ) -> list[tuple[tuple[int, ...], bytes]]:
         out = []
         while len(buffer) >= HEADER_SIZE:
             if struct.unpack(">I", buffer[:4])[0] != MAGIC:
                 raise OSError("not a QiMessaging stream")
             fields = HEADER.unpack(bytes(buffer[:HEADER_SIZE]))
             size = fields[2]
-            if size > MAX_PAYLOAD:
+            if size > limit:
                 raise OSError(f"message of {size} bytes")
             if len(buffer) < HEADER_SIZE + size:
                 break
@@ -230,9 +250,45 @@ class QiRelay:
             del buffer[: HEADER_SIZE + size]
         return out
 
+    def _refuse(self, conn: _Conn, fields: tuple[int, ...], text: str) -> None:
+        _, ident, _, _, kind, _, service, obj, action = fields
+        if kind == TYPE_CALL:
+            payload = _error_payload(text)
+            conn.to_client += _header(ident, len(payload), TYPE_ERROR, service, obj, action)
+            conn.to_client += payload
+        self.refused += 1
+        self._log(f"naoloc serve: refused a message of {conn.name}: {text}")
+
+    def _screened(self, conn: _Conn, fields: tuple[int, ...], payload: bytes) -> bool:
+        """True when libqi may decode the message; closes or answers the ones it may not.
+
+        Raises:
+            OSError: Before the login, a capability map over the budget (closes).
+        """
+        _, _, _, _, kind, flags, service, obj, action = fields
+        login = kind in (TYPE_CALL, TYPE_POST) and service == SERVICE_SERVER
+        items = None if conn.authenticated else MAX_PREAUTH_ITEMS
+        try:
+            if kind == TYPE_CAPABILITY or login:
+                codec.decode("{sm}", payload, max_items=items, exact=False)
+            elif kind in (TYPE_CALL, TYPE_POST) and conn.authenticated and self._screen:
+                problem = self._screen(service, obj, action, flags, payload)
+                if problem:
+                    self._refuse(conn, fields, problem)
+                    return False
+        except ProtocolError as err:
+            if not conn.authenticated:
+                raise OSError(f"bad capability map before the login: {err}") from None
+            self._refuse(conn, fields, f"ProtocolError: {err}")
+            return False
+        return True
+
     def _parse_client(self, conn: _Conn) -> None:
-        for fields, raw in self._messages(conn.from_client):
+        limit = MAX_PAYLOAD if conn.authenticated else MAX_PREAUTH_BYTES
+        for fields, raw in self._messages(conn.from_client, limit):
             _, ident, _, _, kind, _, service, obj, action = fields
+            if not self._screened(conn, fields, raw[HEADER_SIZE:]):
+                continue
             refusal = ""
             if service == SERVICE_DIRECTORY and action in (SD_REGISTER, SD_UNREGISTER):
                 refusal = self._refusal(conn, kind, action, raw)
@@ -267,6 +323,9 @@ class QiRelay:
     def _parse_upstream(self, conn: _Conn) -> None:
         for fields, raw in self._messages(conn.from_upstream):
             kind = fields[4]
+            login = (fields[6], fields[8]) == (SERVICE_SERVER, ACTION_AUTHENTICATE)
+            if kind == TYPE_REPLY and login:
+                conn.authenticated = True  # libqi closes a connection whose login it refused
             if kind in (TYPE_REPLY, TYPE_ERROR):
                 self._note_answer(conn, fields[1], fields[6], fields[8])
             if kind in (TYPE_REPLY, TYPE_ERROR) and len(conn.to_client) > MAX_UNREAD_BYTES:

@@ -11,9 +11,18 @@ times real time, so a client that sleeps sees the robot walk.
 
 Dead-man stop, per client: the client that commands a walk (``move``, ``moveToward``,
 or a blocking ``moveTo``) owns it. The walk is stopped at once when the owner's
-connection closes, and when a heartbeating owner (every zmq client; a libqi client
-that calls ``NaolocWatchdog.ping``) is silent for more than ``deadman_s`` (0.4 s).
-Other clients' traffic never keeps a silent owner alive.
+connection closes, when a heartbeating owner (every zmq client; a libqi client
+that calls ``NaolocWatchdog.ping``) is silent for more than ``deadman_s`` (0.4 s), and
+when the owner of a velocity walk (``move``, ``moveToward``) makes no call for
+``command_timeout_s`` (0.4 s) while none of its calls runs: a frozen client (SIGSTOP,
+a hung script) leaves no robot walking, as the ROS 2 ``cmd_vel`` timeout. A real NAOqi
+has no such timeout (``move`` walks until told otherwise); ``naoloc serve
+--command-timeout 0`` serves that behaviour. Other clients' traffic never keeps a
+silent owner alive.
+
+When a client leaves, what it held is released: its walk stops, its posted tasks are
+stopped, and its camera subscribers are unsubscribed :data:`RELEASE_GRACE_S` later
+unless a reconnected client names them first.
 
 Errors: one line ``"<Type>: <Service>.<method>: <problem>"``, never a traceback; a
 failure answers that one request and the server goes on.
@@ -63,6 +72,7 @@ from naoloc.backends.naoqi.signatures import (
     TOUCH,
     TRACKER,
     TTS,
+    URGENT,
     VIDEO,
     VIDEO_RECORDER,
     WATCHDOG,
@@ -72,6 +82,8 @@ from naoloc.errors import BackendError, NaolocError, RobotError
 from naoloc.robot import Robot, rules
 
 DEADMAN_S: Final = 0.4
+COMMAND_TIMEOUT_S: Final = 0.4  # a velocity walk's owner silent this long: stop (frozen)
+RELEASE_GRACE_S: Final = 2.0  # a left client's camera subscribers wait this long
 _CHECK_EVERY_S: Final = 0.05
 RobotThread = RobotLoop  # the robot's thread (kept under its old name for callers)
 _WALK_METHODS: Final = frozenset(
@@ -101,6 +113,8 @@ class ServedRobot:
         speed: Simulated seconds per wall second; None = no clock (time advances only
             inside calls, as in-process).
         deadman_s: Silence (s, wall clock) of a heartbeating owner before its walk stops.
+        command_timeout_s: Silence (s, wall clock) of any velocity walk's owner with no
+            call running before the walk stops; None = never (NAOqi's behaviour).
         log: Where one-line notices go (stderr by default).
         robot_name: What ALSystem.robotName answers.
         cfg: The served config: with it, NaolocLocalization is served (its home map and
@@ -116,6 +130,7 @@ class ServedRobot:
         thread: RobotLoop | None = None,
         speed: float | None = 1.0,
         deadman_s: float = DEADMAN_S,
+        command_timeout_s: float | None = COMMAND_TIMEOUT_S,
         log: Callable[[str], None] = _stderr,
         robot_name: str = "nao",
         cfg: Any = None,
@@ -123,6 +138,7 @@ class ServedRobot:
     ) -> None:
         self.robot = robot
         self.deadman_s = deadman_s
+        self.command_timeout_s = command_timeout_s
         self._log = log
         self._own_loop = thread is None
         self.loop = thread or RobotLoop()
@@ -157,12 +173,15 @@ class ServedRobot:
             SYSTEM: companions.SystemFront(robot_name),
             SPEECH_RECOGNITION: companions.SpeechRecognitionFront(ctx),
         }
+        self._stopping = threading.local()  # .now: this thread runs a stop (URGENT)
         self._add_scripted_services(robot, cfg, record_dir)
         self._seen_lock = threading.Lock()
         self._last_seen: dict[str, float] = {}
         self._heartbeating: set[str] = set()
         self._gone: set[str] = set()
+        self._busy: dict[str, int] = {}  # caller -> its calls running now
         self._owner: str | None = None
+        self._velocity = False  # the owner's walk is a velocity walk (move, moveToward)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.calls = 0
@@ -196,7 +215,10 @@ class ServedRobot:
     # ------------------------------------------------------------------ robot access
     def _run(self, function: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
         self.calls += 1
-        return self.loop.run(function, *args, caller=self.ctx.caller or "server", **kwargs)
+        urgent = bool(getattr(self._stopping, "now", False))  # a stop jumps the queue
+        return self.loop.run(
+            function, *args, caller=self.ctx.caller or "server", urgent=urgent, **kwargs
+        )
 
     def _submit(self, function: Callable[..., Any], *args: Any) -> None:
         self.calls += 1
@@ -227,11 +249,17 @@ class ServedRobot:
             self._gone.discard(caller)
 
     def gone(self, caller: str) -> None:
-        """``caller``'s connection closed: stop its walk now."""
+        """``caller``'s connection closed: stop its walk and tasks, orphan its cameras."""
         with self._seen_lock:
             self._gone.add(caller)
             self._last_seen.pop(caller, None)
+            self._heartbeating.discard(caller)
+            if len(self._gone) > 10_000:  # ids are never reused; keep the newest
+                self._gone = {caller, *(o for o in (self._owner,) if o)}
         self.check_deadman()
+        self.ctx.left(caller)
+        self.ctx.tasks.stop_of(caller)
+        self.video.orphan(caller)
 
     @property
     def services(self) -> list[str]:
@@ -249,6 +277,9 @@ class ServedRobot:
             NaolocError: One line ``"<Service>.<method>: <problem>"`` (its type kept).
         """
         self.touch(caller, heartbeat=service == WATCHDOG)
+        with self._seen_lock:
+            self._busy[caller] = self._busy.get(caller, 0) + 1
+        self._stopping.now = (service, method) in URGENT
         try:
             checked = select_overload(service, method, list(args))
             result = self._dispatch(caller, service, method, checked)
@@ -262,6 +293,11 @@ class ServedRobot:
             self._log(f"naoloc serve: {line}")
             raise RobotError(line.split(": ", 1)[1]) from None
         finally:
+            self._stopping.now = False
+            with self._seen_lock:
+                left = self._busy.pop(caller, 1) - 1
+                if left:
+                    self._busy[caller] = left
             self.touch(caller)
         return _plain(result)
 
@@ -276,15 +312,15 @@ class ServedRobot:
         front = self.fronts.get(service)
         if front is None:
             raise RobotError(f"service {service!r} is not served")
+        self.ctx.caller = caller
         if method in MODULE_METHODS and not hasattr(front, method):
             return self._module_method(caller, service, method, args)
         function = getattr(front, method, None)
         if function is None:
             raise RobotError(f"{service} has no method {method!r} in this simulator")
-        self.ctx.caller = caller
         key = (service, method)
         if key in BLOCKING_WALKS or (key in STARTS_MOTION and any(args[:3])):
-            self._owner = caller
+            self._owner, self._velocity = caller, key in STARTS_MOTION
         elif key in STARTS_MOTION:
             self._owner = None
         try:
@@ -304,7 +340,7 @@ class ServedRobot:
         if method == "getMethodList":
             return sorted(SERVICES[service])
         if method == "wait":
-            return tasks.wait(args[0], args[1])
+            return tasks.wait(args[0], args[1], self.ctx.cancelled)
         if method == "isRunning":
             return tasks.is_running(args[0])
         if method == "stop":
@@ -346,13 +382,16 @@ class ServedRobot:
             gone = owner in self._gone
             silent = time.monotonic() - self._last_seen.get(owner, 0.0)
             beating = owner in self._heartbeating
-        if not gone and not (beating and silent > self.deadman_s):
+            busy = self._busy.get(owner, 0) > 0
+        timeout = self.command_timeout_s
+        frozen = self._velocity and timeout is not None and not busy and silent > timeout
+        if not gone and not (beating and silent > self.deadman_s) and not frozen:
             return False
         if self._owner != owner:
             return False
         self._owner = None
         try:
-            self.loop.run(self.robot.motion.stopMove, caller="deadman")
+            self.loop.run(self.robot.motion.stopMove, caller="deadman", urgent=True)
         except NaolocError as err:
             self._log(f"naoloc serve: dead-man stop failed: {err}")
             return False
@@ -364,6 +403,10 @@ class ServedRobot:
     def _run_deadman(self) -> None:
         while not self._stop.wait(_CHECK_EVERY_S):
             self.check_deadman()
+            try:
+                self.video.release_orphans(RELEASE_GRACE_S)
+            except NaolocError as err:
+                self._log(f"naoloc serve: releasing a left client's camera failed: {err}")
 
     def start(self) -> None:
         """Start the dead-man thread."""
@@ -423,17 +466,22 @@ WatchdogEndpoint = ServiceEndpoint  # NaolocWatchdog.ping goes through the same 
 
 
 class VirtualNaoqi:
-    """Serve a robot over libqi or zmq until :meth:`close`.
+    """Serve a robot over libqi, zmq or qimessaging until :meth:`close`.
 
     Args:
         robot: The simulated robot to serve.
         url: Where to listen, e.g. ``tcp://127.0.0.1:9559`` (port 0 = any free port).
-        transport: ``libqi`` or ``zmq``.
+        transport: ``libqi``, ``zmq`` or ``qimessaging``.
         curve_keys: zmq only: CURVE certificate folder (required off loopback).
         thread: The robot's thread (the one that created it); None = a new one.
         speed: Simulated seconds per wall second (None = no clock).
-        deadman_s: Silence (s, wall clock) after which a walk is stopped.
+        deadman_s: Silence (s, wall clock) after which a heartbeating client's walk stops.
+        command_timeout_s: Silence (s) after which any client's velocity walk stops;
+            None = never (NAOqi's behaviour).
         log: Where one-line notices go.
+        users: qimessaging only: logins ``{user: password}`` (None = no login asked).
+        certfile: qimessaging only: PEM certificate (and key) for ``tcps://``.
+        keyfile: qimessaging only: PEM key when not inside ``certfile``.
         cfg: The served config (serves NaolocLocalization).
         record_dir: Where recordings and the home map go.
     """
@@ -448,7 +496,11 @@ class VirtualNaoqi:
         thread: RobotLoop | None = None,
         speed: float | None = 1.0,
         deadman_s: float = DEADMAN_S,
+        command_timeout_s: float | None = COMMAND_TIMEOUT_S,
         log: Callable[[str], None] = _stderr,
+        users: dict[str, str] | None = None,
+        certfile: str | None = None,
+        keyfile: str | None = None,
         cfg: Any = None,
         record_dir: Path | None = None,
     ) -> None:
@@ -457,33 +509,50 @@ class VirtualNaoqi:
             thread=thread,
             speed=speed,
             deadman_s=deadman_s,
+            command_timeout_s=command_timeout_s,
             log=log,
             cfg=cfg,
             record_dir=record_dir,
         )
         self.transport = transport
         self._relay: Any = None
+        self._session: Any = None
         names = self.core.services
         try:
             if transport == "libqi":
                 from naoloc.backends.naoqi.libqi_transport import LibqiServer
 
-                self._session: Any = LibqiServer(self.core, url, names, log=log)
+                self._session = LibqiServer(self.core, url, names, log=log)
+            elif transport == "qimessaging":
+                from naoloc.backends.naoqi.qimessaging.server import QiServer
+
+                self._session = QiServer(users=users, certfile=certfile, keyfile=keyfile)
+                self._session.listen(url)
+                self._session.set_core(self.core)
+                for name in names:
+                    self._session.register(name, ServiceEndpoint(self.core, name))
             else:
                 self._session = new_session(transport, curve_keys=curve_keys)
                 self._session.listenStandalone(url)
-                if hasattr(self._session, "set_core"):  # liveness per client (zmq, qimessaging)
+                if hasattr(self._session, "set_core"):  # liveness per client
                     self._session.set_core(self.core)
                 for name in names:
                     self._session.registerService(name, ServiceEndpoint(self.core, name))
         except NaolocError:
-            self.core.stop()
+            self._abandon()
             raise
         except Exception as err:  # libqi raises RuntimeError for a bad or busy address
-            self.core.stop()
+            self._abandon()
             raise BackendError(f"cannot serve on {url}: {str(err).splitlines()[0]}") from None
         self.services = names
         self.core.start()
+
+    def _abandon(self) -> None:
+        self.core.stop()
+        session, self._session = self._session, None
+        if session is not None:
+            with contextlib.suppress(Exception):
+                session.close()
 
     @property
     def endpoint(self) -> str:

@@ -206,7 +206,11 @@ def resolve_transport(transport: str) -> Transport:
 
 
 def new_session(
-    transport: Transport, *, curve_keys: str | None = None, connect_timeout_s: float = 3.0
+    transport: Transport,
+    *,
+    curve_keys: str | None = None,
+    connect_timeout_s: float = 3.0,
+    tls_trust: str | None = None,
 ) -> Any:
     """A fresh, unconnected session with the qi.Session call shapes.
 
@@ -216,6 +220,8 @@ def new_session(
         curve_keys: zmq only: folder with CURVE certificates (see
             :func:`~.zmq_transport.make_curve_keys`); None = no encryption.
         connect_timeout_s: zmq and qimessaging: how long ``connect`` waits for an answer.
+        tls_trust: qimessaging over ``tcps://``: how the robot's certificate is checked
+            (see :mod:`~.qimessaging.trust`; None = trust on first use).
 
     Raises:
         DependencyNotInstalled: libqi without the qi package.
@@ -227,7 +233,7 @@ def new_session(
     if transport == "qimessaging":
         from naoloc.backends.naoqi.qimessaging.client import QiSession
 
-        return QiSession(connect_timeout_s=connect_timeout_s)
+        return QiSession(connect_timeout_s=connect_timeout_s, tls_trust=tls_trust)
     from naoloc.backends.naoqi.zmq_transport import ZmqSession
 
     return ZmqSession(curve_keys=curve_keys, connect_timeout_s=connect_timeout_s)

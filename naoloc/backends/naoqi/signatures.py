@@ -456,6 +456,20 @@ ENDS_MOTION: Final = frozenset(
         (NAVIGATION, "stopNavigateTo"),
     }
 )
+# Calls a server runs at once on a path of their own, never behind other clients' work:
+# the ways to stop the robot, and the heartbeat that feeds the dead-man.
+URGENT: Final = frozenset(
+    {
+        (MOTION, "stopMove"),
+        (MOTION, "killMove"),
+        (MOTION, "killAll"),
+        (MOTION, "stopWalk"),
+        (MOTION, "rest"),
+        (POSTURE, "stopMove"),
+        (NAVIGATION, "stopNavigateTo"),
+        (WATCHDOG, "ping"),
+    }
+)
 
 _INT32 = (-(1 << 31), (1 << 31) - 1)
 

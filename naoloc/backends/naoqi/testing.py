@@ -15,7 +15,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
@@ -81,6 +81,8 @@ def served(
     listen: str = "tcp://127.0.0.1:0",
     start_timeout_s: float = 60.0,
     speed: float | None = None,
+    args: Sequence[str] = (),
+    env: dict[str, str] | None = None,
 ) -> Iterator[ServedProcess]:
     """Start ``naoloc serve -c <config> --listen <listen> --transport <transport>``.
 
@@ -90,6 +92,8 @@ def served(
         listen: Listen URL; port 0 picks a free port.
         start_timeout_s: Longest wait for the "listening on" line.
         speed: ``--speed`` (simulated seconds per wall second); None = the default 1.0.
+        args: More command-line arguments (e.g. ``--login``, ``--tls-cert``).
+        env: More environment variables (e.g. ``NAOLOC_SERVE_PASSWORD``).
 
     Yields:
         The running server; on exit it gets SIGTERM (SIGKILL after 5 s).
@@ -105,12 +109,15 @@ def served(
         cmd += ["--listen", listen, "--transport", transport]
         if speed is not None:
             cmd += ["--speed", repr(float(speed))]
-        env = dict(os.environ)
-        env.setdefault("MUJOCO_GL", "egl")
+        cmd += list(args)
+        environ = dict(os.environ)
+        environ.setdefault("MUJOCO_GL", "egl")
+        environ.update(env or {})
         with err_path.open("w", encoding="utf-8") as err_file:
             process = subprocess.Popen(
-                cmd, stdout=subprocess.PIPE, stderr=err_file, text=True, env=env
-            )
+                cmd, stdout=subprocess.PIPE, stderr=err_file, text=True, env=environ,
+                stdin=subprocess.DEVNULL,
+            )  # fmt: skip
             try:
                 assert process.stdout is not None
                 url = _read_endpoint(process.stdout, process, start_timeout_s)

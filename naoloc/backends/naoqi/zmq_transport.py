@@ -8,9 +8,14 @@ The I/O thread also pings the server whenever it has sent nothing for
 call fails with :class:`~naoloc.errors.ConnectionLost` and ``disconnected`` fires.
 
 Server side: a ROUTER socket owned by one I/O thread that answers ``hello`` and
-``ping`` itself and hands each ``call`` to the worker thread of its service (one
-thread per service, so calls to one service never overlap, like libqi's
-single-threaded objects). Wire format: :mod:`.wire` (msgpack + raw frames, no pickle).
+``ping`` itself and hands each ``call`` to a fixed pool of daemon workers, fair across
+clients (:class:`~.qimessaging.workers.CallPool`: at most a quarter of the workers per
+client; stops and heartbeats on a path of their own). The I/O thread takes at most
+:data:`TURN_MESSAGES` requests before it sends the answers waiting, so a client that
+floods the server delays another's ``pong`` by one turn, not by the whole flood. A
+client silent for :data:`GONE_AFTER_S` (naoloc's clients ping every 0.2 s) counts as
+gone: what it held is released. Wire format: :mod:`.wire` (msgpack + raw frames, no
+pickle).
 
 Neither I/O thread dies of a message: a malformed request is answered with an error
 reply when its id can be read, and logged as one line (at most one line a second, with
@@ -24,7 +29,6 @@ from __future__ import annotations
 import contextlib
 import itertools
 import os
-import queue
 import sys
 import threading
 import time
@@ -36,6 +40,7 @@ import zmq
 import zmq.auth
 
 from naoloc.backends.naoqi import wire
+from naoloc.backends.naoqi.qimessaging.workers import CallPool
 from naoloc.backends.naoqi.session import Future, Promise, Signal, error_from_text
 from naoloc.backends.naoqi.urls import parse_url
 from naoloc.errors import BackendError, ConnectionLost, NaolocError, ProtocolError, RobotError
@@ -47,19 +52,9 @@ _POLL_MS: Final = 50
 CLOSE_WAIT_S: Final = 10.0
 REPLY_HWM: Final = 16  # unread replies kept per client before new ones are dropped
 MAX_PENDING_CALLS: Final = 64  # calls one client may have queued at once
-MAX_WORKERS: Final = 256  # (client, service) worker threads at once
-WORKER_IDLE_S: Final = 1.0
-THREADS_PER_LANE: Final = 4  # parallel calls of one client to one service
-
-
-class _Lane:
-    """One client's calls to one service: a queue and up to THREADS_PER_LANE workers."""
-
-    def __init__(self) -> None:
-        self.jobs: queue.Queue[Any] = queue.Queue()
-        self.threads = 0
-        self.busy = 0
-        self.handles: list[threading.Thread] = []
+WORKERS: Final = 16  # threads that run calls (a fixed pool: fuzzing cannot grow it)
+TURN_MESSAGES: Final = 64  # requests read before the waiting answers are sent
+GONE_AFTER_S: Final = 3.0  # a client silent this long has left (its holdings released)
 
 
 _LOG_EVERY_S: Final = 1.0
@@ -227,8 +222,10 @@ class ZmqSession:
         self._objects: dict[str, Any] = {}
         self._core: Any = None
         self._workers_lock = threading.Lock()
-        self._call_workers: dict[tuple[bytes, str], _Lane] = {}
+        self._pool: CallPool | None = None
+        self._urgent: frozenset[tuple[str, str]] = frozenset()
         self._pending_calls: dict[bytes, int] = {}
+        self._heard: dict[bytes, float] = {}  # peer -> when it last sent anything
         self._endpoint = ""
         self._auth: Any = None
         self.protocol_errors = 0
@@ -468,6 +465,10 @@ class ZmqSession:
             _destroy(self._ctx)
             self._ctx = None
             raise BackendError(f"cannot listen on {url}: {err}") from None
+        from naoloc.backends.naoqi.signatures import URGENT
+
+        self._urgent = URGENT
+        self._pool = CallPool(WORKERS, per_client=WORKERS // 4, name="naoloc-zmq-call")
         self._wake = _Wake()
         self._thread = threading.Thread(
             target=self._server_loop, args=(sock,), name="naoloc-zmq-server", daemon=True
@@ -499,48 +500,28 @@ class ZmqSession:
         if wake is not None:
             wake.poke()
 
-    def _worker(self, key: tuple[bytes, str], obj: Any, lane: _Lane) -> None:
-        """Run one client's calls to one service; ends after a second idle."""
-        peer = key[0]
-        while True:
-            try:
-                job = lane.jobs.get(timeout=WORKER_IDLE_S)
-            except queue.Empty:
-                with self._workers_lock:
-                    if lane.jobs.empty():
-                        lane.threads -= 1
-                        with contextlib.suppress(ValueError):
-                            lane.handles.remove(threading.current_thread())
-                        if lane.threads == 0 and self._call_workers.get(key) is lane:
-                            del self._call_workers[key]
-                        return
-                continue
-            if job is None:
-                return
+    def _run_call(self, peer: bytes, ident: int, obj: Any, method: str, args: Any) -> None:
+        """Run one call on a worker and queue its answer."""
+        try:
+            if isinstance(obj, Invokable):
+                value = obj.invoke(peer.hex(), method, args)
+            else:
+                target = getattr(obj, method, None)
+                if method.startswith("_") or not callable(target):
+                    raise RobotError(f"no method {method!r}")
+                value = target(*args)
+            self._reply(peer, {"k": "ok", "i": ident, "v": value})
+        except NaolocError as err:
+            self._reply(peer, {"k": "err", "i": ident, "e": [type(err).__name__, str(err)]})
+        except Exception as err:  # a server bug must not kill the worker
+            message = f"{type(err).__name__}: {err}".splitlines()[0]
+            print(f"naoloc serve: {message}", file=sys.stderr, flush=True)
+            self._reply(peer, {"k": "err", "i": ident, "e": ["RobotError", message]})
+        finally:
             with self._workers_lock:
-                lane.busy += 1
-            ident, method, args = job
-            try:
-                if isinstance(obj, Invokable):
-                    value = obj.invoke(peer.hex(), method, args)
-                else:
-                    target = getattr(obj, method, None)
-                    if method.startswith("_") or not callable(target):
-                        raise RobotError(f"no method {method!r}")
-                    value = target(*args)
-                self._reply(peer, {"k": "ok", "i": ident, "v": value})
-            except NaolocError as err:
-                self._reply(peer, {"k": "err", "i": ident, "e": [type(err).__name__, str(err)]})
-            except Exception as err:  # a server bug must not kill the worker
-                message = f"{type(err).__name__}: {err}".splitlines()[0]
-                print(f"naoloc serve: {message}", file=sys.stderr, flush=True)
-                self._reply(peer, {"k": "err", "i": ident, "e": ["RobotError", message]})
-            finally:
-                with self._workers_lock:
-                    lane.busy -= 1
-                    self._pending_calls[peer] = self._pending_calls.get(peer, 1) - 1
-                    if self._pending_calls[peer] <= 0:
-                        del self._pending_calls[peer]
+                self._pending_calls[peer] = self._pending_calls.get(peer, 1) - 1
+                if self._pending_calls[peer] <= 0:
+                    del self._pending_calls[peer]
 
     def _dispatch_call(self, peer: bytes, ident: int, service: str, method: str, args: Any) -> None:
         obj = self._objects.get(service)
@@ -548,34 +529,43 @@ class ZmqSession:
             error = ["RobotError", f"unknown service {service!r}"]
             self._reply(peer, {"k": "err", "i": ident, "e": error})
             return
-        key = (peer, service)
         with self._workers_lock:
             pending = self._pending_calls.get(peer, 0)
             if pending >= MAX_PENDING_CALLS:
                 busy = f"{service}.{method}: too many calls queued ({MAX_PENDING_CALLS})"
                 self._reply(peer, {"k": "err", "i": ident, "e": ["RobotError", busy]})
+                self._log(f"client {peer.hex()}: {busy}")
                 return
-            lane = self._call_workers.get(key)
-            if lane is None:
-                if len(self._call_workers) >= MAX_WORKERS:
-                    busy = f"{service}.{method}: the server is busy ({MAX_WORKERS} clients)"
-                    self._reply(peer, {"k": "err", "i": ident, "e": ["RobotError", busy]})
-                    return
-                lane = _Lane()
-                self._call_workers[key] = lane
             self._pending_calls[peer] = pending + 1
-            lane.jobs.put((ident, method, args))
-            # A blocking call (moveTo) must not hold up the same client's next call.
-            if lane.busy + lane.jobs.qsize() > lane.threads and lane.threads < THREADS_PER_LANE:
-                lane.threads += 1
-                thread = threading.Thread(
-                    target=self._worker,
-                    args=(key, obj, lane),
-                    name=f"naoloc-{service}",
-                    daemon=True,
-                )
-                lane.handles.append(thread)
-                thread.start()
+
+        def job() -> None:
+            self._run_call(peer, ident, obj, method, args)
+
+        pool = self._pool
+        urgent = (service, method) in self._urgent
+        if pool is not None and (
+            (urgent and pool.submit_urgent(peer, job)) or pool.submit(peer, job)
+        ):
+            return
+        with self._workers_lock:  # closing
+            self._pending_calls[peer] = self._pending_calls.get(peer, 1) - 1
+            if self._pending_calls[peer] <= 0:
+                del self._pending_calls[peer]
+
+    def _reap(self) -> None:
+        """Clients silent for :data:`GONE_AFTER_S` have left: release what they held."""
+        now = time.monotonic()
+        gone = [peer for peer, heard in self._heard.items() if now - heard > GONE_AFTER_S]
+        for peer in gone:
+            del self._heard[peer]
+            if self._pool is not None:
+                self._pool.drop(peer)
+            core = self._core
+            if core is not None:
+                try:
+                    core.gone(peer.hex())
+                except Exception as err:  # the dead-man's own failure must not end the loop
+                    self._log(f"releasing client {peer.hex()} failed: {err}")
 
     def _on_request(self, frames: list[Any]) -> None:
         """Answer or dispatch one request; a malformed one gets an error reply if it has an id."""
@@ -591,6 +581,11 @@ class ZmqSession:
             return
         kind, ident = request["k"], request["i"]
         core = self._core
+        self._heard[peer] = time.monotonic()
+        if kind == "bye":
+            self._heard.pop(peer, None)
+            if self._pool is not None:
+                self._pool.drop(peer)
         if core is not None:
             if kind == "bye":
                 core.gone(peer.hex())
@@ -609,14 +604,19 @@ class ZmqSession:
         poller = zmq.Poller()
         poller.register(sock, zmq.POLLIN)
         poller.register(self._wake.read_fd, zmq.POLLIN)
+        reaped = time.monotonic()
         try:
             while not self._stop.is_set():
-                events = dict(poller.poll(_POLL_MS))
+                events = dict(poller.poll(0 if sock.poll(0) else _POLL_MS))
                 if self._wake.read_fd in events:
                     self._wake.drain()
-                if sock in events:
-                    while sock.poll(0):
-                        self._serve_one(sock.recv_multipart(copy=False))
+                turn = 0
+                while turn < TURN_MESSAGES and sock.poll(0):  # then answer: fair to others
+                    self._serve_one(sock.recv_multipart(copy=False))
+                    turn += 1
+                if time.monotonic() - reaped > 0.5:
+                    reaped = time.monotonic()
+                    self._reap()
                 while self._outbox:
                     frames = self._outbox.popleft()
                     try:
@@ -663,15 +663,9 @@ class ZmqSession:
         thread = self._thread
         if thread is not None and thread is not threading.current_thread():
             thread.join(timeout=CLOSE_WAIT_S)
-        with self._workers_lock:
-            lanes, self._call_workers = list(self._call_workers.values()), {}
-        for lane in lanes:
-            for _ in lane.handles:
-                lane.jobs.put(None)
-        for lane in lanes:
-            for worker in lane.handles:
-                if worker is not threading.current_thread():
-                    worker.join(timeout=2.0)
+        pool, self._pool = self._pool, None
+        if pool is not None:
+            pool.close(1.0)
         self._stop_auth()
         with self._release_lock:
             if thread is None or self._io_done:

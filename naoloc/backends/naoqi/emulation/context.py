@@ -8,6 +8,7 @@ with ``sleep_sim`` (wall time divided by the clock's speed).
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -41,6 +42,36 @@ class FrontContext:
     tasks: TaskTable = field(default_factory=TaskTable)
     _local: threading.local = field(default_factory=threading.local)
     _said: set[str] = field(default_factory=set)
+    _left: dict[str, threading.Event] = field(default_factory=dict)
+    _gone: dict[str, None] = field(default_factory=dict)  # callers that left, oldest first
+    _left_lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def _left_event(self) -> threading.Event | None:
+        caller = self.caller
+        if not caller:
+            return None
+        with self._left_lock:
+            if caller in self._gone:  # a call of a client that already left: no waiting
+                done = threading.Event()
+                done.set()
+                return done
+            return self._left.setdefault(caller, threading.Event())
+
+    def left(self, caller: str) -> None:
+        """``caller`` disconnected: its blocking waits (``sleep_sim``) end now, and so do
+        those of its calls that start later (queued before it left)."""
+        with self._left_lock:
+            event = self._left.pop(caller, None)
+            self._gone[caller] = None
+            while len(self._gone) > 10_000:  # ids are never reused: forget the oldest
+                del self._gone[next(iter(self._gone))]
+        if event is not None:
+            event.set()
+
+    def cancelled(self) -> bool:
+        """True when the client of the current call has left."""
+        event = self._left_event()
+        return event is not None and event.is_set()
 
     @property
     def caller(self) -> str:
@@ -60,12 +91,21 @@ class FrontContext:
             self.submit(function, *args)
 
     def sleep_sim(self, seconds: float, stop: threading.Event | None = None) -> bool:
-        """Wait ``seconds`` of simulated time; False when ``stop`` was set first."""
+        """Wait ``seconds`` of simulated time; False when ``stop`` was set first.
+
+        The wait also ends (False) when the calling client disconnects.
+        """
         wall = max(0.0, seconds) / self.speed
-        if stop is None:
-            threading.Event().wait(wall)
-            return True
-        return not stop.wait(wall)
+        left = self._left_event()
+        if left is None or stop is None:
+            return not (stop or left or threading.Event()).wait(wall)
+        deadline = time.monotonic() + wall
+        while not (stop.is_set() or left.is_set()):
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                return True
+            stop.wait(min(remaining, 0.05))
+        return False
 
     def not_simulated(self, what: str) -> None:
         """Log once per ``what`` that it is accepted but not simulated."""

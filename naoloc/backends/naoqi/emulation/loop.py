@@ -77,9 +77,19 @@ class RobotLoop:
         return threading.current_thread() is self._thread
 
     def run(
-        self, function: Callable[..., Any], *args: Any, caller: str = "server", **kwargs: Any
+        self,
+        function: Callable[..., Any],
+        *args: Any,
+        caller: str = "server",
+        urgent: bool = False,
+        **kwargs: Any,
     ) -> Any:
         """Run ``function(*args, **kwargs)`` on the loop thread; return its result or raise.
+
+        Args:
+            urgent: A stop: ``caller`` is served next, before the other callers (its own
+                earlier calls still run first, in order), so a stop waits for at most the
+                job running now.
 
         Raises:
             RobotError: ``caller`` has too many calls queued, or the loop is closed.
@@ -87,7 +97,7 @@ class RobotLoop:
         if self.on_loop:
             return function(*args, **kwargs)
         job = _Job(function, args, kwargs)
-        self._enqueue(job, caller)
+        self._enqueue(job, caller, urgent)
         job.done.wait()
         if job.error is not None:
             raise job.error
@@ -114,17 +124,21 @@ class RobotLoop:
             return
         self._enqueue(job, caller)
 
-    def _enqueue(self, job: _Job, caller: str) -> None:
+    def _enqueue(self, job: _Job, caller: str, urgent: bool = False) -> None:
         with self._cond:
             if self._closed:
                 raise RobotError("the robot is closed")
             queue = self._queues.setdefault(caller, deque())
-            if len(queue) >= MAX_PENDING_PER_CALLER:
+            if len(queue) >= MAX_PENDING_PER_CALLER and not urgent:
                 raise RobotError(
                     f"too many calls queued ({MAX_PENDING_PER_CALLER}); wait for answers"
                 )
             queue.append(job)
-            if len(queue) == 1:
+            if urgent:
+                if len(queue) > 1:
+                    self._order.remove(caller)
+                self._order.appendleft(caller)
+            elif len(queue) == 1:
                 self._order.append(caller)
             self._cond.notify()
 

@@ -1,8 +1,17 @@
-"""ALMemory of a served NAOqi: a key-value store, events, standard keys and joint keys."""
+"""ALMemory of a served NAOqi: a key-value store, events, standard keys and joint keys.
+
+Clients share one store that outlives them (as on a NAO), so it is bounded: a key of at
+most :data:`MAX_KEY_CHARS` characters, a value of at most :data:`MAX_VALUE_BYTES` and
+all values together at most :data:`MAX_TOTAL_BYTES` (sizes estimated as the Python
+objects that hold them), at most :data:`MAX_KEYS` keys. A refused insert raises a
+NAOqi-style error and logs one line (at most one a second).
+"""
 
 from __future__ import annotations
 
+import sys
 import threading
+import time
 from collections.abc import Callable
 from typing import Any, Final
 
@@ -33,9 +42,30 @@ STATIC_KEYS: Final[dict[str, Any]] = {
     "Device/SubDeviceList/Platform/ILS/Sensor/Value": 0.0,
     "RobotConfig/Body/Type": "nao",
 }
+MAX_KEY_CHARS: Final = 1024
+MAX_VALUE_BYTES: Final = 1024 * 1024  # one value, estimated in memory
+MAX_TOTAL_BYTES: Final = 16 * 1024 * 1024  # every value, estimated in memory
+MAX_KEYS: Final = 10_000
+_ITEM_BYTES: Final = 64  # a Python object and its reference, roughly
 _SENSOR = "Device/SubDeviceList/{}/Position/Sensor/Value"
 _ACTUATOR = "Device/SubDeviceList/{}/Position/Actuator/Value"
 _STIFFNESS = "Device/SubDeviceList/{}/Hardness/Actuator/Value"
+
+
+def value_bytes(value: Any, limit: int = MAX_VALUE_BYTES) -> int:
+    """Estimated memory of ``value`` (bytes); stops counting once over ``limit``."""
+    total, stack = 0, [value]
+    while stack and total <= limit:
+        item = stack.pop()
+        total += _ITEM_BYTES
+        if isinstance(item, str | bytes | bytearray | memoryview):
+            total += len(item)
+        elif isinstance(item, list | tuple):
+            stack.extend(item)
+        elif isinstance(item, dict):
+            stack.extend(item.keys())
+            stack.extend(item.values())
+    return total
 
 
 class MemoryFront:
@@ -65,6 +95,33 @@ class MemoryFront:
         self._stiffness = stiffness
         self._listeners: list[Callable[[str, Any], None]] = []
         self._providers: list[tuple[tuple[str, ...], Callable[[str], Any]]] = []
+        self._sizes: dict[str, int] = {}
+        self._total = 0
+        self._logged = -1e9
+
+    def _refuse(self, text: str) -> None:
+        """Raise a NAOqi-style error; log one line (at most one a second)."""
+        now = time.monotonic()
+        if now - self._logged >= 1.0:
+            self._logged = now
+            print(f"naoloc serve: ALMemory refused: {text}", file=sys.stderr, flush=True)
+        raise RobotError(text)
+
+    def _store(self, key: str, value: Any) -> None:
+        """Keep ``value`` under ``key`` within the size limits (caller holds the lock)."""
+        if len(key) > MAX_KEY_CHARS:
+            self._refuse(f"a key of {len(key)} characters is over {MAX_KEY_CHARS}")
+        size = value_bytes(value)
+        if size > MAX_VALUE_BYTES:
+            self._refuse(f"the value of {key[:60]!r} is over {MAX_VALUE_BYTES} bytes")
+        old = self._sizes.get(key, 0)
+        if self._total - old + size > MAX_TOTAL_BYTES:
+            self._refuse(f"ALMemory holds {MAX_TOTAL_BYTES} bytes of values; remove some")
+        if key not in self._data and len(self._data) >= MAX_KEYS:
+            self._refuse(f"ALMemory holds {MAX_KEYS} keys; remove some")
+        self._data[key] = value
+        self._sizes[key] = size
+        self._total += size - old
 
     def add_provider(self, keys: tuple[str, ...], read: Callable[[str], Any]) -> None:
         """Serve ``keys`` live: ``read(key)`` answers getData (sensors of other fronts)."""
@@ -123,7 +180,7 @@ class MemoryFront:
         if not isinstance(key, str) or not key:
             raise RobotError(f"a key is a non-empty string, got {key!r}")
         with self._lock:
-            self._data[key] = value
+            self._store(key, value)
         self._emit(key, value)
 
     def insertListData(self, list_: Any) -> None:
@@ -137,14 +194,16 @@ class MemoryFront:
         """Forget a key."""
         with self._lock:
             self._data.pop(str(key), None)
+            self._total -= self._sizes.pop(str(key), 0)
+            self._events.discard(str(key))
 
     def raiseEvent(self, name: Any, value: Any) -> None:
         """Store ``value`` under ``name`` and tell every subscriber."""
         if not isinstance(name, str) or not name:
             raise RobotError(f"an event name is a non-empty string, got {name!r}")
+        self.insertData(name, value)
         with self._lock:
             self._events.add(name)
-        self.insertData(name, value)
 
     def raiseMicroEvent(self, name: Any, value: Any) -> None:
         """As raiseEvent."""
@@ -152,9 +211,11 @@ class MemoryFront:
 
     def declareEvent(self, eventName: Any) -> None:
         """Declare an event name."""
+        name = str(eventName)
         with self._lock:
-            self._events.add(str(eventName))
-            self._data.setdefault(str(eventName), None)
+            if name not in self._data:
+                self._store(name, None)
+            self._events.add(name)
 
     def getEventList(self) -> list[str]:
         """Declared event names."""

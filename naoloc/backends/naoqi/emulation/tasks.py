@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import itertools
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -77,19 +78,29 @@ class TaskTable:
         """True while the task runs."""
         return self.get(task_id) is not None
 
-    def wait(self, task_id: Any, timeout_ms: Any) -> bool:
+    def wait(
+        self, task_id: Any, timeout_ms: Any, cancelled: Callable[[], bool] | None = None
+    ) -> bool:
         """Wait for a task to end; True when it ended (or never existed).
 
         Args:
             task_id: The id.
             timeout_ms: Longest wait in milliseconds; 0 = until it ends.
+            cancelled: Ends the wait (False) once it returns True (the waiter left).
         """
         if isinstance(timeout_ms, bool) or not isinstance(timeout_ms, int) or timeout_ms < 0:
             raise RobotError(f"timeoutPeriod must be an int >= 0 (ms), got {timeout_ms!r}")
         task = self.get(task_id)
         if task is None:
             return True
-        return task.done.wait(None if timeout_ms == 0 else timeout_ms / 1000.0)
+        if cancelled is None:
+            return task.done.wait(None if timeout_ms == 0 else timeout_ms / 1000.0)
+        deadline = None if timeout_ms == 0 else time.monotonic() + timeout_ms / 1000.0
+        while not cancelled():
+            left = 0.1 if deadline is None else min(0.1, deadline - time.monotonic())
+            if left <= 0 or task.done.wait(left):
+                return task.done.is_set()
+        return False
 
     def stop(self, task_id: Any) -> bool:
         """Ask a task to end; True when it was running."""
@@ -110,6 +121,13 @@ class TaskTable:
     def stop_all(self, resources: str | None = None) -> int:
         """Stop every running task (of one kind); returns how many."""
         tasks = self.running(resources)
+        for task in tasks:
+            self.stop(task.id)
+        return len(tasks)
+
+    def stop_of(self, caller: str) -> int:
+        """Stop every running task ``caller`` started (it left); returns how many."""
+        tasks = [t for t in self.running() if t.caller == caller]
         for task in tasks:
             self.stop(task.id)
         return len(tasks)

@@ -8,6 +8,7 @@ of the protocol features it supports plus, for a login, ``auth_user`` and
 
 from __future__ import annotations
 
+import hmac
 from typing import Any, Final
 
 from naoloc.backends.naoqi.qimessaging.codec import Dynamic
@@ -80,3 +81,13 @@ def check_reply(reply: Any) -> dict[str, bool]:
             )
         raise ProtocolError("authentication needs more steps than user and password")
     raise ProtocolError(f"authentication reply has no valid {STATE_KEY} ({state!r})")
+
+
+def login_ok(users: dict[str, str], request: dict[str, Any]) -> bool:
+    """True when a login request's user and token match ``users`` (constant-time compare)."""
+    user, token = request.get("auth_user"), request.get("auth_token")
+    if not isinstance(user, str) or not isinstance(token, str):
+        return False
+    expected = users.get(user)
+    match = hmac.compare_digest(token.encode(), (expected or "\0").encode())
+    return expected is not None and match

@@ -7,6 +7,13 @@ live behind another endpoint get their own authenticated :class:`Channel`. When 
 connection ends, every pending call fails with :class:`~naoloc.errors.ConnectionLost`
 and ``disconnected`` fires once; nothing reconnects by itself (like libqi; the naoloc
 Link reconnects).
+
+The client defends itself as the server does: over ``tcps://`` it checks the robot's
+certificate (:mod:`.trust`) before it sends a login; a password is never sent over
+plain ``tcp://`` except to loopback, nor to an endpoint weaker than the one it was
+given for (a ``tcps://`` directory's services are reached over ``tcps://`` only, with
+the directory's own certificate); replies and events are decoded within element
+budgets, and nothing but a small login answer is read before the login succeeded.
 """
 
 from __future__ import annotations
@@ -34,26 +41,35 @@ from naoloc.backends.naoqi.qimessaging.meta import (
 )
 from naoloc.backends.naoqi.qimessaging.proxy import RemoteObject, RemoteSignal
 from naoloc.backends.naoqi.qimessaging.signature import Sig, parse
+from naoloc.backends.naoqi.qimessaging.trust import Trust, fingerprint, parse_trust
 from naoloc.backends.naoqi.session import Future, Promise, Signal, error_from_text
 from naoloc.errors import BackendError, ConnectionLost, NaolocError, ProtocolError, RobotError
 
 _AUTH = Method(message.ACTION_AUTHENTICATE, "authenticate", parse("({sm})"), parse("{sm}"))
 _META = Method(META_OBJECT, "metaObject", parse("(I)"), parse(codec.METAOBJECT_SIGNATURE))
 _CANCELLED: Final = "the call was cancelled"
+PREAUTH_BYTES: Final = 64 * 1024  # largest message read before the login succeeded
+PREAUTH_ITEMS: Final = 1024  # elements of the login answer
 
 
 class Channel:
     """One authenticated connection of a session, with its pending calls and events."""
 
-    def __init__(self, session: QiSession, url: str, timeout_s: float) -> None:
+    def __init__(
+        self, session: QiSession, url: str, timeout_s: float, trust: Trust | None = None
+    ) -> None:
         self.session, self.url = session, url
         self.timeout_ms = max(1, int(timeout_s * 1000))
         self.features: dict[str, bool] = dict(capability.LOCAL)
         self._pending: dict[int, tuple[Promise, Sig]] = {}
         self._lock = threading.Lock()
         self._events: dict[tuple[int, int, int], dict[int, tuple[Any, RemoteSignal]]] = {}
+        self._authenticated = False
+        sock = open_socket(url, timeout_s, trust)
+        peer_certificate = getattr(sock, "peer_certificate", None)
+        self.fingerprint = fingerprint(peer_certificate()) if peer_certificate else ""
         self._conn = Connection(
-            open_socket(url, timeout_s), self._on_message, self._on_close, name="naoloc-qim"
+            sock, self._on_message, self._on_close, name="naoloc-qim", max_payload=PREAUTH_BYTES
         )
         self._conn.start()
 
@@ -77,6 +93,12 @@ class Channel:
         Raises:
             ConnectionLost: No answer or a refused login.
         """
+        if user and not _may_send_password(self.url):
+            self.close("no password over plain tcp")
+            raise ConnectionLost(
+                f"refusing to send the password for {user!r} to {self.url} in clear: "
+                "use tcps:// (NAOqi 2.9), or no login"
+            )
         request = capability.client_request(user, token)
         future = self.call(message.SERVICE_SERVER, 0, _AUTH, (request,))
         try:
@@ -85,6 +107,8 @@ class Channel:
         except NaolocError as err:
             self.close(str(err))
             raise ConnectionLost(f"cannot connect to NAOqi at {self.url}: {err}") from None
+        self._authenticated = True
+        self._conn.max_payload = message.MAX_PAYLOAD
 
     def call(
         self, service: int, obj: int, method: Method, args: tuple[Any, ...], where: str = ""
@@ -161,7 +185,8 @@ class Channel:
                     promise.setError(error_from_text(str(text)))
                 else:
                     sig = parse("m") if header.flags & message.FLAG_DYNAMIC_PAYLOAD else returns
-                    value = codec.decode(sig, payload, object_uid=uid)
+                    items = None if self._authenticated else PREAUTH_ITEMS
+                    value = codec.decode(sig, payload, object_uid=uid, max_items=items)
                     promise.setValue(self._objects(value))
             except ProtocolError as err:
                 promise.setError(ProtocolError(f"bad reply from {self.url}: {err}"))
@@ -169,7 +194,7 @@ class Channel:
             self._on_event(header, payload)
         elif kind == message.CAPABILITY:
             with contextlib.suppress(ProtocolError):
-                peer = codec.decode("{sm}", payload)
+                peer = codec.decode("{sm}", payload, max_items=PREAUTH_ITEMS)
                 if isinstance(peer, dict):
                     self.features = capability.negotiated({**self.features, **peer})
         elif kind == message.CALL:
@@ -226,10 +251,15 @@ class QiSession:
 
     Args:
         connect_timeout_s: How long ``connect`` and look-ups wait for an answer.
+        tls_trust: How ``tcps://`` certificates are checked (see :mod:`.trust`): None
+            = trust on first use, ``sha256:<hex>``, a CA or certificate PEM path, or
+            ``insecure``.
     """
 
-    def __init__(self, connect_timeout_s: float = 5.0) -> None:
+    def __init__(self, connect_timeout_s: float = 5.0, tls_trust: str | None = None) -> None:
         self._timeout_s = connect_timeout_s
+        self._tls_trust = tls_trust
+        self._trust: Trust | None = None
         self._url = ""
         self._user: str | None = None
         self._token: str | None = None
@@ -275,7 +305,8 @@ class QiSession:
         self._url = url
         promise = Promise()
         try:
-            channel = Channel(self, url, self._timeout_s)
+            self._trust = parse_trust(self._tls_trust)
+            channel = Channel(self, url, self._timeout_s, self._trust)
             channel.authenticate(self._user, self._token)
             meta = MetaObject.from_wire(
                 channel.call(message.SERVICE_DIRECTORY, 1, _META, (0,)).value(channel.timeout_ms)
@@ -382,6 +413,9 @@ class QiSession:
         assert self._main is not None
         scheme, host, port = parse_url(self._url)
         peer = self._main.peer
+        trust = self._trust
+        if scheme == "tcps" and trust is not None and not (trust.ca_file or trust.insecure):
+            trust = Trust(pin=self._main.fingerprint)  # the directory's own certificate
         same = {(host, port), (peer[0], peer[1])} if peer else {(host, port)}
         usable = []
         for endpoint in endpoints:
@@ -397,6 +431,8 @@ class QiSession:
                 continue
             if e_scheme == scheme and (e_host, e_port) in same:
                 return self._main
+            if scheme == "tcps" and e_scheme != "tcps":
+                continue  # never weaker than the endpoint the login was given for
             usable.append(endpoint)
         if not endpoints:
             return self._main
@@ -408,7 +444,7 @@ class QiSession:
             if channel is not None and not channel.closed:
                 return channel
             try:
-                channel = Channel(self, url, min(self._timeout_s, 2.0))
+                channel = Channel(self, url, min(self._timeout_s, 2.0), trust)
                 channel.authenticate(self._user, self._token)
             except NaolocError:
                 continue
@@ -588,6 +624,19 @@ class QiSession:
             self._events.put(None)
 
 
+def _may_send_password(url: str) -> bool:
+    """True for ``tcps://`` (its certificate checked) and for plain TCP to loopback."""
+    import ipaddress
+
+    scheme, host, _ = parse_url(url)
+    if scheme == "tcps" or host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
 def local_machine_id() -> str:
     """This machine's id as libqi knows it (``~/.config/qimessaging/machine_id``, which
     libqi writes), else a stable id from the host name (never written anywhere).
@@ -599,11 +648,14 @@ def local_machine_id() -> str:
     import uuid
     from pathlib import Path
 
+    from naoloc.safe_yaml import open_regular
+
     path = Path.home() / ".config" / "qimessaging" / "machine_id"
     try:
-        text = path.read_text(encoding="utf-8").strip()
-    except OSError:
-        text = ""
+        with open_regular(path, "libqi machine id", BackendError) as handle:
+            text = handle.read(256).decode("utf-8", errors="replace").strip()
+    except (OSError, NaolocError):
+        text = ""  # missing, unreadable or not a regular file (a FIFO would block)
     return text or str(uuid.uuid5(uuid.NAMESPACE_DNS, socket.gethostname()))
 
 

@@ -8,7 +8,10 @@ optionals as a bool then the value when present, dynamic values as their signatu
 the ObjectPtrUID capability) a 20-byte uid.
 
 Decoding trusts nothing: every count is checked against the bytes that remain, nesting
-is limited, and truncated input raises :class:`~naoloc.errors.ProtocolError`. Raw
+is limited, the elements of one value are counted against a budget (``max_items``:
+a list of zero-size elements such as ``()`` takes no bytes, so nested lists of them
+could ask for billions of objects from a few kilobytes), and truncated input raises
+:class:`~naoloc.errors.ProtocolError`. Raw
 buffers decode as zero-copy ``memoryview`` slices of the received payload; large raw
 buffers are encoded as separate parts (no copy) for a scatter send.
 """
@@ -30,7 +33,7 @@ from naoloc.backends.naoqi.qimessaging.signature import (
 )
 from naoloc.errors import ProtocolError
 
-MAX_ZERO_SIZE_ITEMS: Final = 1 << 16  # elements of a type that takes no bytes (e.g. "()")
+MAX_ZERO_SIZE_ITEMS: Final = 1 << 16  # elements beyond the payload's bytes (e.g. of "()")
 _BIG_RAW: Final = 32 * 1024  # raw buffers at least this big are sent without a copy
 
 _FORMAT: Final = {
@@ -101,8 +104,33 @@ class Writer:
         return b"".join(parts)
 
 
+class Budget:
+    """What one decode may still build, and how objects are read.
+
+    Attributes:
+        uid: Objects carry a 20-byte uid (the ObjectPtrUID capability).
+        items: Elements (of lists, maps) still allowed.
+    """
+
+    __slots__ = ("items", "uid")
+
+    def __init__(self, uid: bool, items: int) -> None:
+        self.uid = uid
+        self.items = items
+
+    def take(self, count: int, sig: Sig) -> None:
+        """Spend ``count`` elements of ``sig``.
+
+        Raises:
+            ProtocolError: Over the budget.
+        """
+        self.items -= count
+        if self.items < 0:
+            raise ProtocolError(f"{str(sig)[:40]}: more elements than a message may hold")
+
+
 Encoder = Callable[[Any, Writer, int, bool], None]
-Decoder = Callable[[memoryview, int, int, bool], tuple[Any, int]]
+Decoder = Callable[[memoryview, int, int, Budget], tuple[Any, int]]
 
 
 def _depth(depth: int) -> int:
@@ -310,13 +338,13 @@ def encode_bytes(sig: Sig | str, value: Any, *, object_uid: bool = True) -> byte
 # ---------------------------------------------------------------------------- decoding
 @functools.lru_cache(maxsize=1024)
 def decoder(sig: Sig) -> Decoder:
-    """A function ``(buffer, position, depth, object_uid) -> (value, new position)``."""
+    """A function ``(buffer, position, depth, budget) -> (value, new position)``."""
     kind = sig.kind
     if kind in _FORMAT:
         unpacker = struct.Struct("<" + _FORMAT[kind])
         size = unpacker.size
 
-        def dec_fixed(buf: memoryview, pos: int, depth: int, uid: bool) -> tuple[Any, int]:
+        def dec_fixed(buf: memoryview, pos: int, depth: int, ctx: Budget) -> tuple[Any, int]:
             return unpacker.unpack_from(buf, pos)[0], pos + size
 
         return dec_fixed
@@ -336,13 +364,13 @@ def decoder(sig: Sig) -> Decoder:
         key, val = decoder(sig.items[0]), decoder(sig.items[1])
         pair_size = max(1, sig.items[0].min_size + sig.items[1].min_size)
 
-        def dec_map(buf: memoryview, pos: int, depth: int, uid: bool) -> tuple[Any, int]:
-            count, pos = _count(buf, pos, pair_size, sig)
+        def dec_map(buf: memoryview, pos: int, depth: int, ctx: Budget) -> tuple[Any, int]:
+            count, pos = _count(buf, pos, pair_size, sig, ctx)
             depth = _depth(depth)
             out: dict[Any, Any] = {}
             for _ in range(count):
-                k, pos = key(buf, pos, depth, uid)
-                v, pos = val(buf, pos, depth, uid)
+                k, pos = key(buf, pos, depth, ctx)
+                v, pos = val(buf, pos, depth, ctx)
                 out[_hashable(k)] = v
             return out, pos
 
@@ -350,30 +378,30 @@ def decoder(sig: Sig) -> Decoder:
     if kind == "+":
         inner = decoder(sig.items[0])
 
-        def dec_optional(buf: memoryview, pos: int, depth: int, uid: bool) -> tuple[Any, int]:
+        def dec_optional(buf: memoryview, pos: int, depth: int, ctx: Budget) -> tuple[Any, int]:
             if pos >= len(buf):
                 raise ProtocolError("truncated optional value")
             if not buf[pos]:
                 return None, pos + 1
-            return inner(buf, pos + 1, _depth(depth), uid)
+            return inner(buf, pos + 1, _depth(depth), ctx)
 
         return dec_optional
     fields = sig.fields if sig.fields and len(sig.fields) == len(sig.items) else ()
     if sig.items and all(s.kind in _FORMAT for s in sig.items):
         packed = struct.Struct("<" + "".join(_FORMAT[s.kind] for s in sig.items))
 
-        def dec_flat(buf: memoryview, pos: int, depth: int, uid: bool) -> tuple[Any, int]:
+        def dec_flat(buf: memoryview, pos: int, depth: int, ctx: Budget) -> tuple[Any, int]:
             values = packed.unpack_from(buf, pos)
             return (NamedStruct(values, fields) if fields else values), pos + packed.size
 
         return dec_flat
     members = [decoder(s) for s in sig.items]
 
-    def dec_tuple(buf: memoryview, pos: int, depth: int, uid: bool) -> tuple[Any, int]:
+    def dec_tuple(buf: memoryview, pos: int, depth: int, ctx: Budget) -> tuple[Any, int]:
         depth = _depth(depth)
         out = []
         for dec in members:
-            v, pos = dec(buf, pos, depth, uid)
+            v, pos = dec(buf, pos, depth, ctx)
             out.append(v)
         return (NamedStruct(out, fields) if fields else tuple(out)), pos
 
@@ -406,12 +434,13 @@ def _hashable(key: Any) -> Any:
     return key
 
 
-def _count(buf: memoryview, pos: int, item_size: int, sig: Sig) -> tuple[int, int]:
+def _count(buf: memoryview, pos: int, item_size: int, sig: Sig, ctx: Budget) -> tuple[int, int]:
     (count,) = _U32.unpack_from(buf, pos)
     pos += 4
     limit = (len(buf) - pos) // item_size if item_size else MAX_ZERO_SIZE_ITEMS
     if count > limit:
-        raise ProtocolError(f"{sig} claims {count} elements, more than the payload holds")
+        raise ProtocolError(f"{str(sig)[:40]} claims {count} elements, more than the payload holds")
+    ctx.take(count, sig)
     return count, pos
 
 
@@ -419,8 +448,8 @@ def _list_decoder(item_sig: Sig) -> Decoder:
     if item_sig.kind in _FORMAT:
         code, size = _FORMAT[item_sig.kind], FIXED_SIZE[item_sig.kind]
 
-        def dec_scalar_list(buf: memoryview, pos: int, depth: int, uid: bool) -> tuple[Any, int]:
-            count, pos = _count(buf, pos, size, item_sig)
+        def dec_scalar_list(buf: memoryview, pos: int, depth: int, ctx: Budget) -> tuple[Any, int]:
+            count, pos = _count(buf, pos, size, item_sig, ctx)
             values = list(struct.unpack_from(f"<{count}{code}", buf, pos))
             return values, pos + count * size
 
@@ -429,12 +458,12 @@ def _list_decoder(item_sig: Sig) -> Decoder:
     size = item_sig.min_size
     list_sig = Sig("[", (item_sig,))
 
-    def dec_list(buf: memoryview, pos: int, depth: int, uid: bool) -> tuple[Any, int]:
-        count, pos = _count(buf, pos, size, list_sig)
+    def dec_list(buf: memoryview, pos: int, depth: int, ctx: Budget) -> tuple[Any, int]:
+        count, pos = _count(buf, pos, size, list_sig, ctx)
         depth = _depth(depth)
         out = []
         for _ in range(count):
-            v, pos = item(buf, pos, depth, uid)
+            v, pos = item(buf, pos, depth, ctx)
             out.append(v)
         return out, pos
 
@@ -449,7 +478,7 @@ def _dec_bytes(buf: memoryview, pos: int) -> tuple[memoryview, int]:
     return buf[pos : pos + size], pos + size
 
 
-def _dec_string(buf: memoryview, pos: int, depth: int, uid: bool) -> tuple[Any, int]:
+def _dec_string(buf: memoryview, pos: int, depth: int, ctx: Budget) -> tuple[Any, int]:
     data, pos = _dec_bytes(buf, pos)
     raw = bytes(data)
     try:
@@ -458,29 +487,29 @@ def _dec_string(buf: memoryview, pos: int, depth: int, uid: bool) -> tuple[Any, 
         return raw, pos  # NAOqi may put binary in strings
 
 
-def _dec_raw(buf: memoryview, pos: int, depth: int, uid: bool) -> tuple[Any, int]:
+def _dec_raw(buf: memoryview, pos: int, depth: int, ctx: Budget) -> tuple[Any, int]:
     return _dec_bytes(buf, pos)
 
 
-def _dec_void(buf: memoryview, pos: int, depth: int, uid: bool) -> tuple[Any, int]:
+def _dec_void(buf: memoryview, pos: int, depth: int, ctx: Budget) -> tuple[Any, int]:
     return None, pos
 
 
-def _dec_dynamic(buf: memoryview, pos: int, depth: int, uid: bool) -> tuple[Any, int]:
+def _dec_dynamic(buf: memoryview, pos: int, depth: int, ctx: Budget) -> tuple[Any, int]:
     text, pos = _dec_bytes(buf, pos)
     try:
         sig = parse(bytes(text).decode("ascii"))
     except UnicodeDecodeError:
         raise ProtocolError("a dynamic value's signature is not ASCII") from None
-    return decoder(sig)(buf, pos, _depth(depth), uid)
+    return decoder(sig)(buf, pos, _depth(depth), ctx)
 
 
-def _dec_object(buf: memoryview, pos: int, depth: int, uid: bool) -> tuple[Any, int]:
-    meta, pos = decoder(parse(METAOBJECT_SIGNATURE))(buf, pos, _depth(depth), uid)
+def _dec_object(buf: memoryview, pos: int, depth: int, ctx: Budget) -> tuple[Any, int]:
+    meta, pos = decoder(parse(METAOBJECT_SIGNATURE))(buf, pos, _depth(depth), ctx)
     service, obj = struct.unpack_from("<II", buf, pos)
     pos += 8
     object_uid = b""
-    if uid:
+    if ctx.uid:
         if len(buf) - pos < UID_SIZE:
             raise ProtocolError("truncated object uid")
         object_uid = bytes(buf[pos : pos + UID_SIZE])
@@ -494,6 +523,7 @@ def decode(
     *,
     object_uid: bool = True,
     exact: bool = True,
+    max_items: int | None = None,
 ) -> Any:
     """Decode one value of ``sig`` from ``data``.
 
@@ -502,14 +532,19 @@ def decode(
         data: The payload.
         object_uid: Objects carry a 20-byte uid (the ObjectPtrUID capability).
         exact: Reject bytes left over after the value.
+        max_items: Elements (of lists and maps, summed over the whole value) allowed;
+            None = the payload's size plus :data:`MAX_ZERO_SIZE_ITEMS` (every element
+            but a zero-size one takes at least a byte).
 
     Raises:
-        ProtocolError: Truncated, oversized, malformed or (``exact``) trailing data.
+        ProtocolError: Truncated, oversized, malformed, over ``max_items`` or
+            (``exact``) trailing data.
     """
     parsed = parse(sig) if isinstance(sig, str) else sig
     buf = data if isinstance(data, memoryview) else memoryview(data)
+    items = len(buf) + MAX_ZERO_SIZE_ITEMS if max_items is None else max_items
     try:
-        value, end = decoder(parsed)(buf, 0, 0, object_uid)
+        value, end = decoder(parsed)(buf, 0, 0, Budget(object_uid, items))
     except struct.error:
         raise ProtocolError(f"truncated payload for signature {str(parsed)[:60]}") from None
     except RecursionError:

@@ -6,6 +6,11 @@ own, so decoded raw buffers can be zero-copy views of it. Payloads over 4 MiB ar
 read in growing steps, so a peer that announces a huge message and stalls costs
 nothing. A malformed header closes the connection with a one-line reason (there is
 no way to find the next message); the owner's ``on_close`` gets it once.
+
+A server's connection (``queued=True``) never lets a slow reader hold up the thread
+that sends: messages go to an outgoing queue that a writer thread of its own drains.
+The queue has a byte budget: over it, droppable messages (events) are dropped and
+counted, and anything else closes the connection ("slow reader").
 """
 
 from __future__ import annotations
@@ -14,7 +19,11 @@ import contextlib
 import itertools
 import socket
 import ssl
+import struct
+import sys
 import threading
+import time
+from collections import deque
 from collections.abc import Callable, Sequence
 from typing import Final
 from urllib.parse import urlsplit
@@ -27,10 +36,12 @@ from naoloc.backends.naoqi.qimessaging.message import (
     pack_header,
     unpack_header,
 )
+from naoloc.backends.naoqi.qimessaging.trust import Trust, check, context, parse_trust
 from naoloc.errors import BackendError, ConnectionLost, ProtocolError
 
 _PREALLOCATE: Final = 4 * 1024 * 1024
 _STEP: Final = 1024 * 1024
+MAX_QUEUED: Final = 32 * 1024 * 1024  # bytes a queued connection holds for a slow reader
 
 Buffer = bytes | bytearray | memoryview
 OnMessage = Callable[["Connection", Header, memoryview], None]
@@ -82,14 +93,18 @@ def keepalive(sock: socket.socket, idle_s: int = 5, interval_s: int = 2, probes:
                 sock.setsockopt(socket.IPPROTO_TCP, option, value)
 
 
-def open_socket(url: str, timeout_s: float) -> socket.socket | tls.TlsSocket:
-    """Connect to ``url`` (TLS for ``tcps://``, without certificate checks, like libqi).
+def open_socket(
+    url: str, timeout_s: float, trust: Trust | None = None
+) -> socket.socket | tls.TlsSocket:
+    """Connect to ``url``; for ``tcps://`` check the robot's certificate with ``trust``.
 
-    NAOqi 2.9 robots present self-signed certificates, which libqi accepts; the login
-    that follows is what authenticates.
+    NAOqi 2.9 robots present self-signed certificates, which libqi accepts without a
+    look; naoloc pins them on first use by default (see :mod:`.trust`).
 
     Raises:
-        ConnectionLost: Nothing accepts the connection within ``timeout_s``.
+        ConnectionLost: Nothing accepts the connection within ``timeout_s``, the TLS
+            handshake fails, or the certificate is not the trusted one.
+        BackendError: A bad ``tls_trust`` setting.
     """
     scheme, host, port = parse_url(url)
     try:
@@ -99,14 +114,16 @@ def open_socket(url: str, timeout_s: float) -> socket.socket | tls.TlsSocket:
     sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
     keepalive(sock)
     if scheme == "tcps":
-        context = ssl.SSLContext(ssl.PROTOCOL_TLS_CLIENT)
-        context.check_hostname = False
-        context.verify_mode = ssl.CERT_NONE
+        checked = trust if trust is not None else parse_trust(None)
         try:
-            wrapped = tls.client(sock, context, host)
+            wrapped = tls.client(sock, context(checked), host)
+            check(checked, f"{host}:{port}", wrapped.peer_certificate())
         except (OSError, ssl.SSLError) as err:
             sock.close()
             raise ConnectionLost(f"TLS handshake with {url} failed ({err})") from None
+        except ConnectionLost:
+            sock.close()
+            raise
         sock.settimeout(None)
         return wrapped
     sock.settimeout(None)
@@ -121,8 +138,12 @@ class Connection:
             ``ssl.SSLSocket``: the reader and the senders would share its SSL state).
         on_message: Called on the reader thread for every valid message.
         on_close: Called once with the reason when the connection ends.
-        max_payload: Largest payload accepted, bytes.
+        max_payload: Largest payload accepted, bytes (``max_payload`` can be changed
+            later, e.g. raised once the peer authenticated).
         name: For thread names and messages.
+        queued: Sends go through an outgoing queue and a writer thread (servers), instead
+            of being written by the sending thread (clients).
+        max_queued: Byte budget of the outgoing queue (``queued`` only).
     """
 
     def __init__(
@@ -133,12 +154,14 @@ class Connection:
         *,
         max_payload: int = MAX_PAYLOAD,
         name: str = "qimessaging",
+        queued: bool = False,
+        max_queued: int = MAX_QUEUED,
     ) -> None:
         self.sock = sock
         self.name = name
+        self.max_payload = max_payload
         self._on_message = on_message
         self._on_close = on_close
-        self._max_payload = max_payload
         self._send_lock = threading.Lock()
         self._state_lock = threading.Lock()
         self._ids = itertools.count(1)
@@ -146,9 +169,22 @@ class Connection:
         self._reason = ""
         self._scatter = isinstance(sock, socket.socket)
         self._thread = threading.Thread(target=self._read_loop, name=name, daemon=True)
+        self._queued = queued
+        self._max_queued = max_queued
+        self._out: deque[tuple[list[Buffer], int]] = deque()
+        self._out_bytes = 0
+        self._out_cond = threading.Condition()
+        self._writer: threading.Thread | None = None
+        if queued:
+            self._writer = threading.Thread(
+                target=self._write_loop, name=f"{name}-send", daemon=True
+            )
+        self.dropped = 0  # droppable messages not sent (slow reader)
 
     def start(self) -> None:
-        """Start the reader thread."""
+        """Start the reader thread (and the writer of a queued connection)."""
+        if self._writer is not None:
+            self._writer.start()
         self._thread.start()
 
     @property
@@ -160,6 +196,11 @@ class Connection:
     def reason(self) -> str:
         """Why it ended ("" while open)."""
         return self._reason
+
+    @property
+    def queued_bytes(self) -> int:
+        """Bytes waiting in the outgoing queue (0 for an unqueued connection)."""
+        return self._out_bytes
 
     def next_id(self) -> int:
         """A fresh message id."""
@@ -175,28 +216,91 @@ class Connection:
         parts: Sequence[Buffer] = (),
         size: int | None = None,
         flags: int = 0,
-    ) -> None:
+        *,
+        droppable: bool = False,
+    ) -> bool:
         """Send one message whose payload is ``parts`` (concatenated).
 
+        Args:
+            droppable: A queued connection over its budget drops this message (an
+                event) instead of closing.
+
+        Returns:
+            False when a droppable message was dropped.
+
         Raises:
-            ConnectionLost: The connection is closed or the send failed.
+            ConnectionLost: The connection is closed, the send failed, or (queued) the
+                peer reads too slowly for a message that cannot be dropped.
             ProtocolError: The payload is over the limit.
         """
         total = sum(len(p) for p in parts) if size is None else size
         header = pack_header(mid, total, mtype, flags, service, obj, action)
         if self._closed.is_set():
             raise ConnectionLost(self._reason or "connection closed")
+        if self._queued:
+            return self._enqueue([header, *parts], len(header) + total, droppable)
         try:
             with self._send_lock:
-                if self._scatter:
-                    self._sendmsg([header, *parts])
-                elif len(parts) <= 1:
-                    self.sock.sendall(header + bytes(parts[0]) if parts else header)
-                else:
-                    self.sock.sendall(b"".join([header, *parts]))
+                self._write([header, *parts])
         except OSError as err:
             self.close(f"send failed: {err.strerror or err}")
             raise ConnectionLost(self._reason) from None
+        return True
+
+    def _enqueue(self, buffers: list[Buffer], size: int, droppable: bool) -> bool:
+        with self._out_cond:
+            over = self._out_bytes > 0 and self._out_bytes + size > self._max_queued
+            if not over:
+                self._out.append((buffers, size))
+                self._out_bytes += size
+                self._out_cond.notify()
+                return True
+            if droppable:
+                self.dropped += 1
+                return False
+            unread = self._out_bytes
+        self.close(f"slow reader: {unread} bytes unread (budget {self._max_queued})")
+        raise ConnectionLost(self._reason)
+
+    def _write(self, buffers: list[Buffer]) -> None:
+        if self._scatter:
+            self._sendmsg(buffers)
+        elif len(buffers) <= 2:
+            self.sock.sendall(bytes(buffers[0]) + bytes(buffers[1]) if len(buffers) == 2
+                              else bytes(buffers[0]))  # fmt: skip
+        else:
+            self.sock.sendall(b"".join(buffers))
+
+    def _write_loop(self) -> None:
+        while True:
+            with self._out_cond:
+                while not self._out and not self._closed.is_set():
+                    self._out_cond.wait()
+                if not self._out:
+                    return
+                buffers, size = self._out.popleft()
+            try:
+                self._write(buffers)
+            except OSError as err:
+                self.close(f"send failed: {err.strerror or err}")
+                return
+            finally:
+                with self._out_cond:
+                    self._out_bytes -= size
+                    self._out_cond.notify_all()
+            if self._closed.is_set():
+                return
+
+    def flush(self, timeout_s: float) -> bool:
+        """Wait until the outgoing queue is empty (at most ``timeout_s``); True when it is."""
+        deadline = time.monotonic() + timeout_s
+        with self._out_cond:
+            while self._out_bytes and not self._closed.is_set():
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return False
+                self._out_cond.wait(left)
+            return not self._out_bytes
 
     def _sendmsg(self, buffers: list[Buffer]) -> None:
         sock = self.sock
@@ -236,7 +340,7 @@ class Connection:
                 head = self._recv_exact(HEADER_SIZE)
                 if head is None:
                     break
-                header = unpack_header(head, self._max_payload)
+                header = unpack_header(head, self.max_payload)
                 payload = self._recv_exact(header.size) if header.size else bytearray()
                 if payload is None:
                     reason = "peer closed the connection mid-message"
@@ -257,6 +361,10 @@ class Connection:
                 return
             self._reason = reason
             self._closed.set()
+        with self._out_cond:
+            self._out_bytes -= sum(size for _, size in self._out)
+            self._out.clear()
+            self._out_cond.notify_all()
         with contextlib.suppress(OSError):
             self.sock.shutdown(socket.SHUT_RDWR)
         with contextlib.suppress(OSError):
@@ -267,3 +375,13 @@ class Connection:
         """Wait for the reader thread (not from itself)."""
         if self._thread.is_alive() and self._thread is not threading.current_thread():
             self._thread.join(timeout_s)
+
+
+def send_timeout(sock: socket.socket, seconds: float) -> None:
+    """Make blocking sends give up after ``seconds`` (a client that never reads)."""
+    whole = int(seconds)
+    value = struct.pack("ll", whole, int((seconds - whole) * 1e6))
+    if sys.platform == "win32":
+        value = struct.pack("L", int(seconds * 1000))
+    with contextlib.suppress(OSError):
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDTIMEO, value)

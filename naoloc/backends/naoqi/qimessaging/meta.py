@@ -15,7 +15,7 @@ from typing import Any, Final
 
 from naoloc.backends.naoqi.qimessaging.codec import METAOBJECT_SIGNATURE
 from naoloc.backends.naoqi.qimessaging.signature import Sig, parse
-from naoloc.errors import ProtocolError
+from naoloc.errors import BackendError, ProtocolError
 
 REGISTER_EVENT: Final = 0
 UNREGISTER_EVENT: Final = 1
@@ -199,3 +199,20 @@ def service_info_dict(value: Any) -> dict[str, Any]:
     info = dict(zip(SERVICE_INFO_FIELDS, value, strict=False))
     info.setdefault("objectUid", "")
     return info
+
+
+def signature_table(name: str) -> list[tuple[str, str, str]]:
+    """``(method, params, returns)`` of every overload naoloc serves for service ``name``.
+
+    Raises:
+        BackendError: No signatures are known for ``name``.
+    """
+    from naoloc.backends.naoqi.signatures import SERVICES
+
+    if name not in SERVICES:
+        raise BackendError(f"no signatures for service {name!r}; pass methods=[...]")
+    return [
+        (method, "(" + "".join(o.params) + ")", o.returns)
+        for method, overloads in SERVICES[name].items()
+        for o in overloads
+    ]

@@ -5,12 +5,31 @@ authenticate (service 0), find services in the directory (service 1) and call
 methods described by MetaObjects built from :mod:`naoloc.backends.naoqi.signatures`
 (or a table given at registration). Every connection is its own caller
 (``qim-<n>``), so the virtual NAOqi's dead-man tells clients apart. Clients may
-register services of their own under new names (as on a NAO: an old-SDK ALBroker's
-modules, NaolocLocalization from another process), at most
-:data:`MAX_CLIENT_SERVICES`; they are listed until their connection closes, and the
-server's own services cannot be replaced or unregistered. Every incoming message is
-validated before it is trusted; a bad payload gets an error reply, a bad header closes
-that connection.
+register services of their own under new names once logged in (as on a NAO: an
+old-SDK ALBroker's modules, NaolocLocalization from another process), at most
+:data:`MAX_CLIENT_SERVICES` in all and :data:`MAX_SERVICES_PER_CLIENT` each; they are
+listed until their connection closes, and the server's own services cannot be replaced
+or unregistered. Every incoming message is validated before it is trusted; a bad
+payload gets an error reply, a bad header closes that connection.
+
+Bounded work, per client (each limit answers a NAOqi-style error and logs one line,
+at most one a second per kind):
+
+- before authentication: messages of at most :data:`MAX_PREAUTH_BYTES` with at most
+  :data:`MAX_PREAUTH_ITEMS` elements, :data:`AUTH_TIMEOUT_S` to log in, at most
+  :data:`MAX_UNAUTHENTICATED` such connections (a new one closes the oldest) and
+  :data:`MAX_PER_PEER` connections from one address; a wrong login is answered after
+  :data:`AUTH_FAIL_DELAY_S` and the connection closed;
+- after it: :data:`MAX_IN_FLIGHT` calls and :data:`MAX_QUEUED_ARGS` bytes of
+  arguments waiting per client, run fairly (:mod:`.workers`); stops and heartbeats run
+  at once on a path of their own; the directory answers on the reader thread, so a
+  busy server still lets clients connect;
+- replies and events wait in a per-connection queue of :data:`MAX_QUEUED_BYTES`:
+  a slow reader's events are dropped, then it is disconnected; no sending thread
+  ever waits for it;
+- at most :data:`MAX_OBJECTS` objects, :data:`MAX_LINKS` signal links and
+  :data:`MAX_SERVICES_PER_CLIENT` registered services per client, all released (with
+  the client's queued calls) when it leaves.
 """
 
 from __future__ import annotations
@@ -21,18 +40,20 @@ import itertools
 import os
 import socket
 import ssl
-import struct
 import sys
 import threading
 import time
 import uuid
 from collections.abc import Iterable
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any, Final
 
 from naoloc.backends.naoqi.qimessaging import capability, codec, message, tls
-from naoloc.backends.naoqi.qimessaging.connection import Connection, parse_url
+from naoloc.backends.naoqi.qimessaging.connection import Connection, parse_url, send_timeout
+from naoloc.backends.naoqi.qimessaging.directory import (
+    ClientServices,
+    directory_meta,
+)
 from naoloc.backends.naoqi.qimessaging.memory import MemoryHub
 from naoloc.backends.naoqi.qimessaging.message import Header
 from naoloc.backends.naoqi.qimessaging.meta import (
@@ -42,7 +63,6 @@ from naoloc.backends.naoqi.qimessaging.meta import (
     PROPERTY,
     REGISTER_EVENT,
     REGISTER_EVENT_WITH_SIGNATURE,
-    SERVICE_INFO_SIGNATURE,
     SET_PROPERTY,
     TERMINATE,
     UNREGISTER_EVENT,
@@ -50,20 +70,31 @@ from naoloc.backends.naoqi.qimessaging.meta import (
     Method,
     build,
     describe,
+    signature_table,
 )
 from naoloc.backends.naoqi.qimessaging.proxy import fit
 from naoloc.backends.naoqi.qimessaging.signature import parse
+from naoloc.backends.naoqi.qimessaging.workers import CallPool, Notices
 from naoloc.errors import BackendError, NaolocError, ProtocolError, RobotError
 
 MAX_CONNECTIONS: Final = 64
-MAX_IN_FLIGHT: Final = 64  # calls per connection
+MAX_PER_PEER: Final = 32  # connections from one address (loopback clients share one)
+MAX_UNAUTHENTICATED: Final = 16  # connections not logged in yet; a new one evicts the oldest
+MAX_IN_FLIGHT: Final = 32  # calls per connection, queued or running
 MAX_INCOMING: Final = 1024 * 1024  # bytes: clients send arguments, not images
+MAX_QUEUED_ARGS: Final = 8 * 1024 * 1024  # bytes of one client's calls waiting to run
 MAX_IN_FLIGHT_ALL: Final = 256  # calls of every client (bounds queued arguments' memory)
+MAX_PREAUTH_BYTES: Final = 16 * 1024  # a message before authentication (a login is ~300)
+MAX_PREAUTH_ITEMS: Final = 1024  # elements of a value before authentication
+MAX_QUEUED_BYTES: Final = 32 * 1024 * 1024  # replies and events waiting for a slow reader
+MAX_OBJECTS: Final = 256  # objects (e.g. ALMemory subscribers) one client holds
+MAX_LINKS: Final = 1024  # signal links of one client
 SEND_TIMEOUT_S: Final = 5.0  # a client that stops reading is dropped after this long
-AUTH_TIMEOUT_S: Final = 10.0  # a connection that does not authenticate is dropped
+AUTH_TIMEOUT_S: Final = 5.0  # a connection that does not authenticate is dropped
+AUTH_FAIL_DELAY_S: Final = 1.0  # a wrong login is answered (and closed) this much later
+CLOSE_WAIT_S: Final = 1.0  # close() waits this long for running calls
 SD_NAME: Final = "ServiceDirectory"
 MEMORY: Final = "ALMemory"
-MAX_CLIENT_SERVICES: Final = 32  # services registered by clients, all together
 _REFUSED: Final = "naoloc serve's own services cannot be unregistered by clients"
 
 
@@ -83,53 +114,14 @@ class _Served:
 class _Client:
     conn: Connection
     caller: str
+    peer: str = ""
     opened: float = field(default_factory=time.monotonic)
     authenticated: bool = False
     features: dict[str, bool] = field(default_factory=lambda: dict(capability.LOCAL))
     in_flight: int = 0
+    queued_bytes: int = 0
     links: dict[tuple[int, int, int], set[int]] = field(default_factory=dict)
     exported: set[tuple[int, int]] = field(default_factory=set)
-    registered: set[int] = field(default_factory=set)  # service ids it registered here
-
-
-def _send_timeout(sock: socket.socket, seconds: float) -> None:
-    """Make blocking sends give up after ``seconds`` (a client that never reads)."""
-    whole = int(seconds)
-    value = struct.pack("ll", whole, int((seconds - whole) * 1e6))
-    if sys.platform == "win32":
-        value = struct.pack("L", int(seconds * 1000))
-    with contextlib.suppress(OSError):
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDTIMEO, value)
-
-
-def _directory_meta() -> MetaObject:
-    info = SERVICE_INFO_SIGNATURE
-    meta = build([])
-    for uid, name, params, returns in (
-        (100, "service", "(s)", info),
-        (101, "services", "()", f"[{info}]"),
-        (102, "registerService", f"({info})", "I"),
-        (103, "unregisterService", "(I)", "v"),
-        (104, "serviceReady", "(I)", "v"),
-        (105, "updateServiceInfo", f"({info})", "v"),
-        (108, "machineId", "()", "s"),
-    ):
-        meta.methods[uid] = Method(uid, name, parse(params), parse(returns))
-    meta.signals[106] = ("serviceAdded", parse("(Is)"))
-    meta.signals[107] = ("serviceRemoved", parse("(Is)"))
-    return meta
-
-
-def _table(name: str) -> list[tuple[str, str, str]]:
-    from naoloc.backends.naoqi.signatures import SERVICES
-
-    if name not in SERVICES:
-        raise BackendError(f"no signatures for service {name!r}; pass methods=[...]")
-    return [
-        (method, "(" + "".join(o.params) + ")", o.returns)
-        for method, overloads in SERVICES[name].items()
-        for o in overloads
-    ]
 
 
 class QiServer:
@@ -139,8 +131,10 @@ class QiServer:
         users: NAOqi 2.9-style logins ``{user: password}``; None = no login asked.
         certfile: PEM certificate (and key) for ``tcps://``; None = plain TCP only.
         keyfile: PEM key when not inside ``certfile``.
-        workers: Threads that run calls (blocking calls from one client must not
-            hold up another client's ``stopMove``).
+        workers: Threads that run ordinary calls (each client may use at most a
+            quarter of them; stops and heartbeats never wait for them).
+        urgent: ``(service, method)`` pairs run at once on their own path; None = the
+            NAOqi stops and the naoloc heartbeat (:data:`~.signatures.URGENT`).
     """
 
     def __init__(
@@ -150,16 +144,24 @@ class QiServer:
         certfile: str | None = None,
         keyfile: str | None = None,
         workers: int = 16,
+        urgent: frozenset[tuple[str, str]] | None = None,
     ) -> None:
+        from naoloc.backends.naoqi.signatures import URGENT
+
         self._users = users
         self._tls: ssl.SSLContext | None = None
         if certfile:
             self._tls = ssl.SSLContext(ssl.PROTOCOL_TLS_SERVER)
-            self._tls.load_cert_chain(certfile, keyfile)
-        self._pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="naoloc-qim-call")
+            try:
+                self._tls.load_cert_chain(certfile, keyfile)
+            except (OSError, ssl.SSLError) as err:
+                raise BackendError(f"cannot load the TLS certificate {certfile}: {err}") from None
+        self._urgent = URGENT if urgent is None else urgent
+        self._pool = CallPool(workers, per_client=max(1, workers // 4))
         self._lock = threading.Lock()
         self._services: dict[int, _Served] = {}
         self._clients: dict[Connection, _Client] = {}
+        self._opening: dict[str, int] = {}  # peer -> connections in their TLS handshake
         self._ids = itertools.count(2)
         self._callers = itertools.count(1)
         self._sock: socket.socket | None = None
@@ -168,14 +170,16 @@ class QiServer:
         self._thread: threading.Thread | None = None
         seed = f"{socket.gethostname()}-{os.getpid()}"
         self.machine_id = str(uuid.uuid5(uuid.NAMESPACE_DNS, seed))
-        self._services[1] = _Served(SD_NAME, 1, self, _directory_meta())
+        self._services[1] = _Served(SD_NAME, 1, self, directory_meta())
         self._objects: dict[tuple[int, int], _Served] = {}
         self._object_ids = itertools.count(2)
         self._core: Any = None
         self._in_flight = 0
         self._memory: MemoryHub | None = None
-        self._external: dict[int, tuple[Any, ...]] = {}  # clients' services: id -> ServiceInfo
+        self._notice = Notices()
+        self._external = ClientServices()  # services clients registered (under self._lock)
         self.protocol_errors = 0
+        self.refused: dict[str, int] = {}  # limit name -> times it refused something
 
     # ------------------------------------------------------------------ lifecycle
     def listen(self, url: str) -> None:
@@ -204,59 +208,119 @@ class QiServer:
         """The listening URL."""
         return self._endpoint
 
+    def _limit(self, kind: str, text: str) -> None:
+        """Count a refusal and log it (one line a second per kind)."""
+        with self._lock:
+            self.refused[kind] = self.refused.get(kind, 0) + 1
+        self._notice(kind, text)
+
     def _accept(self) -> None:
         assert self._sock is not None
-        self._sock.settimeout(1.0)
+        self._sock.settimeout(0.5)
         while not self._closed.is_set():
             self._drop_silent()
             try:
-                sock, _ = self._sock.accept()
+                sock, address = self._sock.accept()
             except TimeoutError:
                 continue
             except OSError:
                 return
             sock.settimeout(None)
-            with self._lock:
-                full = len(self._clients) >= MAX_CONNECTIONS
-            if full:
-                sock.close()
+            peer = str(address[0]) if isinstance(address, tuple) else "local"
+            why = self._make_room(peer)
+            if why:
+                self._limit("connections", f"refused a connection from {peer}: {why}")
+                with contextlib.suppress(OSError):
+                    sock.close()
                 continue
-            threading.Thread(target=self._open, args=(sock,), daemon=True).start()
+            with self._lock:
+                self._opening[peer] = self._opening.get(peer, 0) + 1
+            threading.Thread(target=self._open, args=(sock, peer), daemon=True).start()
+
+    def _make_room(self, peer: str) -> str:
+        """Why a new connection from ``peer`` is refused ("" = accept it).
+
+        Closes the oldest connection that has not logged in when they are too many.
+        """
+        with self._lock:
+            clients = list(self._clients.values())
+            opening = sum(self._opening.values())
+            from_peer = sum(c.peer == peer for c in clients) + self._opening.get(peer, 0)
+        if len(clients) + opening >= MAX_CONNECTIONS:
+            return f"{MAX_CONNECTIONS} connections already"
+        if from_peer >= MAX_PER_PEER:
+            return f"{MAX_PER_PEER} connections from this address already"
+        waiting = sorted((c for c in clients if not c.authenticated), key=lambda c: c.opened)
+        if len(waiting) + opening >= MAX_UNAUTHENTICATED:
+            if not waiting:
+                return f"{MAX_UNAUTHENTICATED} connections in their TLS handshake"
+            self._limit(
+                "unauthenticated",
+                f"closed a connection from {waiting[0].peer} that had not logged in: "
+                f"{MAX_UNAUTHENTICATED} such connections at most",
+            )
+            waiting[0].conn.close("too many connections that did not log in")
+        return ""
 
     def _drop_silent(self) -> None:
         """Close connections that never authenticated within :data:`AUTH_TIMEOUT_S`."""
         now = time.monotonic()
         with self._lock:
             silent = [
-                c.conn
+                c
                 for c in self._clients.values()
                 if not c.authenticated and now - c.opened > AUTH_TIMEOUT_S
             ]
-        for conn in silent:
-            conn.close("did not authenticate in time")
+        for client in silent:
+            self._limit(
+                "auth-timeout", f"closed a connection from {client.peer}: no login within "
+                f"{AUTH_TIMEOUT_S:g} s",
+            )  # fmt: skip
+            client.conn.close("did not authenticate in time")
 
-    def _open(self, sock: socket.socket) -> None:
-        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        _send_timeout(sock, SEND_TIMEOUT_S)
-        stream: socket.socket | tls.TlsSocket = sock
-        if self._tls is not None:
-            try:
-                sock.settimeout(5.0)
-                stream = tls.server(sock, self._tls)
-                sock.settimeout(None)
-            except (OSError, ssl.SSLError):
-                sock.close()
-                return
+    def _open(self, sock: socket.socket, peer: str) -> None:
+        try:
+            stream = self._handshake(sock)
+        finally:
+            with self._lock:
+                self._opening[peer] -= 1
+                if not self._opening[peer]:
+                    del self._opening[peer]
+        if stream is None:
+            return
         caller = f"qim-{next(self._callers)}"
         conn = Connection(
-            stream, self._on_message, self._on_close, max_payload=MAX_INCOMING, name=caller
-        )
+            stream, self._on_message, self._on_close, max_payload=MAX_PREAUTH_BYTES,
+            name=caller, queued=True, max_queued=MAX_QUEUED_BYTES,
+        )  # fmt: skip
         with self._lock:
-            self._clients[conn] = _Client(conn, caller)
+            if self._closed.is_set():
+                conn.close("server closed")
+                return
+            self._clients[conn] = _Client(conn, caller, peer)
         conn.start()
 
+    def _handshake(self, sock: socket.socket) -> socket.socket | tls.TlsSocket | None:
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        send_timeout(sock, SEND_TIMEOUT_S)
+        if self._tls is None:
+            return sock
+        try:
+            sock.settimeout(AUTH_TIMEOUT_S)
+            stream = tls.server(sock, self._tls)
+            sock.settimeout(None)
+        except (OSError, ssl.SSLError, ValueError):
+            with contextlib.suppress(OSError):
+                sock.close()
+            return None
+        return stream
+
     def close(self) -> None:
-        """Stop accepting, close every connection, finish running calls."""
+        """Stop accepting, close every connection; wait at most :data:`CLOSE_WAIT_S`.
+
+        Calls still running after that are left to their daemon threads (a call that
+        never returns cannot keep the process alive).
+        """
         if self._closed.is_set():
             return
         self._closed.set()
@@ -267,9 +331,9 @@ class QiServer:
             clients = list(self._clients)
         for conn in clients:
             conn.close("server closed")
-        self._pool.shutdown(wait=True, cancel_futures=True)
+        self._pool.close(CLOSE_WAIT_S)
         if self._thread is not None:
-            self._thread.join(2.0)
+            self._thread.join(CLOSE_WAIT_S)
 
     # ------------------------------------------------------------------ services
     def register(
@@ -298,12 +362,10 @@ class QiServer:
             BackendError: The name is taken or has no signatures.
         """
         with self._lock:
-            taken = any(s.name == name for s in self._services.values()) or any(
-                i[0] == name for i in self._external.values()
-            )
-            if taken or service_id in self._services:
+            taken = any(s.name == name for s in self._services.values())
+            if taken or self._external.find(name) or service_id in self._services:
                 raise BackendError(f"service {name!r} is already registered")
-        table = list(methods) if methods is not None else _table(name)
+        table = list(methods) if methods is not None else signature_table(name)
         meta = build(table, signals=(signals or {}).items(), description=name)
         service_id = next(self._ids) if service_id is None else service_id
         served = _Served(name, service_id, target, meta)
@@ -344,6 +406,11 @@ class QiServer:
         """Serve ``target`` (returned by a method) as a new object of ``owner``'s service."""
         if isinstance(target, codec.ObjectRef):
             return target
+        with self._lock:
+            held = len(client.exported)
+        if held >= MAX_OBJECTS:
+            self._limit("objects", f"client {client.caller} holds {MAX_OBJECTS} objects")
+            raise RobotError(f"{owner.name}: too many objects held ({MAX_OBJECTS}); release some")
         methods, signals = describe(target)
         meta = build(methods, signals=signals.items(), description=type(target).__name__)
         object_id = next(self._object_ids)
@@ -410,9 +477,13 @@ class QiServer:
         for client in targets:
             with contextlib.suppress(NaolocError):
                 mid = client.conn.next_id()
-                client.conn.send(
-                    mid, message.EVENT, served.service_id, served.object_id, uid, [payload]
-                )
+                sent = client.conn.send(
+                    mid, message.EVENT, served.service_id, served.object_id, uid, [payload],
+                    droppable=True,
+                )  # fmt: skip
+                if not sent:
+                    self._limit("slow-reader", f"client {client.caller} reads slowly: "
+                                "events dropped")  # fmt: skip
 
     # ------------------------------------------------------------------ messages
     def _on_close(self, conn: Connection, reason: str) -> None:
@@ -420,10 +491,20 @@ class QiServer:
             client = self._clients.pop(conn, None)
         if client is None:
             return
-        for key in list(client.exported):
+        dropped = self._pool.drop(conn)
+        with self._lock:
+            client.in_flight -= dropped
+            self._in_flight -= dropped
+            client.links.clear()
+            exported, client.exported = list(client.exported), set()
+        for key in exported:
             self._drop(key)
-        for service_id in list(client.registered):  # as libqi: a client's services go with it
+        with self._lock:
+            registered = self._external.of(client.caller)
+        for service_id in registered:  # as libqi: a client's services go with it
             self._unregister_external(service_id)
+        if reason.startswith(("slow reader", "protocol error", "socket error: timed")):
+            self._limit("closed", f"client {client.caller} disconnected: {reason}")
         gone = getattr(self._core, "gone", None)
         if callable(gone):
             try:
@@ -437,9 +518,10 @@ class QiServer:
         if client is None:
             return
         kind = header.type
+        items = None if client.authenticated else MAX_PREAUTH_ITEMS
         if kind == message.CAPABILITY:  # a peer may announce its features at any time
             with contextlib.suppress(ProtocolError):
-                peer = codec.decode("{sm}", payload)
+                peer = codec.decode("{sm}", payload, max_items=items)
                 if isinstance(peer, dict):
                     client.features = capability.negotiated(peer)
             return
@@ -475,19 +557,52 @@ class QiServer:
             except (TypeError, ValueError, IndexError, KeyError) as err:
                 self._error(client, header, f"{served.name}.{method.name}: bad arguments: {err}")
             return
-        with self._lock:
-            busy = client.in_flight >= MAX_IN_FLIGHT or self._in_flight >= MAX_IN_FLIGHT_ALL
-            client.in_flight += 0 if busy else 1
-            self._in_flight += 0 if busy else 1
-        if busy:
-            self._error(client, header, "too many calls in flight; wait for answers")
+        if served.service_id == 1:  # look-ups answer here: connecting never waits for workers
+            self._call(client, header, served, method, args)
             return
-        try:
-            self._pool.submit(self._run, client, header, served, method, args)
-        except RuntimeError:  # shutting down
-            with self._lock:
-                client.in_flight -= 1
-                self._in_flight -= 1
+        self._submit(client, header, served, method, args, len(payload))
+
+    def _submit(
+        self, client: _Client, header: Header, served: _Served, method: Method, args: list[Any],
+        size: int,
+    ) -> None:  # fmt: skip
+        where = f"{served.name}.{method.name}"
+        with self._lock:
+            busy = ""
+            if client.in_flight >= MAX_IN_FLIGHT:
+                busy = f"too many calls in flight ({MAX_IN_FLIGHT}); wait for answers"
+            elif client.queued_bytes + size > MAX_QUEUED_ARGS:
+                busy = f"too many bytes of calls waiting ({MAX_QUEUED_ARGS}); wait for answers"
+            elif self._in_flight >= MAX_IN_FLIGHT_ALL:
+                busy = f"the server is busy ({MAX_IN_FLIGHT_ALL} calls in flight)"
+            if not busy:
+                client.in_flight += 1
+                client.queued_bytes += size
+                self._in_flight += 1
+        if busy:
+            self._limit("in-flight", f"client {client.caller}: {where}: {busy}")
+            self._error(client, header, f"RobotError: {where}: {busy}")
+            return
+
+        def job() -> None:
+            try:
+                self._call(client, header, served, method, args)
+            finally:
+                with self._lock:
+                    client.in_flight -= 1
+                    client.queued_bytes -= size
+                    self._in_flight -= 1
+
+        urgent = served.object_id == message.MAIN_OBJECT and (served.name, method.name) in (
+            self._urgent
+        )
+        conn = client.conn
+        if (urgent and self._pool.submit_urgent(conn, job)) or self._pool.submit(conn, job):
+            return
+        with self._lock:  # closing
+            client.in_flight -= 1
+            client.queued_bytes -= size
+            self._in_flight -= 1
 
     def _arguments(
         self, client: _Client, header: Header, method: Method, payload: memoryview
@@ -514,19 +629,26 @@ class QiServer:
             self._error(client, header, "service 0 only has authenticate (action 8)")
             return
         try:
-            request = codec.decode("{sm}", payload)
+            request = codec.decode("{sm}", payload, max_items=MAX_PREAUTH_ITEMS)
         except ProtocolError as err:
             self.protocol_errors += 1
             self._error(client, header, f"bad capability map: {err}")
             return
-        state, reason = capability.STATE_DONE, ""
-        if self._users is not None:
-            user, token = request.get("auth_user"), request.get("auth_token")
-            if not isinstance(user, str) or self._users.get(user) != token:
-                state, reason = capability.STATE_ERROR, "wrong user or password"
+        if self._users is not None and not capability.login_ok(self._users, request):
+            self._limit("login", f"refused a login from {client.peer} (wrong user or password)")
+            if self._closed.wait(AUTH_FAIL_DELAY_S):
+                return
+            reply = capability.server_reply(
+                request, capability.STATE_ERROR, "wrong user or password"
+            )
+            self._reply(client, header, parse("{sm}"), reply)
+            client.conn.flush(SEND_TIMEOUT_S)
+            client.conn.close("wrong user or password")
+            return
         client.features = capability.negotiated(request)
-        client.authenticated = state == capability.STATE_DONE
-        reply = capability.server_reply(request, state, reason)
+        client.authenticated = True
+        client.conn.max_payload = MAX_INCOMING
+        reply = capability.server_reply(request, capability.STATE_DONE)
         self._reply(client, header, parse("{sm}"), reply)
 
     def _generic(
@@ -542,7 +664,13 @@ class QiServer:
                 return
             with self._lock:
                 key = (served.service_id, served.object_id, signal)
-                client.links.setdefault(key, set()).add(link)
+                full = sum(len(v) for v in client.links.values()) >= MAX_LINKS
+                if not full:
+                    client.links.setdefault(key, set()).add(link)
+            if full:
+                self._limit("links", f"client {client.caller} holds {MAX_LINKS} signal links")
+                self._error(client, header, f"too many signal links ({MAX_LINKS})")
+                return
             self._reply(client, header, method.returns, link)
         elif action == UNREGISTER_EVENT:
             with self._lock:
@@ -562,9 +690,11 @@ class QiServer:
         else:
             self._error(client, header, f"{GENERIC_METHODS[action][0]} is not supported")
 
-    def _run(
+    def _call(
         self, client: _Client, header: Header, served: _Served, method: Method, args: list[Any]
     ) -> None:
+        if client.conn.closed:
+            return
         try:
             if served.service_id == 1:
                 value = self._directory(client, method.name, args)
@@ -583,25 +713,21 @@ class QiServer:
         except Exception as err:  # a service bug must not kill the server
             text = f"{type(err).__name__}: {err}".splitlines()[0]
             self._error(client, header, f"RobotError: {served.name}.{method.name}: {text}")
-        finally:
-            with self._lock:
-                client.in_flight -= 1
-                self._in_flight -= 1
 
     def _directory(self, client: _Client, name: str, args: list[Any]) -> Any:
         with self._lock:
             served = list(self._services.values())
-            external = dict(self._external)
+            external = self._external.infos()
         if name == "service":
             found = next((s for s in served if s.name == args[0]), None)
             if found is not None:
                 return self._info(found)
-            info = next((i for i in external.values() if i[0] == args[0]), None)
+            info = next((i for i in external if i[0] == args[0]), None)
             if info is None:
                 raise RobotError(f"Cannot find service '{args[0]}' in index")
             return info
         if name == "services":
-            return [self._info(s) for s in served] + list(external.values())
+            return [self._info(s) for s in served] + external
         if name == "machineId":
             return self.machine_id
         if name == "registerService":
@@ -610,7 +736,7 @@ class QiServer:
             return None
         if name == "unregisterService":
             service_id = int(args[0])
-            if service_id in external:
+            if any(i[1] == service_id for i in external):
                 self._unregister_external(service_id)
                 return None
             if service_id in (s.service_id for s in served):
@@ -624,24 +750,23 @@ class QiServer:
         if not isinstance(name, str) or not name:
             raise RobotError("registerService: a service needs a name")
         with self._lock:
-            taken = any(s.name == name for s in self._services.values()) or any(
-                i[0] == name for i in self._external.values()
-            )
-            if taken:
+            if self._clients.get(client.conn) is not client:
+                raise RobotError("registerService: the client has left")
+            if any(s.name == name for s in self._services.values()) or self._external.find(name):
                 raise RobotError(f'Service "{name}" is already registered')
-            if len(self._external) >= MAX_CLIENT_SERVICES:
-                raise RobotError(f"registerService: at most {MAX_CLIENT_SERVICES} client services")
-            service_id = next(self._ids)
-            self._external[service_id] = (name, service_id, *info[2:])
-            client.registered.add(service_id)
+            full = self._external.refusal(client.caller)
+            if not full:
+                service_id = next(self._ids)
+                self._external.add(client.caller, service_id, info)
+        if full:
+            self._limit("services", f"client {client.caller}: registerService {name!r}: {full}")
+            raise RobotError(f"registerService: {full}")
         self._emit(self._services[1], 106, (service_id, name))
         return service_id
 
     def _unregister_external(self, service_id: int) -> None:
         with self._lock:
-            info = self._external.pop(service_id, None)
-            for c in self._clients.values():
-                c.registered.discard(service_id)
+            info = self._external.pop(service_id)
         if info is not None:
             self._emit(self._services[1], 107, (service_id, info[0]))
 

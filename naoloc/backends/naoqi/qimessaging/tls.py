@@ -133,6 +133,11 @@ class TlsSocket:
         """The peer's address."""
         return self._sock.getpeername()
 
+    def peer_certificate(self) -> bytes:
+        """The peer's certificate (DER; b"" when it sent none)."""
+        with self._state:
+            return self._tls.getpeercert(binary_form=True) or b""
+
 
 def _wrap(sock: socket.socket, context: ssl.SSLContext, *, server_side: bool,
           host: str | None) -> TlsSocket:  # fmt: skip
