@@ -531,6 +531,26 @@ class FilterTuning(_Model):
     neighbours: int = Field(
         3, ge=1, le=10, description="nearest landmark descriptors a feature may be (any of)"
     )
+    distinct_ratio: float = Field(
+        0.8,
+        gt=0,
+        le=1,
+        description="Lowe's ratio over the whole map for a feature's match to weigh whether "
+        "this is the mapped room",
+    )
+    identity_forget_per_picture: float = Field(
+        0.03,
+        ge=0,
+        lt=1,
+        description="share of the evidence that this is the mapped room a hypothesis forgets "
+        "per picture (slower than forget_per_observation: the room does not change)",
+    )
+    identity_cap_nats: float = Field(
+        12.0,
+        gt=0,
+        description="most evidence one picture gives that this is the mapped room (nats): "
+        "below null_nats, so no single picture decides it",
+    )
     min_pnp_inliers: int = Field(
         12, ge=6, description="PnP inliers of one picture that propose a new hypothesis"
     )

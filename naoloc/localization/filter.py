@@ -33,7 +33,7 @@ from naoloc.localization.hypothesis import (
     motion_step,
 )
 from naoloc.localization.line_poses import line_poses
-from naoloc.localization.pictures import PictureMatches, matched_only, picture_log_ratio
+from naoloc.localization.pictures import PictureMatches, distinct_only, picture_log_ratio
 from naoloc.localization.walls import WallMap, fit_line
 from naoloc.mapping.planar_ransac import planar_hypotheses
 from naoloc.perception.floorline import WallLine
@@ -147,12 +147,14 @@ class MultiHypothesisFilter:
             self.window.append((evidence, odometry))
         # Odometry alone says nothing of where the robot is: only evidence ages the scores.
         keep = 1.0 - self.tun.forget_per_observation if evidence is not None else 1.0
+        kept = 1.0 - self.tun.identity_forget_per_picture
         leader = max(self.hypotheses, key=lambda h: h.score) if self.hypotheses else None
         gains = {}
         for h in self.hypotheses:
             gains[id(h)] = self._update(h, evidence)
             h.score = keep * h.score + gains[id(h)]
-            h.seen_score = keep * h.seen_score + self._identity(h, evidence)
+            if isinstance(evidence, PictureMatches):  # lines say nothing of which room
+                h.seen_score = kept * h.seen_score + self._identity(h, evidence)
         if isinstance(evidence, PictureMatches):
             if evidence.features > 0:
                 self.pictures += 1
@@ -316,10 +318,13 @@ class MultiHypothesisFilter:
 
     def _identity(self, h: Hypothesis, evidence: Evidence) -> float:
         """What an observation says of the map's room being the robot's at ``h``: a
-        picture's ratio-tested matches at its pose (:func:`matched_only`); lines, nothing."""
-        if not isinstance(evidence, PictureMatches) or evidence.matched.shape[0] == 0:
+        picture's distinctive matches at its pose (:func:`distinct_only`), at most
+        ``identity_cap_nats`` (one picture's matches share its view: one picture alone is
+        not another room's proof); lines, nothing."""
+        if not isinstance(evidence, PictureMatches) or evidence.distinct.shape[0] == 0:
             return 0.0
-        return picture_log_ratio(matched_only(evidence), h.pose, self.tun)
+        gain = picture_log_ratio(distinct_only(evidence), h.pose, self.tun)
+        return min(self.tun.identity_cap_nats, gain)
 
     def _propose(self, m: PictureMatches) -> None:
         """New hypotheses where the pictures put the robot, unless one explains them.
@@ -410,18 +415,23 @@ class MultiHypothesisFilter:
         assert self.odometry is not None
         h = Hypothesis(z, PROPOSAL_COV if cov is None else cov, self.tun)
         keep = 1.0 - self.tun.forget_per_observation
+        kept = 1.0 - self.tun.identity_forget_per_picture
         events = list(self.window)
         score = seen = 0.0
+        shown = 0  # pictures scored so far (the identity ages by pictures only)
         if anchor is not None:
             score = h.update_picture(anchor, self.tun).evidence
             seen = self._identity(h, anchor)
+            shown = 1
             events = events[:-1]
         for age, (evidence, odo) in enumerate(reversed(events), start=1 if anchor else 0):
             step = self.step_of(self.odometry, odo)
             near = math.hypot(step[0], step[1]) < NEAR_M and abs(step[2]) < NEAR_RAD
             probe = h if near else Hypothesis(*motion_step(h.pose, h.cov, step, self.tun), self.tun)
             score += keep**age * self._update(probe, evidence)
-            seen += keep**age * self._identity(probe, evidence)
+            if isinstance(evidence, PictureMatches):
+                seen += kept**shown * self._identity(probe, evidence)
+                shown += 1
         if h.support + h.line_support == 0:
             return None
         h.score, h.seen_score = score, seen

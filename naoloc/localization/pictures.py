@@ -18,7 +18,7 @@ Frames: landmarks and poses in the map frame (m, rad); pixels of the map's pinho
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -34,8 +34,8 @@ __all__ = [
     "EVIDENCE_CAP",
     "LandmarkIndex",
     "PictureMatches",
+    "distinct_only",
     "match_picture",
-    "matched_only",
     "mixture",
     "picture_log_ratio",
     "reprojection",
@@ -65,6 +65,9 @@ class PictureMatches:
         retrieved: The keyframes retrieval ranked first.
         proposal: The robot pose at capture a PnP RANSAC fits (map frame), or None.
         proposal_inliers: That fit's inliers (0 without one).
+        distinct: ``(d, 3)`` the nearest landmark of each feature that passes Lowe's ratio
+            test over the whole map (:meth:`LandmarkIndex.candidates`).
+        distinct_pixels: ``(d, 2)`` those features' pixels.
     """
 
     points: np.ndarray
@@ -79,6 +82,8 @@ class PictureMatches:
     retrieved: tuple[int, ...]
     proposal: np.ndarray | None
     proposal_inliers: int
+    distinct: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    distinct_pixels: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
     def __len__(self) -> int:
         """Features with landmark candidates."""
@@ -179,10 +184,11 @@ def match_picture(
     proposal, inliers = None, 0
     if idx.size >= tun.min_pnp_inliers:
         proposal, inliers = _pnp_pose(obj, pixels, kmat, c_q, tun, seed)
-    points, px, group = landmarks.candidates(feats, tun.neighbours)
+    points, px, group, distinct = landmarks.candidates(feats, tun.neighbours, tun.distinct_ratio)
+    first = np.flatnonzero(distinct) * tun.neighbours  # each distinctive feature's nearest
     return PictureMatches(
         points, px, group, tun.neighbours, obj, pixels, projection, area, len(feats),
-        tuple(cands), proposal, inliers,
+        tuple(cands), proposal, inliers, points[first], px[first],
     )  # fmt: skip
 
 
@@ -202,14 +208,28 @@ class LandmarkIndex:
         self.desc = pad_packed(desc) if self.binary else desc
         self.matcher = hamming_matcher(self.binary)
 
-    def candidates(self, feats: Features, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Each feature's ``k`` nearest landmark descriptors: points, pixels, feature index."""
+    def candidates(
+        self, feats: Features, k: int, ratio: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Each feature's ``k`` nearest landmark descriptors, and which features are
+        distinctive.
+
+        Returns:
+            The candidates' points and pixels, their feature index, and per feature whether
+            its nearest landmark is ``ratio`` times nearer in descriptor space than the
+            nearest *other* landmark (one 0.1 m away or more: the same point triangulated
+            from two pairs of keyframes is one landmark), Lowe's test over the whole map.
+        """
         if len(feats) == 0 or self.points.shape[0] == 0:
-            return np.zeros((0, 3)), np.zeros((0, 2)), np.zeros(0, np.int64)
+            return np.zeros((0, 3)), np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, bool)
         query = pad_packed(feats.descriptors) if self.binary else feats.descriptors
-        _dist, nearest = self.matcher.knn(query, self.desc, k)
+        dist, nearest = self.matcher.knn(query, self.desc, k)
+        pts = self.points[nearest]  # (n, k, 3)
+        other = np.linalg.norm(pts - pts[:, :1], axis=2) > 0.1
+        second = np.where(other, dist, np.inf).min(axis=1)
+        distinct = dist[:, 0] < ratio * second
         group = np.repeat(np.arange(len(feats)), nearest.shape[1])
-        return self.points[nearest.ravel()], feats.xy[group].astype(np.float64), group
+        return pts.reshape(-1, 3), feats.xy[group].astype(np.float64), group, distinct
 
 
 def reprojection(
@@ -286,17 +306,19 @@ def mixture(
     return resp, np.log((per + wrong) / wrong)
 
 
-def matched_only(m: PictureMatches) -> PictureMatches:
-    """The picture's retrieval matches alone (each feature's one ratio-tested landmark).
+def distinct_only(m: PictureMatches) -> PictureMatches:
+    """The picture's distinctive matches alone (each feature whose nearest landmark passes
+    Lowe's ratio test over the whole map).
 
-    Any pose finds a few of the many nearest-descriptor candidates by chance; ratio-tested
-    matches agree with a pose only where the pictures and the map show the same place, so
+    Any pose finds a few of the many nearest-descriptor candidates by chance; distinctive
+    matches agree with a pose only where the picture and the map show the same place, so
     they alone weigh whether this is the mapped room at all.
     """
-    n = m.matched.shape[0]
+    n = m.distinct.shape[0]
     return PictureMatches(
-        m.matched, m.matched_pixels, np.arange(n), 1, m.matched, m.matched_pixels,
+        m.distinct, m.distinct_pixels, np.arange(n), 1, m.matched, m.matched_pixels,
         m.projection, m.area_px, n, m.retrieved, m.proposal, m.proposal_inliers,
+        m.distinct, m.distinct_pixels,
     )  # fmt: skip
 
 

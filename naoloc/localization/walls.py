@@ -66,9 +66,11 @@ class WallMap:
 
 
 def wall_map(meta: dict[str, Any]) -> WallMap | None:
-    """The walls a map's meta records (``wall_poses.wall_frame`` and ``walls_m``), or None.
+    """Where the floor lines of the walls a map's meta records stand, or None.
 
-    None for a map whose keyframe poses did not come from the walls (odometry poses).
+    From ``wall_poses.wall_frame`` and ``walls_m`` (the wall surfaces), moved in by
+    ``wall_poses.skirting_m`` where the survey recorded skirting boards: the floor line is
+    the boards' foot. None for a map whose keyframe poses did not come from the walls.
     """
     wp = meta.get("wall_poses")
     if not isinstance(wp, dict):
@@ -82,6 +84,9 @@ def wall_map(meta: dict[str, Any]) -> WallMap | None:
     ):
         return None
     x0, x1, y0, y1 = (float(v) for v in bounds)
+    skirting = wp.get("skirting_m", 0.0)
+    if isinstance(skirting, (int, float)) and not isinstance(skirting, bool) and 0 < skirting < 0.1:
+        x0, x1, y0, y1 = x0 + skirting, x1 - skirting, y0 + skirting, y1 - skirting
     if not (x0 < x1 and y0 < y1):
         return None
     return WallMap.of(Pose2D(*(float(v) for v in frame)), (x0, x1, y0, y1))

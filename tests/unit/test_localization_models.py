@@ -88,7 +88,7 @@ def _picture(pose: np.ndarray, n: int = 60, seed: int = 0, wrong: float = 0.0) -
     bad = rng.random(n) < wrong
     pixels[bad] = rng.uniform([0, 0], [320, 240], (int(bad.sum()), 2))
     return PictureMatches(points, pixels, np.arange(n), 1, points, pixels, projection,
-                          320 * 240.0, n, (), None, 0)  # fmt: skip
+                          320 * 240.0, n, (), None, 0, points, pixels)  # fmt: skip
 
 
 def test_reprojection_jacobian_is_the_numerical_one() -> None:
@@ -184,6 +184,7 @@ def test_the_filter_starts_from_the_lines_and_a_picture_decides() -> None:
     f.observe(_picture(truth, seed=1, wrong=0.3), odo)
     f.observe(lines, odo)
     f.observe(_picture(truth, seed=2, wrong=0.3), odo)
+    f.observe(_picture(truth, seed=3, wrong=0.3), odo)  # no one picture proves the room
     b = f.belief()
     assert b.pose is not None and math.hypot(*(b.pose[:2] - truth[:2])) < 0.02
     assert decide(b, TUN)[0] is Status.TRACKING
