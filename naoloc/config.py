@@ -268,6 +268,13 @@ class SurveyConfig(_Model):
         None,
         description="[along x, along y] sides of the circuit (m); null = room size - 2 * offset",
     )
+    skirting_m: float = Field(
+        0.012,
+        ge=0.0,
+        le=0.1,
+        description="how far the skirting boards stand out of the walls (m): the floor line "
+        "sees their face, the room and the map's walls are measured wall to wall (0: none)",
+    )
     head_yaw_rad: float | None = Field(
         None, description="head yaw while walking; null = from the nearest-wall detector"
     )
@@ -472,6 +479,35 @@ class LocalizerTuning(_Model):
     )
 
 
+class MapCheckTuning(_Model):
+    """Limits of build-map's checks of a survey's map frame (naoloc.mapping.checks)."""
+
+    min_corner_share: float = Field(
+        0.75, ge=0, le=1, description="least share of the circuit's corners a wall placed"
+    )
+    min_coverage: float = Field(
+        0.5, ge=0, le=1, description="least share of each wall's stops with its floor line"
+    )
+    max_wall_fit_m: float = Field(
+        0.06,
+        gt=0,
+        description="largest RMS of the side lines' change between stops against the "
+        "odometry's walk away from the wall (m)",
+    )
+    max_lap_difference_pct: float = Field(
+        15.0, gt=0, description="largest lap-to-lap difference of a side's scale (%)"
+    )
+    odometry_scale_range: tuple[float, float] = Field(
+        (0.75, 1.33), description="a side's metres per odometry metre a NAO's walk can give"
+    )
+    max_size_error_pct: float = Field(
+        10.0,
+        gt=0,
+        description="largest disagreement of the configured sides with the walk (%): x "
+        "against y, and each against the survey's floor-line metric scale",
+    )
+
+
 class MapTuning(_Model):
     """Tuning of map building (landmarks, pose graph, bundle adjustment) and localizing."""
 
@@ -479,6 +515,7 @@ class MapTuning(_Model):
     pose_graph: PoseGraphTuning = PoseGraphTuning()
     bundle: BundleTuning = BundleTuning()
     localizer: LocalizerTuning = LocalizerTuning()
+    checks: MapCheckTuning = MapCheckTuning()
 
 
 class MapConfig(_Model):

@@ -41,12 +41,14 @@ from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.robot.keyframe import Keyframe
 
 MAX_OFFSET_ERROR_M: Final = 0.5  # a side line farther than this from the offset is not used
-MAX_ANGLE_ERROR_RAD: Final = 0.35  # nor one at a larger angle to the expected wall
+MAX_ANGLE_ERROR_RAD: Final = 0.2  # nor one at a larger angle to the expected wall
+MIN_LINE_M: Final = 0.35  # nor one nearer than this (m): no view sees a wall there
 MIN_CORNER_TURN_RAD: Final = math.pi / 4  # an odometry turn this large between frames: corner
 SCALE_RANGE: Final = (0.7, 1.4)  # a side's metres per odometry metre outside this: not used
 TURN_SCALE_RANGE: Final = (0.8, 1.25)  # odometry turn per true turn outside this: not used
 MIN_CORNER_FRACTION: Final = 0.5  # sides whose corner a front line must have placed
 MAX_FRONT_M: Final = 2.2  # front lines are checked to 2.2 m (tools/floorline_accuracy.py)
+FRONT_HEADING_M: Final = 4.0  # a far wall's line gives the start's heading (angle, not distance)
 LINE_STD_M: Final = 0.03  # a floor line's distance, one sigma (NAO's lens reads 2-4 cm long)
 LINE_STD_RAD: Final = 0.01  # and its angle
 MIN_ANGLE_GATE_RAD: Final = 0.12  # an angle this close to the prediction is always used
@@ -89,6 +91,15 @@ class WallPoses:
         walls: The room's walls in W, ``(x_min, x_max, y_min, y_max)`` (m): the circuit
             widened by the wall offset; the floor-line fix (:mod:`naoloc.localization.floorfix`)
             uses them.
+        sides_of: Each keyframe's side (0, 1, 2, ... over all laps).
+        lines_seen: Whether each keyframe had a usable side line (near the offset, at the
+            expected angle).
+        wall_seen: Whether that line saw its side's wall (not furniture before it).
+        residuals: For consecutive keyframes of a side whose lines both saw the wall, the
+            lines' change less the odometry's walk away from the wall between them, m (a
+            straight wall and a true odometry give zero; the map checks use them).
+        skirting: How far the skirting boards stand out of the walls (m): ``walls`` are the
+            wall surfaces; a floor line sees the boards' face this much nearer.
     """
 
     keyframes: list[Keyframe]
@@ -97,11 +108,17 @@ class WallPoses:
     turn_scale: float | None = None
     wall_frame: Pose2D | None = None
     walls: tuple[float, float, float, float] | None = None
+    sides_of: list[int] = dataclasses.field(default_factory=list)
+    lines_seen: list[bool] = dataclasses.field(default_factory=list)
+    wall_seen: list[bool] = dataclasses.field(default_factory=list)
+    residuals: list[float] = dataclasses.field(default_factory=list)
+    skirting: float = 0.0
 
     def summary(self) -> dict[str, Any]:
         """JSON-able facts for the map's meta."""
         known = [s for s in self.side_scales if s is not None]
         return {
+            "skirting_m": self.skirting,
             "sides": len(self.side_scales),
             "sides_with_corner": len(known),
             "median_scale": None if not known else round(float(np.median(known)), 4),
@@ -154,6 +171,8 @@ def _line(
     delta = modulo2PI(side_normal - normal)
     if abs(distance - offset) > MAX_OFFSET_ERROR_M or abs(delta) > MAX_ANGLE_ERROR_RAD:
         return None
+    if distance < MIN_LINE_M:
+        return None  # the bottom camera sees no wall that near: the robot's own arm
     return float(distance), float(delta)
 
 
@@ -162,6 +181,7 @@ def wall_poses(
     meta: dict[str, Any],
     *,
     offset: float,
+    skirting: float = 0.0,
 ) -> WallPoses | None:
     """Keyframe poses from the survey's rectangle, its floor lines and the odometry.
 
@@ -170,12 +190,16 @@ def wall_poses(
         meta: The survey meta: ``sides_m``, ``vision`` (per-frame side and front lines),
             ``wall_follow.side_normal`` and optionally ``start_side``.
         offset: ``survey.wall_offset_m``, m.
+        skirting: ``survey.skirting_m``: how far the skirting boards stand out of the walls,
+            m. The floor lines see the boards' face; the room (and so the circuit) is
+            measured wall to wall, so every line's distance is taken this much longer.
 
     Returns:
         The poses, or None when the meta lacks what this needs (no vision, a survey that
         did not follow walls) or when fewer than half of the corners were placed (by the
         next side's wall or a front line): the odometry poses are then kept.
     """
+    meta = _to_walls(meta, skirting)
     vision = meta.get("vision")
     sides_m = meta.get("sides_m")
     follow = meta.get("wall_follow")
@@ -239,6 +263,8 @@ def wall_poses(
     # Pass 2, per side: what each line saw, the wall or furniture standing in front of it
     # (:func:`side_distances`), and so every frame's distance from the side's wall.
     dist: list[float | None] = [None] * len(keyframes)
+    wall_seen = [False] * len(keyframes)  # the frame's line saw its side's wall
+    residuals: list[float] = []  # consecutive lines on the wall against the odometry
     start_dist: float | None = None
     used = 0
     for k in range(n_sides):
@@ -256,8 +282,13 @@ def wall_poses(
             start_dist = dists[0] if on_wall[0] else _start_from_wall(dists, on_wall, dy)
             dists, on_wall = dists[1:], on_wall[1:]
         used += sum(on_wall)
-        for i, v in zip(idx, dists, strict=True):
-            dist[i] = v
+        for i, v, w in zip(idx, dists, on_wall, strict=True):
+            dist[i], wall_seen[i] = v, w
+        for j, i in itertools.pairwise(idx):
+            if wall_seen[i] and wall_seen[j]:
+                li, lj = lines[i], lines[j]
+                assert li is not None and lj is not None  # a line that saw the wall
+                residuals.append(li[0] - lj[0] - (inward_m[i] - inward_m[j]))
 
     # A side starts where the previous one ended: as far along it as that side's last
     # frame stood inward of its circuit.
@@ -293,7 +324,8 @@ def wall_poses(
         poses.append(Pose2D(float(position[0]), float(position[1]), modulo2PI(d + deltas[i])))
 
     # The survey start (the map frame's origin) in the wall frame.
-    heading = _start_heading(start_line, keyframes, lines, frames_of[0], along)
+    own = start_line[1] if start_line is not None else _far_heading(meta, side_normal)
+    heading = _start_heading(own, keyframes, lines, frames_of[0], along)
     start = Pose2D(0.0, 0.0, heading or 0.0)
     if start_dist is not None:  # the origin's distance from side 0's wall, not what it saw
         start = Pose2D(0.0, (start_dist - offset) * turn, start.theta)
@@ -309,8 +341,44 @@ def wall_poses(
         -offset, float(sides_m[0]) + offset, min(-turn * offset, far_y), max(-turn * offset, far_y)
     )  # fmt: skip
     return WallPoses(
-        out, scales, used, _turn_scale(keyframes, side_of, lines, turn), start.inverse(), walls
+        out,
+        scales,
+        used,
+        _turn_scale(keyframes, side_of, lines, turn),
+        start.inverse(),
+        walls,
+        sides_of=list(side_of),
+        lines_seen=[line is not None for line in lines],
+        wall_seen=wall_seen,
+        residuals=residuals,
+        skirting=skirting,
     )
+
+
+def _to_walls(meta: dict[str, Any], skirting: float) -> dict[str, Any]:
+    """The survey meta with every floor line's distance ``skirting`` m longer (from the
+    boards' face to the wall behind them)."""
+    if skirting == 0.0:
+        return meta
+
+    def moved(entry: Any) -> Any:
+        if not isinstance(entry, dict) or not isinstance(entry.get("distance_m"), (int, float)):
+            return entry
+        return {**entry, "distance_m": float(entry["distance_m"]) + skirting}
+
+    out = dict(meta)
+    for key in ("start_side", "start_front", "start_across"):
+        if key in out:
+            out[key] = moved(out[key])
+    vision = out.get("vision")
+    if isinstance(vision, list):
+        out["vision"] = [
+            {**v, "side": moved(v.get("side")), "front": moved(v.get("front"))}
+            if isinstance(v, dict)
+            else v
+            for v in vision
+        ]
+    return out
 
 
 def _turn_scale(
@@ -560,8 +628,30 @@ def _start_from_wall(
     return float(np.median(back)) if back else float(dists[0])
 
 
+def _far_heading(meta: dict[str, Any], side_normal: float) -> float | None:
+    """The survey start's heading to side 0's direction (rad) from the walls it saw farther
+    away when its own side wall was too near to be seen: the nearer of the wall ahead's
+    line (``start_front``, square to side 0) and the wall across's (``start_across``,
+    parallel to it), within :data:`FRONT_HEADING_M`. None without a usable line."""
+    best: tuple[float, float] | None = None
+    for key, expected in (("start_front", 0.0), ("start_across", -side_normal)):
+        entry = meta.get(key)
+        if not isinstance(entry, dict):
+            continue
+        distance, normal = entry.get("distance_m"), entry.get("normal_rad")
+        if not isinstance(distance, (int, float)) or not isinstance(normal, (int, float)):
+            continue
+        if not (math.isfinite(distance) and math.isfinite(normal)):
+            continue
+        delta = modulo2PI(expected - float(normal))
+        usable = distance <= FRONT_HEADING_M and abs(delta) <= MAX_ANGLE_ERROR_RAD
+        if usable and (best is None or distance < best[0]):
+            best = (float(distance), delta)
+    return None if best is None else best[1]
+
+
 def _start_heading(
-    start_line: tuple[float, float] | None,
+    own: float | None,
     keyframes: Sequence[Keyframe],
     lines: Sequence[tuple[float, float] | None],
     side0: Sequence[int],
@@ -569,10 +659,11 @@ def _start_heading(
 ) -> float | None:
     """The survey start's heading to side 0's wall (rad), or None without any line.
 
-    The start's own line, unless side 0's frames' lines within :data:`START_HEADING_M` of
-    walk, each less the odometry's turn from the start to its frame (the map frame is the
-    start's odometry frame), have a median more than :data:`START_GATE_RAD` away from it:
-    then that median.
+    ``own`` is what the start itself saw: its side line's angle, or (a side wall too near
+    to be seen) the wall ahead's (:func:`_front_heading`). That, unless side 0's frames'
+    lines within :data:`START_HEADING_M` of walk, each less the odometry's turn from the
+    start to its frame (the map frame is the start's odometry frame), have a median more
+    than :data:`START_GATE_RAD` away from it: then that median.
     """
     votes = []
     for i in side0:
@@ -581,6 +672,6 @@ def _start_heading(
         if (line := lines[i]) is not None:
             votes.append(modulo2PI(line[1] - keyframes[i].pose.theta))
     frames = float(np.median(votes)) if votes else None
-    if start_line is None or frames is None:
-        return frames if start_line is None else start_line[1]
-    return start_line[1] if abs(modulo2PI(frames - start_line[1])) <= START_GATE_RAD else frames
+    if own is None or frames is None:
+        return frames if own is None else own
+    return own if abs(modulo2PI(frames - own)) <= START_GATE_RAD else frames
