@@ -238,13 +238,13 @@ def decide_side(
         right: The same on the right.
         offset: The survey's wall offset, m (None: any lone line decides).
     """
-    if left is None and right is None:
-        return None
+    seen: Side
     if left is not None and (right is None or left < right):
-        seen: Side = "left"
-        distance = left
-    else:
+        seen, distance = "left", left
+    elif right is not None:
         seen, distance = "right", right
+    else:
+        return None
     if offset is not None and distance > offset + MAX_DEVIATION_M:
         return None
     return seen

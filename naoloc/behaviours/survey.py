@@ -424,7 +424,7 @@ def _walk_laps(
         side_line = median_line(start_lines)
         if side_line is None:
             side_line = measure_side(robot, eye, side_normal, offset)
-        memory.seen_side(side_line, here)
+        memory.seen_side(trusted(side_line, offset), here)
         result.meta["start_side"] = line_dict(side_line)  # where the map frame's origin stands
         result.meta["start_views"] = [line_dict(line) for line in start_lines]
         # The wall ahead at the start: its angle is the origin's heading when the side wall
@@ -476,7 +476,7 @@ def _walk_laps(
                         last = steps + 1 >= n
                     if steps >= n + MAX_EXTRA_STEPS:
                         break
-                    steer = memory.steer(side_line, here)
+                    steer = memory.steer(here)
                     move, steered = corrected_step(steer, side_normal, keep, length_now)
                     if not robot.motion.moveTo(move.x, move.y, move.theta):
                         raise watch.blocked(f"moveTo failed; {_ahead(robot, eye)}")
@@ -502,7 +502,7 @@ def _walk_laps(
                     walked += length_now
                     steps += 1
                     side_line = measure_side(robot, eye, side_normal, offset)
-                    memory.seen_side(side_line, here)
+                    memory.seen_side(trusted(side_line, offset), here)
                     watch.side_line(side_line, here)
                     good = trusted(side_line, offset)
                     if good is not None:
@@ -515,6 +515,7 @@ def _walk_laps(
                             "front": line_dict(front),
                             "steered": steered,
                             "carried": steered and steer is not None and steer.inliers == 0,
+                            "level_m": round(memory.level, 3),
                             "motion": motion,
                             **({"turn_side": line_dict(turn_side)} if steps == 1 else {}),
                         }
@@ -533,7 +534,7 @@ def _walk_laps(
                 here = after
                 memory.turned()  # the front wall is the next side's
                 side_line = turn_side = measure_side(robot, eye, side_normal, offset)
-                memory.seen_side(side_line, here)
+                memory.seen_side(trusted(side_line, offset), here)
             result.laps = lap + 1
     finally:
         scale, ratios = metric_scale(fronts)

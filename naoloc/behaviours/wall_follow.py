@@ -266,46 +266,66 @@ def carry(line: WallLine, motion: Pose2D) -> WallLine:
 
 @dataclass
 class SideMemory:
-    """The last side and front lines seen, carried by the odometry while the side is unseen.
+    """The side wall as the survey steers by it: the last line seen, carried by the
+    odometry, and the depth of what stands in front of the wall.
 
     A wall nearer than the bottom camera's views reach (about 0.45 m) is unseen; stepping
     straight on then walks a robot turned a few degrees into the wall, blind all the way.
     The last line seen, carried by the odometry's motion since (:func:`carry`), steers for
     up to :data:`MAX_CARRY_M` of walk; after a corner the front wall's last line, turned
-    with the robot, is the new side's wall. A line that jumps more than :data:`JUMP_M` or
-    turns more than :data:`JUMP_RAD` from the carried one sees something else (a chair's
-    foot, a doorway's recess, the other wall of a corner): the carried line steers
-    instead, until it is too old.
+    with the robot, is the new side's wall. A line that jumps more than :data:`JUMP_M`
+    from the carried one sees something else: furniture in front of the wall (a
+    sideboard's foot), a doorway's recess, a corner's other wall. Its jump is kept as a
+    level (``level``, m: how far nearer than the wall it stands), and the lines of that
+    stretch steer as the wall behind them, so the robot walks past a sideboard on its
+    circuit, not along its face; a line back at the wall's distance ends the stretch.
     """
 
     side: tuple[WallLine, Pose2D] | None = None
     front: tuple[WallLine, Pose2D] | None = None
     angle_known: bool = True  # False after a corner: the odometry's turn errs 6 %
+    level: float = 0.0
 
     def carried(self, here: Pose2D) -> WallLine | None:
-        """The last side line accepted, carried to odometry pose ``here`` (None: too old)."""
+        """The wall's last line, carried to odometry pose ``here`` (None: too old)."""
         if self.side is None:
             return None
         seen, there = self.side
         motion = there.inverse() * here
         if math.hypot(motion.x, motion.y) > MAX_CARRY_M:
             return None
+        if math.hypot(motion.x, motion.y) < 1e-6 and abs(motion.theta) < 1e-6:
+            return seen  # measured here
         return carry(seen, motion)
 
-    def agrees(self, line: WallLine, here: Pose2D) -> bool:
-        """Whether ``line`` is within :data:`JUMP_M` and :data:`JUMP_RAD` of the carried line
-        (or none is)."""
+    def wall_of(self, line: WallLine, here: Pose2D) -> WallLine:
+        """The wall behind a measured line: the line moved by the stretch's level, a new
+        level when it jumps from the carried wall (the carried wall's angle when the line
+        turned from it by more than :data:`JUMP_RAD`)."""
         known = self.carried(here)
         if known is None:
-            return True
-        turned = abs(modulo2PI(line.normal - known.normal))
-        angle_ok = turned <= JUMP_RAD or not self.angle_known
-        return abs(line.distance - known.distance) <= JUMP_M and angle_ok
+            self.level = 0.0
+            return line
+        turned = abs(modulo2PI(line.normal - known.normal)) > JUMP_RAD and self.angle_known
+        normal = known.normal if turned else line.normal
+        if abs(line.distance - known.distance) <= JUMP_M:
+            self.level = 0.0  # the wall itself
+            return _moved(line, 0.0, normal)
+        if abs(line.distance + self.level - known.distance) > JUMP_M:
+            self.level = known.distance - line.distance  # a new stretch begins
+        return _moved(line, self.level, normal)
 
-    def seen_side(self, line: WallLine | None, here: Pose2D) -> None:
-        """A side line measured (or not) at odometry pose ``here`` (map frame)."""
-        if line is not None and line.inliers > 0 and self.agrees(line, here):
-            self.side, self.angle_known = (line, here), True
+    def seen_side(self, line: WallLine | None, here: Pose2D) -> WallLine | None:
+        """A side line measured (or not) at odometry pose ``here`` (map frame).
+
+        Returns:
+            The wall it shows (None: no measured line).
+        """
+        if line is None or line.inliers == 0:
+            return None
+        wall = self.wall_of(line, here)
+        self.side, self.angle_known = (wall, here), True
+        return wall
 
     def seen_front(self, line: WallLine | None, here: Pose2D) -> None:
         """A front line measured (or not) at odometry pose ``here``."""
@@ -314,14 +334,16 @@ class SideMemory:
 
     def turned(self) -> None:
         """A corner: the front wall becomes the side wall; the old side is behind."""
-        self.side, self.front, self.angle_known = self.front, None, False
+        self.side, self.front, self.angle_known, self.level = self.front, None, False, 0.0
 
-    def steer(self, line: WallLine | None, here: Pose2D) -> WallLine | None:
-        """``line`` when measured and agreeing, else the last one carried to ``here``."""
-        if line is not None and self.agrees(line, here):
-            return line
-        carried = self.carried(here)
-        return carried if carried is not None else line
+    def steer(self, here: Pose2D) -> WallLine | None:
+        """The wall to steer by at ``here``: the last one seen or carried (None: none)."""
+        return self.carried(here)
+
+
+def _moved(line: WallLine, by: float, normal: float) -> WallLine:
+    return WallLine(line.distance + by, normal, line.inliers, line.fraction, line.rms_m,
+                    line.span_m)  # fmt: skip
 
 
 def trusted(line: WallLine | None, offset: float) -> WallLine | None:

@@ -48,6 +48,7 @@ SCALE_RANGE: Final = (0.7, 1.4)  # a side's metres per odometry metre outside th
 TURN_SCALE_RANGE: Final = (0.8, 1.25)  # odometry turn per true turn outside this: not used
 MIN_CORNER_FRACTION: Final = 0.5  # sides whose corner a front line must have placed
 MAX_FRONT_M: Final = 2.2  # front lines are checked to 2.2 m (tools/floorline_accuracy.py)
+FRONT_AGREE_M: Final = 0.12  # a front line within this of the corners' walk also anchors, m
 FRONT_HEADING_M: Final = 4.0  # a far wall's line gives the start's heading (angle, not distance)
 LINE_STD_M: Final = 0.03  # a floor line's distance, one sigma (NAO's lens reads 2-4 cm long)
 LINE_STD_RAD: Final = 0.01  # and its angle
@@ -71,6 +72,7 @@ START_GATE_RAD: Final = 0.06
 # 0.45 m deep, 0.09 m apart, read as one stretch put the start, and every map pose, 9.7 cm
 # off; the walk back errs 1-5 cm).
 START_FROM_WALL_FRAMES: Final = 8
+END_FRAMES: Final = 3  # a side's last frames whose wall lines place where it ended
 WALL_LEVEL_M: Final = 0.1  # stretches whose levels are this close see the same thing
 MIN_WALL_FRAMES: Final = 3  # frames that must see a side's wall
 WALL_SUPPORT: Final = 0.2  # and the share of the side's lines that must
@@ -299,7 +301,7 @@ def wall_poses(
         if not frames_of[k]:
             continue  # a side the survey found itself at the end of: no step, no picture
         last = frames_of[k][-1]
-        starts[k + 1] = laterals[last]
+        starts[k + 1] = _end_lateral(frames_of[k], laterals, wall_seen, inward_m)
         nxt = dist[last + 1] if side_of[last + 1] == k + 1 else None
         if nxt is None:
             continue
@@ -353,6 +355,25 @@ def wall_poses(
         residuals=residuals,
         skirting=skirting,
     )
+
+
+def _end_lateral(
+    idx: Sequence[int],
+    laterals: Sequence[float],
+    wall_seen: Sequence[bool],
+    inward_m: Sequence[float],
+) -> float:
+    """Where a side's last frame stood inward of its circuit (m): the median of its last
+    :data:`END_FRAMES` frames whose lines saw the wall, each carried to the
+    last frame by the odometry's walk inward (a corner's plant or sideboard is often all
+    the last frame's line sees); the last frame's own lateral without such frames."""
+    last = idx[-1]
+    votes = [
+        laterals[i] + (inward_m[last] - inward_m[i])
+        for i in idx[-END_FRAMES:]
+        if wall_seen[i]
+    ]
+    return float(np.median(votes)) if votes else laterals[last]
 
 
 def _to_walls(meta: dict[str, Any], skirting: float) -> dict[str, Any]:
@@ -477,10 +498,11 @@ def _along_sides(
     """Each frame's distance from its side's corner (m), from the odometry's distance walked
     mapped through anchors (``frames_of``: each side's frame indices, in walking order):
     the corner (0 at 0) and, where the next side's wall says where this side ended
-    (``ends``: side -> (odometry along, true along) of its last frame), that alone; else
-    every front-wall line, which puts the frame it was measured at ``length - (distance -
-    offset)`` along the side. A side's start (odometry 0) is at ``starts[side]`` (m;
-    default 0): where the previous side's last frame stood.
+    (``ends``: side -> (odometry along, true along) of its last frame), that and the
+    front-wall lines that agree with it; else every front-wall line. A front line puts the
+    frame it was measured at ``length - (distance - offset)`` along the side. A side's start
+    (odometry 0) is at ``starts[side]`` (m; default 0): where the previous side's last frame
+    stood.
 
     Returns:
         The distances and each side's overall metres per odometry metre (None: no anchor).
@@ -489,12 +511,8 @@ def _along_sides(
     scales: list[float | None] = []
     for k, (idx, length) in enumerate(zip(frames_of, lengths, strict=True)):
         anchors = [(0.0, (starts or {}).get(k, 0.0))]
-        if ends is not None and k in ends and ends[k][0] > 0:
-            anchors.append(ends[k])
-            idx_lines: Sequence[int] = []
-        else:
-            idx_lines = idx
-        for j, i in enumerate(idx_lines):
+        fronts = []
+        for j, i in enumerate(idx):
             front = vision[i].get("front")
             if j == 0 or not isinstance(front, dict):
                 continue
@@ -505,7 +523,19 @@ def _along_sides(
                 and distance <= MAX_FRONT_M
             ):
                 where = length - (float(distance) - offset)
-                anchors.append((float(along[idx[j - 1]]), where))  # measured before the step
+                fronts.append((float(along[idx[j - 1]]), where))  # measured before the step
+        if ends is not None and k in ends and ends[k][0] > 0:
+            # The next wall placed the side's end; front lines that agree with the walk
+            # between the corners (within FRONT_AGREE_M) place the frames near the end too
+            # (a front line that sees furniture before the wall does not agree).
+            (o0, t0), (o1, t1) = anchors[0], ends[k]
+            anchors.append(ends[k])
+            anchors += [
+                (o, t) for o, t in fronts
+                if o < o1 and abs(t - (t0 + (o - o0) * (t1 - t0) / (o1 - o0))) <= FRONT_AGREE_M
+            ]  # fmt: skip
+        else:
+            anchors += fronts
         anchors.sort()
         kept = [anchors[0]]
         for o, t in anchors[1:]:

@@ -60,11 +60,12 @@ def test_a_carried_line_follows_the_odometry() -> None:
     assert moved.inliers == 0  # carried, not measured
     memory = SideMemory()
     memory.seen_side(wall, Pose2D())
-    assert memory.steer(None, Pose2D(0.4, 0.0, 0.0)) is not None
-    assert memory.steer(None, Pose2D(2.0, 0.0, 0.0)) is None  # too far to trust the odometry
+    assert memory.steer(Pose2D()) is wall  # measured here
+    assert memory.steer(Pose2D(0.4, 0.0, 0.0)) is not None
+    assert memory.steer(Pose2D(2.0, 0.0, 0.0)) is None  # too far to trust the odometry
     memory.seen_front(_line(0.55, 0.0), Pose2D(0.4, 0.0, 0.0))
     memory.turned()  # the front wall is the next side's, on the right after a left turn
-    side = memory.steer(None, Pose2D(0.4, 0.0, math.pi / 2))
+    side = memory.steer(Pose2D(0.4, 0.0, math.pi / 2))
     assert side is not None
     assert side.distance == pytest.approx(0.55) and side.normal == pytest.approx(-math.pi / 2)
 
@@ -105,15 +106,23 @@ def test_walking_into_the_wall_ahead_is_refused_before_the_step() -> None:
     assert not corner.wants_front
 
 
-def test_a_side_line_that_jumps_is_something_else() -> None:
+def test_furniture_before_the_wall_steers_as_the_wall_behind_it() -> None:
     memory = SideMemory()
-    memory.seen_side(_line(0.6, -math.pi / 2), Pose2D())
-    chair = _line(0.35, -math.pi / 2)  # a chair's foot 0.25 m nearer than the wall
-    steer = memory.steer(chair, Pose2D(0.2, 0.0, 0.0))
-    assert steer is not None and steer.distance == pytest.approx(0.6)  # the wall, carried
-    memory.seen_side(chair, Pose2D(0.2, 0.0, 0.0))  # not taken as the wall
-    near = _line(0.52, -math.pi / 2)  # the robot drifted 8 cm toward the wall: believed
-    assert memory.steer(near, Pose2D(0.4, 0.0, 0.0)) is near
+    right = -math.pi / 2
+    memory.seen_side(_line(0.8, right), Pose2D())
+    # a sideboard 0.42 m deep begins: its foot is not the wall, the robot keeps its course
+    wall = memory.seen_side(_line(0.38, right), Pose2D(0.2, 0.0, 0.0))
+    assert wall is not None and wall.distance == pytest.approx(0.8)
+    assert memory.level == pytest.approx(0.42)
+    # along the sideboard, past the carried line's reach, its foot still gives the wall
+    for i in range(2, 8):
+        wall = memory.seen_side(_line(0.40, right), Pose2D(0.2 * i, 0.0, 0.0))
+    assert wall is not None and wall.distance == pytest.approx(0.82)  # drifted 2 cm out
+    steer = memory.steer(Pose2D(1.4, 0.0, 0.0))
+    assert steer is not None and steer.distance == pytest.approx(0.82)
+    # past its end the wall itself: the stretch ends
+    memory.seen_side(_line(0.81, right), Pose2D(1.6, 0.0, 0.0))
+    assert memory.level == 0.0
 
 
 def test_a_side_wall_that_ignores_the_steps_toward_it_is_a_robot_sliding() -> None:
