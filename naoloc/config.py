@@ -261,8 +261,9 @@ class SurveyConfig(_Model):
     wall_offset_m: float = Field(
         1.0,
         gt=0.2,
-        description="circuit's distance from the walls (m); keep it 0.65 or more: nearer, "
-        "the robot's arm hides the floor beside it from the bottom camera (no floor line)",
+        description="circuit's distance from the walls (m); 0.5 or more (nearer, the bottom "
+        "camera cannot see the wall's foot beside the robot: the survey refuses it); below "
+        "0.6 the robot keeps 0.6 m from the walls, the circuit's sides as configured",
     )
     side_m: tuple[float, float] | None = Field(
         None,
@@ -484,6 +485,12 @@ class MapCheckTuning(_Model):
 
     min_corner_share: float = Field(
         0.75, ge=0, le=1, description="least share of the circuit's corners a wall placed"
+    )
+    max_origin_heading_deg: float = Field(
+        2.5,
+        gt=0,
+        description="largest difference between the start's heading from its own lines and "
+        "from its first steps' (deg)",
     )
     min_coverage: float = Field(
         0.5, ge=0, le=1, description="least share of each wall's stops with its floor line"

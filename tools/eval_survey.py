@@ -216,7 +216,6 @@ class Clock:
 def run_room(room: dict[str, Any], laps: int, out: Path) -> dict[str, Any]:
     """Survey one room, pose its keyframes as build-map does, check and measure them."""
     import naoloc
-    from naoloc.data.dataset import partial_path_for, read_dataset
     from naoloc.data.recorder import record_survey
 
     cfg = room_config(room, laps)
@@ -236,6 +235,13 @@ def run_room(room: dict[str, Any], laps: int, out: Path) -> dict[str, Any]:
     row["wall_s"] = round(time.monotonic() - t0, 1)
     a, b = cfg.survey_sides()
     row["circuit_s"] = round(laps * (2 * (a + b) / WALK_SPEED + 2 * math.pi / WALK_SPEED_THETA), 1)
+    return analyse(row, cfg, path)
+
+
+def analyse(row: dict[str, Any], cfg: Config, path: Path) -> dict[str, Any]:
+    """Pose a recorded survey's keyframes as build-map does, check and measure them."""
+    from naoloc.data.dataset import partial_path_for, read_dataset
+
     data_path = path if path.exists() else partial_path_for(path)
     if not data_path.exists():
         row.update(complete=False, frames=0)
@@ -309,6 +315,10 @@ def main() -> int:
     parser.add_argument("--out", type=Path, default=None, help="datasets folder (not the repo)")
     parser.add_argument("--json", type=Path, default=None, help="write the rows here")
     parser.add_argument(
+        "--reanalyse", type=Path, default=None, metavar="ROWS.json",
+        help="measure again the datasets a run wrote (its --json rows and --out folder)",
+    )  # fmt: skip
+    parser.add_argument(
         "--room", type=str, default=None,
         help="one room as JSON (size_m, style, light, offset_m, corner, wall, seed)",
     )  # fmt: skip
@@ -321,8 +331,17 @@ def main() -> int:
     out = args.out or Path(tempfile.mkdtemp(prefix="naoloc_eval_survey_"))
     out.mkdir(parents=True, exist_ok=True)
     rows = []
+    previous = {}
+    if args.reanalyse:
+        previous = {r["seed"]: r for r in json.loads(args.reanalyse.read_text(encoding="utf-8"))}
+        rooms = [draw_room(seed) for seed in previous]
     for room in rooms:
-        row = run_room(room, args.laps, out)
+        if room["seed"] in previous:
+            keep = ("error", "robot_s", "walk_s", "head_s", "wall_s", "circuit_s")
+            row = {**room, **{k: previous[room["seed"]].get(k) for k in keep}}
+            row = analyse(row, room_config(room, args.laps), out / f"survey_{room['seed']}.mcap")
+        else:
+            row = run_room(room, args.laps, out)
         rows.append(row)
         print(line_of(row), flush=True)
         if args.json:

@@ -436,9 +436,8 @@ def _walk_laps(
         result.meta["start_front"] = line_dict(
             start_front if start_front is not None and gate(start_front) else None
         )
-        if trusted(side_line, offset) is None:  # the wall across gives the heading too
-            across, _ = look_for_line(robot, eye, -side_normal, [BESIDE_VIEW])
-            result.meta["start_across"] = line_dict(across)
+        across, _ = look_for_line(robot, eye, -side_normal, [BESIDE_VIEW])  # a heading too
+        result.meta["start_across"] = line_dict(across)
         turn_side: WallLine | None = None
         for lap in range(cfg.survey.laps):
             for k in range(4):

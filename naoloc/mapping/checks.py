@@ -8,6 +8,8 @@ the survey's own records can contradict, and gives a figure, its limit and a ver
 - ``survey_complete``: the survey walked every lap (a blocked or interrupted one did not);
 - ``wall_poses``: the floor lines placed the keyframes (figure: the share of the circuit's
   corners they placed); without them the map would be the drifting odometry's;
+- ``origin``: the map origin's heading to its wall, from the start's own lines, against
+  what side 0's first steps' lines say (less the odometry's turn since the start);
 - ``coverage``: each wall's share of the survey's stops whose side line was usable (near
   the offset, at the expected angle); a survey beside the wrong wall, or pressed against
   one, sees its walls nowhere near where the circuit puts them;
@@ -130,6 +132,7 @@ def check_survey(
             "of the circuit's corners placed by a wall",
         )
     )
+    checks.append(_origin(walled, tuning))
     checks.append(_coverage(walled, tuning))
     checks.append(_wall_fit(walled, tuning))
     checks.append(_loop_closure(walled, tuning))
@@ -143,6 +146,30 @@ def _complete(data: Any, meta: dict[str, Any]) -> Check:
         return Check("survey_complete", 1.0, 1.0, "", "pass", "every lap walked")
     reason = meta.get("reason") or "incomplete"
     return Check("survey_complete", 0.0, 1.0, "", "fail", f"the survey stopped: {reason}")
+
+
+def _origin(walled: Any, tuning: MapCheckTuning) -> Check:
+    """The map origin's heading to its wall: the start's own lines against side 0's first
+    frames' (each less the odometry's turn since the start)."""
+    own, frames = walled.start_own, walled.start_frames
+    if own is None or frames is None:
+        return _check(
+            "origin",
+            None,
+            tuning.max_origin_heading_deg,
+            "deg",
+            None,
+            "the start or side 0's first frames saw no wall line",
+        )
+    diff = abs(math.degrees(math.remainder(own - frames, 2 * math.pi)))
+    return _check(
+        "origin",
+        diff,
+        tuning.max_origin_heading_deg,
+        "deg",
+        diff <= tuning.max_origin_heading_deg,
+        "the start's heading to its wall: its own lines against its first steps'",
+    )
 
 
 def _coverage(walled: Any, tuning: MapCheckTuning) -> Check:

@@ -66,6 +66,8 @@ EDGE_M: Final = 0.15
 # (6 % of the survey's first steering), so the start's own line is preferred.
 START_HEADING_M: Final = 1.0
 START_GATE_RAD: Final = 0.06
+CLEAN_RMS_M: Final = 0.006  # the start's views: lines scattered more are not its heading's
+CLEAN_FRACTION: Final = 0.6  # nor those with less of their boundary on them
 # A survey start beside furniture: its distance from the wall is carried back by the
 # odometry's walk inward from side 0's frames that see the wall within this many frames
 # (their median), not taken from its stretch's depth (room 1327980321: two chests 0.36 and
@@ -102,6 +104,10 @@ class WallPoses:
             straight wall and a true odometry give zero; the map checks use them).
         skirting: How far the skirting boards stand out of the walls (m): ``walls`` are the
             wall surfaces; a floor line sees the boards' face this much nearer.
+        start_own: The survey start's heading to side 0's wall from its own lines (rad;
+            None: it saw none).
+        start_frames: The same from side 0's first frames' lines, less the odometry's turn
+            since the start (rad; None: none).
     """
 
     keyframes: list[Keyframe]
@@ -115,6 +121,8 @@ class WallPoses:
     wall_seen: list[bool] = dataclasses.field(default_factory=list)
     residuals: list[float] = dataclasses.field(default_factory=list)
     skirting: float = 0.0
+    start_own: float | None = None
+    start_frames: float | None = None
 
     def summary(self) -> dict[str, Any]:
         """JSON-able facts for the map's meta."""
@@ -326,8 +334,8 @@ def wall_poses(
         poses.append(Pose2D(float(position[0]), float(position[1]), modulo2PI(d + deltas[i])))
 
     # The survey start (the map frame's origin) in the wall frame.
-    own = start_line[1] if start_line is not None else _far_heading(meta, side_normal)
-    heading = _start_heading(own, keyframes, lines, frames_of[0], along)
+    own = _own_heading(meta, offset, side_normal)
+    heading, frames_heading = _start_heading(own, keyframes, lines, frames_of[0], along)
     start = Pose2D(0.0, 0.0, heading or 0.0)
     if start_dist is not None:  # the origin's distance from side 0's wall, not what it saw
         start = Pose2D(0.0, (start_dist - offset) * turn, start.theta)
@@ -354,6 +362,8 @@ def wall_poses(
         wall_seen=wall_seen,
         residuals=residuals,
         skirting=skirting,
+        start_own=own,
+        start_frames=frames_heading,
     )
 
 
@@ -658,12 +668,42 @@ def _start_from_wall(
     return float(np.median(back)) if back else float(dists[0])
 
 
-def _far_heading(meta: dict[str, Any], side_normal: float) -> float | None:
-    """The survey start's heading to side 0's direction (rad) from the walls it saw farther
-    away when its own side wall was too near to be seen: the nearer of the wall ahead's
-    line (``start_front``, square to side 0) and the wall across's (``start_across``,
-    parallel to it), within :data:`FRONT_HEADING_M`. None without a usable line."""
-    best: tuple[float, float] | None = None
+def _own_heading(meta: dict[str, Any], offset: float, side_normal: float) -> float | None:
+    """The survey start's heading to side 0's direction (rad) from the lines the start
+    itself saw: the median of its side wall's (``start_side`` and every view's,
+    ``start_views``: one view's line can mix in a corner's other wall), else of the
+    farther walls' (:func:`_far_headings`: the walls ahead and across are square and
+    parallel to side 0, their lines err more). None without any."""
+    votes = []
+    views = meta.get("start_views")
+    entries = views if isinstance(views, list) and views else [meta.get("start_side")]
+    clean = [e for e in entries if isinstance(e, dict) and _clean(e)]
+    for entry in clean or entries:
+        line = _line(entry, offset, side_normal)
+        if line is not None:
+            votes.append(line[1])
+    if not votes:  # the far walls' lines err more: only without the side wall's
+        votes = _far_headings(meta, side_normal)
+    return float(np.median(votes)) if votes else None
+
+
+def _clean(entry: dict[str, Any]) -> bool:
+    """Whether a line's fit is clean: most of its boundary on it, little scatter about it
+    (a line mixing in a corner's other wall or furniture is neither)."""
+    rms, fraction = entry.get("rms_m"), entry.get("fraction")
+    return (
+        isinstance(rms, (int, float))
+        and isinstance(fraction, (int, float))
+        and rms <= CLEAN_RMS_M
+        and fraction >= CLEAN_FRACTION
+    )
+
+
+def _far_headings(meta: dict[str, Any], side_normal: float) -> list[float]:
+    """The survey start's heading to side 0's direction (rad) from each farther wall it
+    saw, within :data:`FRONT_HEADING_M`: the wall ahead (``start_front``, square to side
+    0) and the wall across (``start_across``, parallel to it)."""
+    found: list[float] = []
     for key, expected in (("start_front", 0.0), ("start_across", -side_normal)):
         entry = meta.get(key)
         if not isinstance(entry, dict):
@@ -674,10 +714,9 @@ def _far_heading(meta: dict[str, Any], side_normal: float) -> float | None:
         if not (math.isfinite(distance) and math.isfinite(normal)):
             continue
         delta = modulo2PI(expected - float(normal))
-        usable = distance <= FRONT_HEADING_M and abs(delta) <= MAX_ANGLE_ERROR_RAD
-        if usable and (best is None or distance < best[0]):
-            best = (float(distance), delta)
-    return None if best is None else best[1]
+        if distance <= FRONT_HEADING_M and abs(delta) <= MAX_ANGLE_ERROR_RAD:
+            found.append(delta)
+    return found
 
 
 def _start_heading(
@@ -686,11 +725,12 @@ def _start_heading(
     lines: Sequence[tuple[float, float] | None],
     side0: Sequence[int],
     along: np.ndarray,
-) -> float | None:
-    """The survey start's heading to side 0's wall (rad), or None without any line.
+) -> tuple[float | None, float | None]:
+    """The survey start's heading to side 0's wall (rad), or None without any line, and
+    what side 0's first frames say of it (None: nothing).
 
     ``own`` is what the start itself saw: its side line's angle, or (a side wall too near
-    to be seen) the wall ahead's (:func:`_front_heading`). That, unless side 0's frames'
+    to be seen) a farther wall's (:func:`_far_headings`). That, unless side 0's frames'
     lines within :data:`START_HEADING_M` of walk, each less the odometry's turn from the
     start to its frame (the map frame is the start's odometry frame), have a median more
     than :data:`START_GATE_RAD` away from it: then that median.
@@ -703,5 +743,5 @@ def _start_heading(
             votes.append(modulo2PI(line[1] - keyframes[i].pose.theta))
     frames = float(np.median(votes)) if votes else None
     if own is None or frames is None:
-        return frames if own is None else own
-    return own if abs(modulo2PI(frames - own)) <= START_GATE_RAD else frames
+        return (frames if own is None else own), frames
+    return (own if abs(modulo2PI(frames - own)) <= START_GATE_RAD else frames), frames
