@@ -447,17 +447,19 @@ def _walk_laps(
                 nominal = length / n
                 walked, steps, last = 0.0, 0, False
                 while not last:
-                    front = None
+                    front = raw_front = None
                     lookahead = length - nominal * 1.5 - FRONT_LOOKAHEAD_M - 0.15 * length
                     if walked >= lookahead or watch.wants_front:
                         remaining = length - walked
                         seen: list[WallLine] = []
                         agrees = _front_gate(offset, remaining, length, seen)
                         front = measure_front(robot, eye, remaining + offset, agrees)
-                        raw = front if front is not None else (seen[0] if seen else None)
-                        watch.front_line(raw, here, remaining, length)  # any line: evidence
-                        if raw is not None and watch.pending("ahead"):  # look again, still
-                            again = measure_front(robot, eye, raw.distance)
+                        # the evidence: the nearest line any pitch showed (head up, a wall
+                        # at the picture's bottom edge reads 0.1 m far)
+                        raw_front = front if front is not None else _nearest(seen)
+                        watch.front_line(raw_front, here, remaining, length)  # any: evidence
+                        if raw_front is not None and watch.pending("ahead"):  # look again
+                            again = measure_front(robot, eye, raw_front.distance)
                             watch.front_line(again, here, remaining, length)
                         if front is not None:
                             fronts.append(FrontSample(lap * 4 + k, here, front))
@@ -502,7 +504,7 @@ def _walk_laps(
                     steps += 1
                     side_line = measure_side(robot, eye, side_normal, offset)
                     memory.seen_side(trusted(side_line, offset), here)
-                    watch.side_line(side_line, here)
+                    watch.side_line(side_line, here, memory.level)
                     good = trusted(side_line, offset)
                     if good is not None:
                         deviations.append(good.distance - offset)
@@ -512,6 +514,7 @@ def _walk_laps(
                             "side_index": lap * 4 + k,
                             "side": line_dict(side_line),
                             "front": line_dict(front),
+                            "front_seen": line_dict(raw_front),
                             "steered": steered,
                             "carried": steered and steer is not None and steer.inliers == 0,
                             "level_m": round(memory.level, 3),
@@ -561,6 +564,11 @@ def _front_gate(
         return trusted_front(line, offset, remaining, length) is not None
 
     return gate
+
+
+def _nearest(lines: list[WallLine]) -> WallLine | None:
+    """The nearest of some lines (None for none)."""
+    return min(lines, key=lambda line: line.distance) if lines else None
 
 
 def _gray(image: np.ndarray) -> np.ndarray:

@@ -37,7 +37,7 @@ from naoloc.robot import Robot
 BODY_CLEAR_M = 0.3  # a wall's line nearer than this: the body (radius 0.15 m) is at it
 FRONT_CHECK_M = 1.6  # front lines farther than this err too much to say a step did not close
 MAX_SIDE_DEVIATION_M = 0.25  # side lines farther than this from the offset are not judged
-MIN_SIDE_STEP_M = 0.08  # odometry steps toward or away from the wall smaller are not judged
+MIN_SIDE_STEP_M = 0.1  # odometry steps toward or away from the wall smaller are not judged
 CONTACT_CLEARANCE_M = 0.15  # simulator only: the body's disc (MuJoCo's capsule) touches
 MIN_STEP_M = 0.08  # odometry steps shorter than this are not judged by the pictures
 STILL_PX = 2.0  # a matched feature that moved less than this (px) stayed put
@@ -46,6 +46,7 @@ MIN_MATCHES = 12  # matched features a picture comparison needs
 MIN_FRONT_ADVANCE_M = 0.15  # odometry advance toward the front wall a comparison needs
 MIN_FRONT_SHARE = 0.3  # the front line must close at least this share of that advance
 STRIKES = 2  # evidence on this many steps in a row stops the survey
+MIN_AHEAD_SPAN_M = 0.5  # a wall across the path fills the view; a door frame's edge does not
 FRONT_WATCH_M = 1.2  # a line ahead this near, sooner than expected, is looked at every stop
 MAX_AHEAD_DISAGREEMENT_M = 0.3  # and a quarter of the side: how much sooner the wall ahead
 #                                 may end a side than the odometry says
@@ -207,16 +208,19 @@ class WalkWatch:
             "matches": matches,
         }
 
-    def side_line(self, line: WallLine | None, here: Pose2D) -> None:
-        """The side wall's line after a step (only lines near the offset: the views see
-        nothing nearer than about 0.45 m, and what they show there is the robot's own arm).
+    def side_line(self, line: WallLine | None, here: Pose2D, level: float = 0.0) -> None:
+        """The side wall's line after a step (only lines of the wall itself, ``level`` 0,
+        near the offset: the views see nothing nearer than about 0.45 m, and what they
+        show there is the robot's own arm; a furniture face's line is noisier).
 
         Raises:
             SurveyBlocked: Twice in a row the odometry stepped at least
                 :data:`MIN_SIDE_STEP_M` toward or away from the wall and the line closed
                 less than :data:`MIN_FRONT_SHARE` of it: the robot slides along something.
         """
-        if line is None or abs(line.distance - self.offset) > MAX_SIDE_DEVIATION_M:
+        if line is None or abs(line.distance - self.offset) > MAX_SIDE_DEVIATION_M or level:
+            self._side = None  # furniture before the wall, or no line: nothing to judge by
+            self._strikes["side"] = 0
             return
         before, self._side = self._side, (line.distance, line.normal, here)
         if before is None:
@@ -261,6 +265,7 @@ class WalkWatch:
         self._strike(
             "ahead",
             line.distance < self.offset + MIN_STEP_M
+            and line.span_m >= MIN_AHEAD_SPAN_M
             and early > 0.25 * length + MAX_AHEAD_DISAGREEMENT_M,
             f"the wall ahead is {line.distance:.2f} m away with {remaining:.1f} m of the "
             "side still to walk by the odometry",

@@ -74,6 +74,9 @@ CLEAN_FRACTION: Final = 0.6  # nor those with less of their boundary on them
 # 0.45 m deep, 0.09 m apart, read as one stretch put the start, and every map pose, 9.7 cm
 # off; the walk back errs 1-5 cm).
 START_FROM_WALL_FRAMES: Final = 8
+# The start's own line places it unless those frames, carried back, disagree by more than
+# this (m): in a corner the one view that sees the wall at 0.5 m can read the wall behind.
+START_AGREE_M: Final = 0.04
 END_FRAMES: Final = 3  # a side's last frames whose wall lines place where it ended
 WALL_LEVEL_M: Final = 0.1  # stretches whose levels are this close see the same thing
 MIN_WALL_FRAMES: Final = 3  # frames that must see a side's wall
@@ -289,7 +292,9 @@ def wall_poses(
             continue
         dists, on_wall = found
         if k == 0:
-            start_dist = dists[0] if on_wall[0] else _start_from_wall(dists, on_wall, dy)
+            back = _start_from_wall(dists, on_wall, dy)
+            own = on_wall[0] and abs(dists[0] - back) <= START_AGREE_M
+            start_dist = dists[0] if own else back
             dists, on_wall = dists[1:], on_wall[1:]
         used += sum(on_wall)
         for i, v, w in zip(idx, dists, on_wall, strict=True):
@@ -379,9 +384,7 @@ def _end_lateral(
     the last frame's line sees); the last frame's own lateral without such frames."""
     last = idx[-1]
     votes = [
-        laterals[i] + (inward_m[last] - inward_m[i])
-        for i in idx[-END_FRAMES:]
-        if wall_seen[i]
+        laterals[i] + (inward_m[last] - inward_m[i]) for i in idx[-END_FRAMES:] if wall_seen[i]
     ]
     return float(np.median(votes)) if votes else laterals[last]
 
@@ -648,7 +651,8 @@ def side_distances(
 def _start_from_wall(
     dists: Sequence[float], on_wall: Sequence[bool], inward: Sequence[float]
 ) -> float:
-    """The survey start's distance from side 0's wall when its own line saw furniture (m).
+    """The survey start's distance from side 0's wall from its first frames (m): when its
+    own line saw furniture, or disagrees with them by more than :data:`START_AGREE_M`.
 
     Each of the first :data:`START_FROM_WALL_FRAMES` frames whose line sees the wall gives
     its distance less the odometry's walk inward since the start; their median. Without

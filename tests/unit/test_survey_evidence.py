@@ -129,11 +129,15 @@ def test_a_side_wall_that_ignores_the_steps_toward_it_is_a_robot_sliding() -> No
     watch = _watch()  # the wall on the right: toward it is -y in the map frame
     right = -math.pi / 2
     watch.side_line(_line(0.62, right), Pose2D(0.0, 0.0, 0.0))
-    watch.side_line(_line(0.51, right), Pose2D(0.2, -0.1, 0.0))  # stepped 0.1 toward: closed
-    watch.side_line(_line(0.50, right), Pose2D(0.4, -0.2, 0.0))  # stepped 0.1, stayed: strike
-    watch.side_line(_line(0.18, right), Pose2D(0.6, -0.3, 0.0))  # the arm's edge: not judged
+    watch.side_line(_line(0.50, right), Pose2D(0.2, -0.12, 0.0))  # stepped toward: closed
+    watch.side_line(_line(0.50, right), Pose2D(0.4, -0.24, 0.0))  # stepped, stayed: strike
+    watch.side_line(_line(0.18, right), Pose2D(0.6, -0.36, 0.0))  # the arm's edge: not judged
+    watch.side_line(_line(0.50, right), Pose2D(0.6, -0.48, 0.0))  # nothing to compare with
+    watch.side_line(_line(0.38, right), Pose2D(0.8, -0.6, 0.0), level=0.4)  # a sideboard
+    watch.side_line(_line(0.50, right), Pose2D(0.8, -0.72, 0.0))
+    watch.side_line(_line(0.49, right), Pose2D(1.0, -0.84, 0.0))  # stayed: strike
     with pytest.raises(SurveyBlocked, match="sliding along the wall on the right: it stayed"):
-        watch.side_line(_line(0.50, right), Pose2D(0.6, -0.4, 0.0))
+        watch.side_line(_line(0.49, right), Pose2D(1.2, -0.96, 0.0))
 
 
 def test_pictures_that_do_not_move_are_a_robot_that_did_not() -> None:
