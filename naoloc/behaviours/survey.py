@@ -42,6 +42,7 @@ from naoloc.behaviours.nearest_wall import (
 from naoloc.behaviours.walk_watch import WalkWatch
 from naoloc.behaviours.wall_follow import (
     BESIDE_VIEW,
+    FRONT_PITCH,
     MIN_KEEP_M,
     MIN_OFFSET_M,
     FloorEye,
@@ -70,6 +71,7 @@ FRONT_RANGE_M = 2.6  # the front wall's line is trusted up to this distance
 MAX_EXTRA_STEPS = 8  # steps a side may take beyond its planned count (odometry too short)
 PROBE_STEP_M = 0.4  # the nearest-wall detector's step out of a corner, m
 PROBE_CLEAR_M = 0.45  # room the body needs beyond the step before the wall ahead, m
+FLOOR_BEYOND_M = 0.6  # floor seen this far past a line ahead: the line is no wall, m
 
 FrameSink = Callable[[Keyframe, int, Pose2D], None]
 """Called with (keyframe, lap, raw FRAME_WORLD odometry) right after each picture."""
@@ -459,8 +461,11 @@ def _walk_laps(
                         raw_front = front if front is not None else _nearest(seen)
                         watch.front_line(raw_front, here, remaining, length)  # any: evidence
                         if raw_front is not None and watch.pending("ahead"):  # look again
-                            again = measure_front(robot, eye, raw_front.distance)
-                            watch.front_line(again, here, remaining, length)
+                            if _floor_goes_on(robot, eye, raw_front.distance):
+                                watch.clear("ahead")  # a plank's edge, not a wall
+                            else:
+                                again = measure_front(robot, eye, raw_front.distance)
+                                watch.front_line(again, here, remaining, length)
                         if front is not None:
                             fronts.append(FrontSample(lap * 4 + k, here, front))
                             memory.seen_front(front, here)
@@ -564,6 +569,22 @@ def _front_gate(
         return trusted_front(line, offset, remaining, length) is not None
 
     return gate
+
+
+def _floor_goes_on(robot: Robot, eye: FloorEye, distance: float) -> bool:
+    """Whether the floor visibly goes on past a line ``distance`` m ahead: looking ahead
+    with the head up, a wall's line beyond it, or a side wall's line running on more than
+    :data:`FLOOR_BEYOND_M` past it (a wall across the way would end both). A plank's edge
+    or a rug's reads as a wall ahead to the level view; the wall itself does not let the
+    floor go on."""
+    look(robot, 0.0, FRONT_PITCH)
+    for line in eye.lines():
+        ahead = abs(modulo2PI(line.normal)) <= 0.4
+        if ahead and line.distance > distance + FLOOR_BEYOND_M:
+            return True
+        if not ahead and line.span_m > distance + FLOOR_BEYOND_M:
+            return True
+    return False
 
 
 def _nearest(lines: list[WallLine]) -> WallLine | None:

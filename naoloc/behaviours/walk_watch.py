@@ -135,6 +135,13 @@ class WalkWatch:
         self._picture, self._front, self._near, self._side = None, None, False, None
         self._strikes.clear()
 
+    def clear(self, name: str) -> None:
+        """Forget evidence ``name``'s strike (a second look showed it was not what it
+        seemed)."""
+        self._strikes[name] = 0
+        if name == "ahead":
+            self._near = False
+
     def pending(self, name: str) -> bool:
         """Whether evidence ``name`` (``ahead``, ``front``, ``side``, ``picture``) has one
         strike and waits for its second."""
