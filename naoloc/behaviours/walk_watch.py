@@ -34,7 +34,6 @@ from naoloc.geometry import Pose2D
 from naoloc.perception.floorline import WallLine
 from naoloc.robot import Robot
 
-BODY_CLEAR_M = 0.3  # a wall's line nearer than this: the body (radius 0.15 m) is at it
 FRONT_CHECK_M = 1.6  # front lines farther than this err too much to say a step did not close
 MAX_SIDE_DEVIATION_M = 0.25  # side lines farther than this from the offset are not judged
 MIN_SIDE_STEP_M = 0.1  # odometry steps toward or away from the wall smaller are not judged
@@ -46,6 +45,7 @@ MIN_MATCHES = 12  # matched features a picture comparison needs
 MIN_FRONT_ADVANCE_M = 0.15  # odometry advance toward the front wall a comparison needs
 MIN_FRONT_SHARE = 0.3  # the front line must close at least this share of that advance
 STRIKES = 2  # evidence on this many steps in a row stops the survey
+MIN_AHEAD_M = 0.35  # lines nearer than this ahead are the feet or a seam at them, m
 MIN_AHEAD_SPAN_M = 0.5  # a wall across the path fills the view; a door frame's edge does not
 FRONT_WATCH_M = 1.2  # a line ahead this near, sooner than expected, is looked at every stop
 MAX_AHEAD_DISAGREEMENT_M = 0.3  # and a quarter of the side: how much sooner the wall ahead
@@ -153,7 +153,7 @@ class WalkWatch:
         was seen nearer than :data:`FRONT_WATCH_M` where the odometry expects none, or a
         piece of evidence ahead waits for its second strike."""
         return self._near or any(
-            self._strikes.get(name, 0) > 0 for name in ("ahead", "front", "front_near")
+            self._strikes.get(name, 0) > 0 for name in ("ahead", "front")
         )
 
     def blocked(self, why: str) -> SurveyBlocked:
@@ -263,11 +263,11 @@ class WalkWatch:
                 :data:`MIN_STEP_M` while the odometry had more than a quarter of the side
                 plus :data:`MAX_AHEAD_DISAGREEMENT_M` to go (a robot walking into a wall; a
                 NAO's odometry errs 10 %), or the line closed less than
-                :data:`MIN_FRONT_SHARE` of the odometry's advance toward it, or was nearer
-                than :data:`BODY_CLEAR_M`.
+                :data:`MIN_FRONT_SHARE` of the odometry's advance toward it. Lines nearer
+                than :data:`MIN_AHEAD_M` are no evidence (the feet, a seam at them).
         """
-        if line is None:
-            return
+        if line is None or line.distance < MIN_AHEAD_M:
+            return  # no view sees a wall that near: the robot's own feet, a seam at them
         early = remaining - (line.distance - self.offset)
         self._strike(
             "ahead",
@@ -278,11 +278,6 @@ class WalkWatch:
             "side still to walk by the odometry",
         )
         self._near = line.distance < FRONT_WATCH_M and early > MAX_AHEAD_DISAGREEMENT_M
-        self._strike(
-            "front_near",
-            line.distance < BODY_CLEAR_M,
-            f"the wall ahead is {line.distance:.2f} m away",
-        )
         before, self._front = self._front, (line.distance, here)
         if before is None or line.distance > FRONT_CHECK_M:
             return
