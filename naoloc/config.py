@@ -553,7 +553,7 @@ class MapConfig(_Model):
         False,
         description="scale the keyframe poses by the survey's floor-line metric_scale (for "
         "surveys that keep their odometry poses); off by default: the wall poses fix the "
-        "scale, and the floor-line scale read 2-4 % off in unseen rooms (docs/RESULTS.md)",
+        "scale, and the floor-line scale read 2-4 % off in unseen rooms (docs/history/RESULTS.md)",
     )
     wall_poses: bool = Field(
         True,

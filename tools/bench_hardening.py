@@ -22,8 +22,8 @@ from naoloc.backends.naoqi.testing import served  # noqa: E402
 from tests.fuzz.libqi_fuzzer import fuzz_libqi  # noqa: E402
 from tests.fuzz.proc import rss_mb  # noqa: E402
 from tests.fuzz.zmq_fuzzer import fuzz_zmq  # noqa: E402
-from tests.test_fuzz_config import BOMBS, CORPUS  # noqa: E402
-from tests.test_fuzz_config import _run as run_cli  # noqa: E402
+from tests.integration.test_fuzz_config import BOMBS, CORPUS  # noqa: E402
+from tests.integration.test_fuzz_config import _run as run_cli  # noqa: E402
 
 FAKE = {"robot": {"backend": "fake"}, "world": {"room": {"size_m": [4.0, 4.0], "seed": 3}}}
 MESSAGES = 10_000

@@ -6,7 +6,7 @@ Usage::
 
 The paper's localizer (Algorithm 5, ``localize.mode: paper``) returns the pose that the
 GCS winners of 1-2 query histograms carry; it can be no better than the nearest training
-image over the same histograms (docs/RESULTS.md measured the two equal). This tool measures
+image over the same histograms (docs/history/RESULTS.md measured the two equal). This tool measures
 that signal without the survey's pose errors, camera placement or GCS in the way: it trains
 the vocabulary on the first lap's pictures, and for each picture of the later laps takes the
 first lap's picture with the nearest histogram. The error is the distance between the two

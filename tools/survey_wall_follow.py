@@ -14,7 +14,7 @@ from the room's layout as ``naoloc survey`` does on simulators) and prints one r
   measured) and the true one (true path / odometry path between keyframes).
 
 Runs the code on ``PYTHONPATH``: point it at another checkout to measure that one (this is
-how RESULTS.md's "before" column was taken, from main's tree).
+how docs/history/RESULTS.md's "before" column was taken, from main's tree).
 
 Usage:
     MUJOCO_GL=egl PYTHONPATH=. .venv/bin/python tools/survey_wall_follow.py

@@ -19,8 +19,9 @@ from typing import Literal
 
 import numpy as np
 
-from naoloc.behaviours.wall_follow import MAX_DEVIATION_M, FloorEye, look_for_line, side_views
+from naoloc.behaviours.wall_follow import FloorEye, look_for_line, side_views
 from naoloc.errors import FeatureError, MotionError
+from naoloc.perception.wall_gate import SIDE_OFFSET_ERROR_M
 from naoloc.robot import Robot
 from naoloc.robot.camera import DEFAULT_HEAD_PITCH, Camera, look
 
@@ -229,7 +230,7 @@ def decide_side(
     A side that shows no line is unseen, not far: it never makes the other side the
     nearer one by itself. Both seen: the nearer. One seen: that side. With the survey's
     ``offset``, the chosen line must also be within
-    :data:`naoloc.behaviours.wall_follow.MAX_DEVIATION_M` of it (the wall the survey was
+    :data:`naoloc.perception.wall_gate.SIDE_OFFSET_ERROR_M` of it (the wall the survey was
     set beside): a lone line farther away says nothing about the unseen side, which may be
     the nearer, and a wall far from the offset cannot be followed. Else None.
 
@@ -245,7 +246,7 @@ def decide_side(
         seen, distance = "right", right
     else:
         return None
-    if offset is not None and distance > offset + MAX_DEVIATION_M:
+    if offset is not None and distance > offset + SIDE_OFFSET_ERROR_M:
         return None
     return seen
 

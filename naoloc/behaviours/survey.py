@@ -18,7 +18,7 @@ Beyond the paper, each stop also photographs the room across its interior
 ahead and the far walls, 1-7 m away. The wall pictures alone show every wall from the
 circuit's 1 m, so a robot near a wall, looking across the room at walls 5 m off, matched
 nothing; the far pictures go to a separate sink and build-map gives them to the verified
-localizer only (docs/RESULTS.md, "Issue 12, eleventh step").
+localizer only (docs/history/RESULTS.md, "Issue 12, eleventh step").
 """
 
 from __future__ import annotations
@@ -62,12 +62,12 @@ from naoloc.config import Config
 from naoloc.errors import ConfigError, MotionError, SurveyError
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
 from naoloc.perception.floorline import WallLine
+from naoloc.perception.wall_gate import in_front_range
 from naoloc.robot import Robot, pose_of
 from naoloc.robot.camera import Camera, clamp_head, lens_of, look, stand
 from naoloc.robot.keyframe import Keyframe
 
 FRONT_LOOKAHEAD_M = 1.0  # start looking at the front wall this far before the corner
-FRONT_RANGE_M = 2.6  # the front wall's line is trusted up to this distance
 MAX_EXTRA_STEPS = 8  # steps a side may take beyond its planned count (odometry too short)
 PROBE_STEP_M = 0.4  # the nearest-wall detector's step out of a corner, m
 PROBE_CLEAR_M = 0.45  # room the body needs beyond the step before the wall ahead, m
@@ -426,13 +426,13 @@ def _walk_laps(
         side_line = median_line(start_lines)
         if side_line is None:
             side_line = measure_side(robot, eye, side_normal, offset)
-        memory.seen_side(trusted(side_line, offset), here)
+        memory.seen_side(trusted(side_line, offset, side_normal), here)
         result.meta["start_side"] = line_dict(side_line)  # where the map frame's origin stands
         result.meta["start_views"] = [line_dict(line) for line in start_lines]
         # The wall ahead at the start: its angle is the origin's heading when the side wall
         # is too near to be seen (a small offset's corner); the watch's first front line.
         start_front = measure_front(robot, eye, sides[0] + offset)
-        if start_front is not None and start_front.distance <= FRONT_RANGE_M:
+        if start_front is not None and in_front_range(start_front.distance):
             watch.front_line(start_front, here, sides[0], sides[0])
         gate = _front_gate(offset, sides[0], sides[0])
         result.meta["start_front"] = line_dict(
@@ -508,9 +508,9 @@ def _walk_laps(
                     walked += length_now
                     steps += 1
                     side_line = measure_side(robot, eye, side_normal, offset)
-                    memory.seen_side(trusted(side_line, offset), here)
+                    memory.seen_side(trusted(side_line, offset, side_normal), here)
                     watch.side_line(side_line, here, memory.level)
-                    good = trusted(side_line, offset)
+                    good = trusted(side_line, offset, side_normal)
                     if good is not None:
                         deviations.append(good.distance - offset)
                     vision.append(
@@ -541,7 +541,7 @@ def _walk_laps(
                 here = after
                 memory.turned()  # the front wall is the next side's
                 side_line = turn_side = measure_side(robot, eye, side_normal, offset)
-                memory.seen_side(trusted(side_line, offset), here)
+                memory.seen_side(trusted(side_line, offset, side_normal), here)
             result.laps = lap + 1
     finally:
         scale, ratios = metric_scale(fronts)
@@ -601,9 +601,9 @@ def _gray(image: np.ndarray) -> np.ndarray:
 
 def _front_in_range(eye: FloorEye) -> WallLine | None:
     """The front wall's line in the bottom camera's current view (the head looking ahead),
-    when within :data:`FRONT_RANGE_M`."""
+    when within :data:`naoloc.perception.wall_gate.FRONT_RANGE_M`."""
     line = eye.measure(0.0, 0.4)
-    return line if line is not None and line.distance <= FRONT_RANGE_M else None
+    return line if line is not None and in_front_range(line.distance) else None
 
 
 def _ahead(robot: Robot, eye: FloorEye) -> str:
@@ -639,7 +639,7 @@ def trusted_front(
         distance scale errs 10 %; a rug's edge or a low piece of furniture would not
         agree), else None.
     """
-    if line is None or line.distance > FRONT_RANGE_M or line.distance < 0.5 * offset:
+    if line is None or not in_front_range(line.distance) or line.distance < 0.5 * offset:
         return None
     if abs(line.distance - offset - remaining) > 0.25 * length + 0.3:
         return None

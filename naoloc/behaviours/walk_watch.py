@@ -152,9 +152,7 @@ class WalkWatch:
         """Whether the front wall should be looked at after the next step: a line ahead
         was seen nearer than :data:`FRONT_WATCH_M` where the odometry expects none, or a
         piece of evidence ahead waits for its second strike."""
-        return self._near or any(
-            self._strikes.get(name, 0) > 0 for name in ("ahead", "front")
-        )
+        return self._near or any(self._strikes.get(name, 0) > 0 for name in ("ahead", "front"))
 
     def blocked(self, why: str) -> SurveyBlocked:
         """The one-line error for this side, e.g. ``blocked on side 2 of lap 1 after 1.2 m:

@@ -22,6 +22,7 @@ from naoloc.config import CameraConfig
 from naoloc.constants import FRAME_ROBOT
 from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.perception.floorline import WallLine, detect_wall_line, detect_wall_lines
+from naoloc.perception.wall_gate import in_front_range, side_line_angle
 from naoloc.robot import Robot
 from naoloc.robot.camera import Camera, look
 from naoloc.robot.lens import Lens
@@ -29,12 +30,10 @@ from naoloc.robot.lens import Lens
 BOTTOM_CAMERA = 1
 MAX_LATERAL_M = 0.12  # largest sideways correction per step
 MAX_TURN_RAD = 0.25  # largest heading correction per step
-MAX_DEVIATION_M = 0.6  # a side line farther than this from the offset is not trusted
 FRONT_PITCH = -0.35  # head pitch for the front wall (the bottom camera sees 0.4 m to far ahead)
 MIN_SCALE_BASELINE_M = 0.4  # front-distance change needed for one scale sample
 MIN_SCALE_SIDES = 2
 MAX_SCALE_SPREAD = 0.1  # relative median absolute deviation of the per-side ratios
-SCALE_RANGE_M = 2.1  # front lines used for the scale (farther ones are biased short)
 # Where the bottom camera looks for a side wall's floor line: (|HeadYaw| rad, HeadPitch rad,
 # Gaussian blur of the picture in px, 0: none). Beside the robot, head up (the shell clamps
 # the pitch to about -0.33 at this yaw): the floor from about 0.5 m to 4 m. Nearer, the foot
@@ -60,7 +59,6 @@ FRONT_NEAR_M = 0.8  # a front wall expected nearer than this is looked for level
 MAX_CARRY_M = 0.8  # a side line carried by the odometry steers for this much walk, m
 JUMP_M = 0.15  # a side line this far from the carried one sees something else, m
 JUMP_RAD = 0.12  # or turned this much from it (a NAO's step turns it by about 0.02), rad
-MIN_LINE_M = 0.35  # a side line nearer than this is the robot's own arm, not a wall, m
 
 
 class FloorEye:
@@ -191,14 +189,14 @@ def measure_side(robot: Robot, eye: FloorEye, side_normal: float, offset: float)
         offset: The survey's wall offset, m.
 
     Returns:
-        The first line a view shows within :data:`MAX_DEVIATION_M` of the offset, else the
+        The first line a view shows that :func:`trusted` keeps, else the
         first line seen at all (furniture, or a wall where it should not be), else None.
     """
     first: list[WallLine] = []
 
     def near(line: WallLine) -> bool:
         first.append(line)
-        return trusted(line, offset) is not None
+        return trusted(line, offset, side_normal) is not None
 
     line, _ = look_for_line(robot, eye, side_normal, side_views(offset), near)
     return line if line is not None else (first[0] if first else None)
@@ -208,12 +206,12 @@ def measure_side_views(
     robot: Robot, eye: FloorEye, side_normal: float, offset: float
 ) -> list[WallLine]:
     """The side wall's line from every view of :func:`side_views` that sees one within
-    :data:`MAX_DEVIATION_M` of the offset (the survey's start: its heading is the map's)."""
+    the side-line gate (:func:`trusted`; the survey's start: its heading is the map's)."""
     side = 1.0 if side_normal >= 0 else -1.0
     out = []
     for yaw, pitch, blur in side_views(offset):
         look(robot, side * yaw, pitch)
-        line = trusted(eye.measure(side_normal, 0.5, blur), offset)
+        line = trusted(eye.measure(side_normal, 0.5, blur), offset, side_normal)
         if line is not None:
             out.append(line)
     return out
@@ -346,12 +344,12 @@ def _moved(line: WallLine, by: float, normal: float) -> WallLine:
                     line.span_m)  # fmt: skip
 
 
-def trusted(line: WallLine | None, offset: float) -> WallLine | None:
-    """``line`` when its distance is plausible for a wall kept at ``offset`` m, else None
-    (nor nearer than :data:`MIN_LINE_M`: no view sees a wall there, only the arm)."""
-    if line is None or abs(line.distance - offset) > MAX_DEVIATION_M:
+def trusted(line: WallLine | None, offset: float, side_normal: float) -> WallLine | None:
+    """``line`` when it is plausible for the side wall kept at ``offset`` m in the direction
+    ``side_normal`` (rad), by :func:`naoloc.perception.wall_gate.side_line_angle`, else None."""
+    if line is None or side_line_angle(line.distance, line.normal, offset, side_normal) is None:
         return None
-    return None if line.distance < MIN_LINE_M else line
+    return line
 
 
 def corrected_step(
@@ -370,7 +368,7 @@ def corrected_step(
         ends ``offset`` from the wall (sideways correction at most :data:`MAX_LATERAL_M`)
         and parallel to it (turn at most :data:`MAX_TURN_RAD`).
     """
-    line = trusted(line, offset)
+    line = trusted(line, offset, side_normal)
     if line is None:
         return Pose2D(step, 0.0, 0.0), False
     toward = line.distance - offset
@@ -404,7 +402,7 @@ def metric_scale(samples: list[FrontSample]) -> tuple[float | None, list[float]]
     On each side, the front measurements' wall distances against the odometry's
     displacement (projected on the wall's normal) fall on a line whose slope is one
     sample (least squares over all of the side's measurements within
-    :data:`SCALE_RANGE_M`).
+    :data:`naoloc.perception.wall_gate.FRONT_RANGE_M`).
 
     Returns:
         ``(median ratio, the per-side ratios)``; the ratio is None with fewer than
@@ -413,7 +411,7 @@ def metric_scale(samples: list[FrontSample]) -> tuple[float | None, list[float]]
     """
     by_side: dict[int, list[FrontSample]] = {}
     for s in samples:
-        if s.line.distance > SCALE_RANGE_M:
+        if not in_front_range(s.line.distance):
             continue
         by_side.setdefault(s.side, []).append(s)
     ratios = []

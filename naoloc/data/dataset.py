@@ -37,7 +37,6 @@ import os
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import TracebackType
 from typing import IO, Any
 
 import numpy as np
@@ -45,12 +44,14 @@ import numpy as np
 from naoloc.data import checks
 from naoloc.data.outputs import staging_path
 from naoloc.errors import DatasetError, NaolocError
-from naoloc.geometry import Pose2D
+from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.robot.keyframe import CameraInfo, Keyframe, check_camera
 
 FORMAT_NAME = "naoloc-survey"
 # 2: chunked and indexed, written to NAME.partial.mcap, with the naoloc.status record.
-FORMAT_VERSION = 2
+# 3: every ``meta.vision`` record names the survey side it was taken on (``side_index``).
+# Older files are read through :func:`_migrate`, the one place that knows their differences.
+FORMAT_VERSION = 3
 METADATA_NAME = "naoloc"
 STATUS_NAME = "naoloc.status"
 KEYFRAME_TOPIC = "/naoloc/keyframe"
@@ -459,12 +460,7 @@ class DatasetWriter:
     def __enter__(self) -> DatasetWriter:
         return self
 
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
+    def __exit__(self, _type: object, exc: BaseException | None, _tb: object) -> None:
         self.close(complete=exc is None, reason="" if exc is None else interruption_reason(exc))
 
 
@@ -601,18 +597,6 @@ def read_dataset(path: str | Path) -> Dataset:
             elif topic == KEYFRAME_TOPIC:
                 records.append(bytes(rec.data))
     version, config, meta = _header(header, path)
-    if version >= 2:
-        complete = finished and status is not None and status.get("complete") == "true"
-    else:  # version 1 had no status record: a closed file was a complete one
-        complete = finished
-    meta["complete"] = complete
-    if status is not None and status.get("frames", "").isdigit() and len(status["frames"]) < 10:
-        meta["frames"] = int(status["frames"])
-    far_count = (status or {}).get("far_frames", "")
-    if far_count.isdigit() and len(far_count) < 10:
-        meta["far_frames"] = int(far_count)
-    if not complete:
-        meta["reason"] = (status or {}).get("reason") or "the writer died before closing the file"
     keyframes: list[Keyframe] = []
     laps: list[int] = []
     far: list[tuple[int, Keyframe]] = []
@@ -627,7 +611,45 @@ def read_dataset(path: str | Path) -> Dataset:
             far.append((stop, keyframe))
     if not keyframes:
         raise DatasetError(f"{path}: no frames")
+    status = _migrate(version, meta, status, keyframes)
+    complete = finished and status is not None and status.get("complete") == "true"
+    meta["complete"] = complete
+    if status is not None and status.get("frames", "").isdigit() and len(status["frames"]) < 10:
+        meta["frames"] = int(status["frames"])
+    far_count = (status or {}).get("far_frames", "")
+    if far_count.isdigit() and len(far_count) < 10:
+        meta["far_frames"] = int(far_count)
+    if not complete:
+        meta["reason"] = (status or {}).get("reason") or "the writer died before closing the file"
     return Dataset(keyframes, config, meta, complete, laps, far)
+
+
+def _migrate(
+    version: int, meta: dict[str, Any], status: dict[str, str] | None, keyframes: list[Keyframe]
+) -> dict[str, str] | None:
+    """Bring an older file's records to the current format; returns the status record.
+
+    - 1 -> 2: version 1 wrote no status record: a closed file was a complete one.
+    - 2 -> 3: ``meta.vision`` records without ``side_index`` get it from the odometry: a turn
+      of more than 45 degrees between two frames starts the next side.
+
+    Args:
+        version: The file's format version.
+        meta: The survey meta, changed in place.
+        status: The file's status record (None: none written).
+        keyframes: The survey's frames in the order taken (odometry poses, map frame).
+    """
+    if version < 2 and status is None:
+        status = {"complete": "true"}
+    vision = meta.get("vision")
+    if version < 3 and isinstance(vision, list) and len(vision) == len(keyframes):
+        side = 0
+        for i, (entry, kf) in enumerate(zip(vision, keyframes, strict=True)):
+            turned = i and abs(modulo2PI(kf.pose.theta - keyframes[i - 1].pose.theta))
+            side += 1 if turned and turned > math.pi / 4 else 0
+            if isinstance(entry, dict) and "side_index" not in entry:
+                entry["side_index"] = side
+    return status
 
 
 def _header(

@@ -17,13 +17,11 @@ from naoloc.geometry import Pose2D
 from naoloc.mapping.builder import ProgressFn, carried
 from naoloc.mapping.checks import Check, check_survey, failed
 from naoloc.mapping.map import VisualMap, build_map
-from naoloc.mapping.wall_poses import WallPoses, wall_poses
+from naoloc.mapping.wall_poses import SCALE_RANGE, WallPoses, wall_poses
 from naoloc.robot.keyframe import Keyframe
 
 # Fewest frames a map is built from: one or two pictures give no place to tell apart.
 MIN_MAP_FRAMES = 3
-# A survey's metric scale outside this range is a failed measurement, not the odometry.
-SCALE_RANGE = (0.6, 1.6)
 
 
 def apply_metric_scale(
@@ -34,7 +32,9 @@ def apply_metric_scale(
     The survey measures it (metres per odometry metre) from the floor-wall line's
     distances, which the camera height from the kinematics makes metric
     (:func:`naoloc.behaviours.wall_follow.metric_scale`). Positions scale about the map
-    origin (the survey start); headings are unchanged.
+    origin (the survey start); headings are unchanged. A scale outside
+    :data:`~naoloc.mapping.wall_poses.SCALE_RANGE` (the metres per odometry metre a NAO's
+    odometry can err to) is a failed measurement and is not applied.
 
     Args:
         keyframes: Keyframes with odometry poses in the map frame.

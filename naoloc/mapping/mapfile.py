@@ -33,8 +33,17 @@ from naoloc.mapping.gcs import GCSNetwork
 from naoloc.mapping.vocabulary import Vocabulary
 
 FORMAT_TAG = "naoloc-map"
-FORMAT_VERSION = 1
+# 2: the feature parameters always name akaze_threshold and min_keypoints; a survey's meta
+# with head_yaw also has picture_yaw. Older files are read through :func:`_migrate`.
+FORMAT_VERSION = 2
 _ZIP_TIME = (1980, 1, 1, 0, 0, 0)
+
+
+# The arrays of a map file, each under the name of its MapData field.
+_ARRAY_FIELDS = (
+    "neuron_poses", "neuron_views", "keyframe_poses", "refined_poses", "keyframe_heads",
+    "keyframe_cameras", "histograms", "winners", "kp_offsets", "kp_xy", "kp_desc", "kp_points",
+)  # fmt: skip
 
 
 def _arrays_of(vmap: MapData) -> dict[str, np.ndarray]:
@@ -43,18 +52,7 @@ def _arrays_of(vmap: MapData) -> dict[str, np.ndarray]:
         "vocab_idf": vmap.vocabulary.idf,
         "gcs_weights": vmap.gcs.weights,
         "gcs_triangles": vmap.gcs.triangles,
-        "neuron_poses": vmap.neuron_poses,
-        "neuron_views": vmap.neuron_views,
-        "keyframe_poses": vmap.keyframe_poses,
-        "refined_poses": vmap.refined_poses,
-        "keyframe_heads": vmap.keyframe_heads,
-        "keyframe_cameras": vmap.keyframe_cameras,
-        "histograms": vmap.histograms,
-        "winners": vmap.winners,
-        "kp_offsets": vmap.kp_offsets,
-        "kp_xy": vmap.kp_xy,
-        "kp_desc": vmap.kp_desc,
-        "kp_points": vmap.kp_points,
+        **{name: getattr(vmap, name) for name in _ARRAY_FIELDS},
     }
 
 
@@ -135,6 +133,23 @@ def _check(arrays: dict[str, np.ndarray], name: str) -> dict[str, Any]:
     return meta
 
 
+def _migrate(meta: dict[str, Any]) -> None:
+    """Bring an older file's metadata to the current format, in place (the one place that
+    knows the older formats; checked afterwards like a current file's).
+
+    - 1 -> 2: maps from before the adaptive A-KAZE threshold did not name it (it was off:
+      ``min_keypoints`` 0, the OpenCV threshold 0.001); maps from before the survey's
+      look-ahead took their pictures where the head pointed (``picture_yaw = head_yaw``).
+    """
+    if meta["version"] < 2:
+        features = meta["features"]
+        features.setdefault("akaze_threshold", 0.001)
+        features.setdefault("min_keypoints", 0)
+        user = meta.get("meta")
+        if isinstance(user, dict) and "head_yaw" in user:
+            user.setdefault("picture_yaw", user["head_yaw"])
+
+
 def _fail(path: str, why: str) -> MapFormatError:
     return mapcheck.fail(path, why)
 
@@ -188,12 +203,13 @@ def read_map(source: str | Path | bytes) -> MapData:
     _consistent(arrays, name)
     mapcheck.check_values(arrays, name)
     kind = mapcheck.check_features(arrays, meta, name)
+    _migrate(meta)
     features = meta["features"]
     if (
         not isinstance(features.get("max_features", 0), int)
-        or not isinstance(features.get("akaze_threshold", 0.001), (int, float))
-        or not isinstance(features.get("min_keypoints", 0), int)
-        or not 0 <= features.get("min_keypoints", 0) <= 100_000
+        or not isinstance(features.get("akaze_threshold"), (int, float))
+        or not isinstance(features.get("min_keypoints"), int)
+        or not 0 <= features["min_keypoints"] <= 100_000
     ):
         raise _fail(name, "bad feature parameters")
     try:
@@ -225,17 +241,6 @@ def read_map(source: str | Path | bytes) -> MapData:
         feature_params=dict(features),
         vocabulary=Vocabulary(arrays["vocab_centres"], arrays["vocab_idf"], binary),
         gcs=gcs,
-        neuron_poses=arrays["neuron_poses"],
-        neuron_views=arrays["neuron_views"],
-        keyframe_poses=arrays["keyframe_poses"],
-        refined_poses=arrays["refined_poses"],
-        keyframe_heads=arrays["keyframe_heads"],
-        keyframe_cameras=arrays["keyframe_cameras"],
-        histograms=arrays["histograms"],
-        winners=arrays["winners"],
-        kp_offsets=arrays["kp_offsets"],
-        kp_xy=arrays["kp_xy"],
-        kp_desc=arrays["kp_desc"],
-        kp_points=arrays["kp_points"],
         timings=timings,
+        **{name: arrays[name] for name in _ARRAY_FIELDS},
     )

@@ -28,7 +28,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from naoloc.config import PoseGraphTuning
-from naoloc.geometry import planar_pose, robot_matrix, se2_compose_local, se2_relative
+from naoloc.geometry import (
+    modulo2PI,
+    planar_pose,
+    robot_matrix,
+    se2_compose_local,
+    se2_relative,
+    wrap_angles,
+)
 from naoloc.mapping.landmarks import (
     DescriptorMatcher,
     camera_poses,
@@ -127,7 +134,7 @@ def edge_terms(
     r = np.empty((len(edges), 3))
     r[:, 0] = cz * q[:, 0] + sz * q[:, 1]
     r[:, 1] = -sz * q[:, 0] + cz * q[:, 1]
-    r[:, 2] = np.remainder(x[ib, 2] - x[ia, 2] - zth + np.pi, 2.0 * np.pi) - np.pi
+    r[:, 2] = wrap_angles(x[ib, 2] - x[ia, 2] - zth)
     # R_z^T R_a^T, a 2x2 rotation by -(theta_a + z_theta).
     cc, ss = np.cos(x[ia, 2] + zth), np.sin(x[ia, 2] + zth)
     rot = np.stack([np.stack([cc, ss], 1), np.stack([-ss, cc], 1)], 1)
@@ -470,7 +477,7 @@ def _solve_robust(
     kept = []
     for e in loops:
         r = relative(sol.poses[e.a], sol.poses[e.b]) - e.z
-        r[2] = math.remainder(r[2], 2.0 * math.pi)
+        r[2] = modulo2PI(r[2])
         if float(r @ e.info @ r) < tuning.outlier_chi2:
             kept.append(e)
     if len(kept) < len(loops):

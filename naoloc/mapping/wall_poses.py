@@ -38,16 +38,12 @@ from typing import Any, Final
 import numpy as np
 
 from naoloc.geometry import Pose2D, modulo2PI
+from naoloc.perception.wall_gate import SIDE_ANGLE_ERROR_RAD, in_front_range, side_line_angle
 from naoloc.robot.keyframe import Keyframe
 
-MAX_OFFSET_ERROR_M: Final = 0.5  # a side line farther than this from the offset is not used
-MAX_ANGLE_ERROR_RAD: Final = 0.2  # nor one at a larger angle to the expected wall
-MIN_LINE_M: Final = 0.35  # nor one nearer than this (m): no view sees a wall there
-MIN_CORNER_TURN_RAD: Final = math.pi / 4  # an odometry turn this large between frames: corner
 SCALE_RANGE: Final = (0.7, 1.4)  # a side's metres per odometry metre outside this: not used
 TURN_SCALE_RANGE: Final = (0.8, 1.25)  # odometry turn per true turn outside this: not used
 MIN_CORNER_FRACTION: Final = 0.5  # sides whose corner a front line must have placed
-MAX_FRONT_M: Final = 2.2  # front lines are checked to 2.2 m (tools/floorline_accuracy.py)
 FRONT_AGREE_M: Final = 0.12  # a front line within this of the corners' walk also anchors, m
 FRONT_HEADING_M: Final = 4.0  # a far wall's line gives the start's heading (angle, not distance)
 LINE_STD_M: Final = 0.03  # a floor line's distance, one sigma (NAO's lens reads 2-4 cm long)
@@ -152,24 +148,6 @@ class WallPoses:
         }
 
 
-def _sides_of_frames(
-    meta_vision: Sequence[dict[str, Any]], keyframes: Sequence[Keyframe]
-) -> list[int]:
-    """Side index (0, 1, 2, ... over all laps) of every keyframe.
-
-    New surveys record it per frame; for older ones a turn of more than 45 degrees in the
-    odometry between two frames starts a new side.
-    """
-    if all(isinstance(v.get("side_index"), int) for v in meta_vision):
-        return [int(v["side_index"]) for v in meta_vision]
-    sides, side = [], 0
-    for i, kf in enumerate(keyframes):
-        if i and abs(modulo2PI(kf.pose.theta - keyframes[i - 1].pose.theta)) > MIN_CORNER_TURN_RAD:
-            side += 1
-        sides.append(side)
-    return sides
-
-
 def _line(
     entry: dict[str, Any] | None, offset: float, side_normal: float
 ) -> tuple[float, float] | None:
@@ -181,12 +159,8 @@ def _line(
         return None
     if not (math.isfinite(distance) and math.isfinite(normal)):
         return None
-    delta = modulo2PI(side_normal - normal)
-    if abs(distance - offset) > MAX_OFFSET_ERROR_M or abs(delta) > MAX_ANGLE_ERROR_RAD:
-        return None
-    if distance < MIN_LINE_M:
-        return None  # the bottom camera sees no wall that near: the robot's own arm
-    return float(distance), float(delta)
+    delta = side_line_angle(distance, normal, offset, side_normal)
+    return None if delta is None else (float(distance), float(delta))
 
 
 def wall_poses(
@@ -200,7 +174,7 @@ def wall_poses(
 
     Args:
         keyframes: The survey's keyframes, in the order taken (odometry poses, map frame).
-        meta: The survey meta: ``sides_m``, ``vision`` (per-frame side and front lines),
+        meta: The survey meta: ``sides_m``, ``vision`` (per-frame side_index, side and front lines),
             ``wall_follow.side_normal`` and optionally ``start_side``.
         offset: ``survey.wall_offset_m``, m.
         skirting: ``survey.skirting_m``: how far the skirting boards stand out of the walls,
@@ -226,9 +200,12 @@ def wall_poses(
         or not keyframes
     ):
         return None
+    marks = [v.get("side_index") if isinstance(v, dict) else None for v in vision]
+    side_of = [k for k in marks if isinstance(k, int) and not isinstance(k, bool) and k >= 0]
+    if len(side_of) != len(marks) or side_of != sorted(side_of):
+        return None  # each frame names its side (older datasets: see naoloc.data.dataset)
     side_normal = float(follow["side_normal"])
     turn = -math.copysign(1.0, side_normal)  # wall on the right: the corners turn left
-    side_of = _sides_of_frames(vision, keyframes)
     n_sides = side_of[-1] + 1
     frames_of: list[list[int]] = [[] for _ in range(n_sides)]  # frame indices of each side
     for i, k in enumerate(side_of):
@@ -293,8 +270,8 @@ def wall_poses(
         dists, on_wall = found
         if k == 0:
             back = _start_from_wall(dists, on_wall, dy)
-            own = on_wall[0] and abs(dists[0] - back) <= START_AGREE_M
-            start_dist = dists[0] if own else back
+            agrees = on_wall[0] and abs(dists[0] - back) <= START_AGREE_M
+            start_dist = dists[0] if agrees else back
             dists, on_wall = dists[1:], on_wall[1:]
         used += sum(on_wall)
         for i, v, w in zip(idx, dists, on_wall, strict=True):
@@ -533,7 +510,7 @@ def _along_sides(
             if (
                 isinstance(distance, (int, float))
                 and math.isfinite(distance)
-                and distance <= MAX_FRONT_M
+                and in_front_range(distance)
             ):
                 where = length - (float(distance) - offset)
                 fronts.append((float(along[idx[j - 1]]), where))  # measured before the step
@@ -718,7 +695,7 @@ def _far_headings(meta: dict[str, Any], side_normal: float) -> list[float]:
         if not (math.isfinite(distance) and math.isfinite(normal)):
             continue
         delta = modulo2PI(expected - float(normal))
-        if distance <= FRONT_HEADING_M and abs(delta) <= MAX_ANGLE_ERROR_RAD:
+        if distance <= FRONT_HEADING_M and abs(delta) <= SIDE_ANGLE_ERROR_RAD:
             found.append(delta)
     return found
 

@@ -7,7 +7,7 @@ keypoints yields empty arrays, never an error.
 A-KAZE's threshold adapts: an image with fewer than ``min_keypoints`` keypoints (a blank
 wall, a dim room) is described at the threshold divided by sqrt(10), again and again, down
 to :data:`AKAZE_FLOOR`. In the default honest world the top camera's QVGA frames give a
-median of 8 keypoints at OpenCV's default 0.001 and 106 at 0.0001 (docs/RESULTS.md). The
+median of 8 keypoints at OpenCV's default 0.001 and 106 at 0.0001 (docs/history/RESULTS.md). The
 scale space does not depend on the threshold, so this is done in one pass: the image is
 described once at the floor and the keypoints whose response exceeds the first threshold
 of that ladder to keep ``min_keypoints`` are kept (the same keypoints and descriptors as a

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from naoloc.errors import FeatureError
+from naoloc.geometry import modulo2PI
 from naoloc.robot.lens import Lens, pinhole_lens
 
 MIN_INLIERS = 12
@@ -493,10 +494,6 @@ def detect_wall_line(
     """
     lines = detect_wall_lines(image, hfov, vfov, camera_pose, seed=seed, lens=lens)
     if expect_normal is not None:
-        lines = [ln for ln in lines if abs(_wrap(ln.normal - expect_normal)) <= tolerance]
+        lines = [ln for ln in lines if abs(modulo2PI(ln.normal - expect_normal)) <= tolerance]
     lines = [ln for ln in lines if ln.fraction >= MIN_INLIER_FRACTION or ln is lines[0]]
     return lines[0] if lines else None
-
-
-def _wrap(a: float) -> float:
-    return (a + math.pi) % (2 * math.pi) - math.pi

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import contextlib
 import math
-from types import TracebackType
 
 from naoloc.config import CameraConfig, Config
 from naoloc.constants import FOV_V5, FOV_V6, FRAME_ROBOT, JOINT_LIMITS
@@ -19,6 +18,7 @@ from naoloc.geometry import Pose2D, relative_pose
 from naoloc.robot import Robot, pose_of
 from naoloc.robot.image import Frame, frame_from_naoqi
 from naoloc.robot.keyframe import CameraInfo, Keyframe
+from naoloc.robot.kinematics import head_pitch_limits
 from naoloc.robot.lens import Lens, lens_for
 
 # Head pitch while taking pictures, rad (negative looks up): as far up as the head goes.
@@ -31,38 +31,6 @@ DEFAULT_HEAD_PITCH = -0.672
 HEAD_SPEED = 0.3  # fraction of the maximum head joint speed
 
 _YAW_MIN, _YAW_MAX, _ = JOINT_LIMITS["HeadYaw"]
-_PITCH_MIN, _PITCH_MAX, _ = JOINT_LIMITS["HeadPitch"]
-# NAOqi's head anti-collision limits (the shell meets the shoulders): HeadPitch range (deg)
-# at HeadYaw (deg), linearly interpolated, from the NAO "Joints" documentation page (head
-# section); naoloc/backends/mujoco/nao.py applies the same table to the simulated joints.
-_SHELL_YAW_DEG = (-119.52, -87.49, -62.45, -51.74, -43.32, -27.85, 0.0,
-                  27.85, 43.32, 51.74, 62.45, 87.49, 119.52)  # fmt: skip
-_SHELL_PITCH_MIN_DEG = (-25.73, -18.91, -24.64, -27.50, -31.40, -38.50, -38.50,
-                        -38.50, -31.40, -27.50, -24.64, -18.91, -25.73)  # fmt: skip
-_SHELL_PITCH_MAX_DEG = (18.91, 11.46, 17.19, 18.91, 21.20, 24.18, 29.51,
-                        24.18, 21.20, 18.91, 17.19, 11.46, 18.91)  # fmt: skip
-
-
-def _interp(x: float, xs: tuple[float, ...], ys: tuple[float, ...]) -> float:
-    """Piecewise-linear interpolation of ``ys`` over increasing ``xs``, clamped at the ends."""
-    if x <= xs[0]:
-        return ys[0]
-    for x0, x1, y0, y1 in zip(xs, xs[1:], ys, ys[1:], strict=False):
-        if x <= x1:
-            return y0 + (y1 - y0) * (x - x0) / (x1 - x0)
-    return ys[-1]
-
-
-def head_pitch_limits(yaw: float) -> tuple[float, float]:
-    """HeadPitch range (rad) the head can reach at a HeadYaw (rad), the shell's limits included.
-
-    At yaw 0 it is the joint's own range (-0.672..+0.515 rad); at +-1.53 rad (87.5 deg) it is
-    about -0.33..+0.20 rad.
-    """
-    deg = math.degrees(yaw)
-    lo = math.radians(_interp(deg, _SHELL_YAW_DEG, _SHELL_PITCH_MIN_DEG))
-    hi = math.radians(_interp(deg, _SHELL_YAW_DEG, _SHELL_PITCH_MAX_DEG))
-    return max(lo, _PITCH_MIN), min(hi, _PITCH_MAX)
 
 
 def clamp_head(yaw: float, pitch: float) -> tuple[float, float]:
@@ -183,12 +151,7 @@ class Camera:
     def __enter__(self) -> Camera:
         return self
 
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
 

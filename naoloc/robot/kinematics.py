@@ -34,6 +34,7 @@ from naoloc.constants import (
     FRAME_ROBOT,
     FRAME_TORSO,
     FRAME_WORLD,
+    JOINT_LIMITS,
     NECK_OFFSET_Z,
     TOP_CAMERA_IN_HEAD,
 )
@@ -49,8 +50,49 @@ FOOT_HEIGHT = 0.04519
 EFFECTORS = ("CameraTop", "CameraBottom", "Head", "Torso", "LLeg", "RLeg")
 FRAMES = (FRAME_TORSO, FRAME_WORLD, FRAME_ROBOT)
 
+# NAOqi's head anti-collision limits (the head's shell meets the shoulders): HeadPitch range
+# (deg) at HeadYaw (deg), linearly interpolated, from the NAO "Joints" documentation page
+# (head section); at yaw 0 the range is the joint's own (-38.5..29.5 deg).
+_SHELL_YAW_DEG = (-119.52, -87.49, -62.45, -51.74, -43.32, -27.85, 0.0,
+                  27.85, 43.32, 51.74, 62.45, 87.49, 119.52)  # fmt: skip
+_SHELL_PITCH_MIN_DEG = (-25.73, -18.91, -24.64, -27.50, -31.40, -38.50, -38.50,
+                        -38.50, -31.40, -27.50, -24.64, -18.91, -25.73)  # fmt: skip
+_SHELL_PITCH_MAX_DEG = (18.91, 11.46, 17.19, 18.91, 21.20, 24.18, 29.51,
+                        24.18, 21.20, 18.91, 17.19, 11.46, 18.91)  # fmt: skip
+
 _SQRT_HALF = math.sqrt(0.5)
 _HIP_YAW_PITCH_AXIS = {"L": (0.0, _SQRT_HALF, -_SQRT_HALF), "R": (0.0, _SQRT_HALF, _SQRT_HALF)}
+
+
+def _interp(x: float, xs: tuple[float, ...], ys: tuple[float, ...]) -> float:
+    """Piecewise-linear interpolation of ``ys`` over increasing ``xs``, clamped at the ends."""
+    if x <= xs[0]:
+        return ys[0]
+    for x0, x1, y0, y1 in zip(xs, xs[1:], ys, ys[1:], strict=False):
+        if x <= x1:
+            return y0 + (y1 - y0) * (x - x0) / (x1 - x0)
+    return ys[-1]
+
+
+def head_pitch_limits(head_yaw: float) -> tuple[float, float]:
+    """HeadPitch range NAOqi lets the head reach at a HeadYaw: the joint's own range,
+    narrowed at large yaw where the head's shell meets the shoulders.
+
+    At yaw 0 it is the joint's range (-0.672..+0.515 rad); at +-1.53 rad (87.5 deg) it is
+    about -0.33..+0.20 rad. The client clamps its head commands to it
+    (:func:`naoloc.robot.camera.clamp_head`) and the MuJoCo backend its joints.
+
+    Args:
+        head_yaw: HeadYaw in radians.
+
+    Returns:
+        ``(min, max)`` HeadPitch in radians.
+    """
+    deg = math.degrees(head_yaw)
+    lo = math.radians(_interp(deg, _SHELL_YAW_DEG, _SHELL_PITCH_MIN_DEG))
+    hi = math.radians(_interp(deg, _SHELL_YAW_DEG, _SHELL_PITCH_MAX_DEG))
+    pitch_min, pitch_max, _ = JOINT_LIMITS["HeadPitch"]
+    return max(lo, pitch_min), min(hi, pitch_max)
 
 
 def rot_x(a: float) -> np.ndarray:

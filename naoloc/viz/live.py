@@ -343,14 +343,18 @@ def follow_rounds(
     return on_round
 
 
-class _WatchedVideo:
-    """ALVideoDevice that also shows every ``getImageRemote`` picture."""
+class _Watched:
+    """A NAOqi service that forwards every call to ``inner``; subclasses also show some."""
 
     def __init__(self, inner: Any, view: LiveView) -> None:
         self._inner, self._view = inner, view
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._inner, name)
+
+
+class _WatchedVideo(_Watched):
+    """ALVideoDevice that also shows every ``getImageRemote`` picture."""
 
     def getImageRemote(self, handle: str) -> Any:  # noqa: N802 - mirrors ALVideoDevice
         value = self._inner.getImageRemote(handle)
@@ -360,14 +364,8 @@ class _WatchedVideo:
         return value
 
 
-class _WatchedMotion:
+class _WatchedMotion(_Watched):
     """ALMotion that also shows every sensor odometry reading."""
-
-    def __init__(self, inner: Any, view: LiveView) -> None:
-        self._inner, self._view = inner, view
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._inner, name)
 
     def getRobotPosition(self, use_sensors: bool) -> Any:  # noqa: N802 - mirrors ALMotion
         value = self._inner.getRobotPosition(use_sensors)

@@ -139,6 +139,16 @@ def _draw_map(
     ax.grid(True, alpha=0.3)
 
 
+def _map_figure(
+    vmap: VisualMap, furniture: Sequence[tuple[str, np.ndarray]] | None
+) -> tuple[Any, Axes]:
+    """A 9 x 7 inch figure with one axes showing the map (:func:`_draw_map`)."""
+    fig = new_figure(9.0, 7.0)
+    ax = fig.add_subplot(1, 1, 1)
+    _draw_map(ax, vmap, furniture)
+    return fig, ax
+
+
 def _arrow(ax: Axes, pose: Pose2D, color: str, label: str) -> None:
     ax.plot([pose.x], [pose.y], "o", color=color, ms=8, label=label)
     ax.arrow(
@@ -164,9 +174,7 @@ def plot_map(
     Returns:
         The path written.
     """
-    fig = new_figure(9.0, 7.0)
-    ax = fig.add_subplot(1, 1, 1)
-    _draw_map(ax, vmap, furniture)
+    fig, ax = _map_figure(vmap, furniture)
     ax.set_title(
         title
         or f"{vmap.images} images, {len(vmap.neuron_poses)} neurons, "
@@ -251,9 +259,7 @@ def plot_estimates(
     Returns:
         The path written.
     """
-    fig = new_figure(9.0, 7.0)
-    ax = fig.add_subplot(1, 1, 1)
-    _draw_map(ax, vmap, furniture)
+    fig, ax = _map_figure(vmap, furniture)
 
     def found(p: Pose2D | None) -> bool:
         return p is not None and math.isfinite(p.x) and math.isfinite(p.y)

@@ -108,10 +108,14 @@ def test_select_overload_checks_and_converts() -> None:
     assert select_overload("ALTextToSpeech", "say", ["hi"]) == ["hi"]
 
 
-def test_every_signature_names_a_method_the_server_implements(fake_robot: Robot) -> None:
+def test_every_signature_names_a_method_the_server_implements(
+    fake_robot: Robot, tmp_path: Path
+) -> None:
     from naoloc.backends.naoqi.signatures import MODULE_METHODS, SIM, WATCHDOG
+    from naoloc.config import load_config
 
-    core = ServedRobot(fake_robot, log=lambda _: None)
+    cfg = load_config({"robot": {"backend": "fake"}})  # a config serves NaolocLocalization
+    core = ServedRobot(fake_robot, log=lambda _: None, cfg=cfg, record_dir=tmp_path)
     try:
         for service, methods in SERVICES.items():
             if service in (SIM, WATCHDOG):

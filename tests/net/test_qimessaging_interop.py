@@ -241,8 +241,12 @@ def test_libqi_client_calls_our_server_with_every_signature(our_server: str) -> 
             def x(self) -> int:
                 return 1
 
-        with pytest.raises(RuntimeError, match="does not accept service"):
-            session.registerService("Intruder", Intruder())
+        with pytest.raises(RuntimeError, match="already registered"):
+            session.registerService("Echoes", Intruder())
+        session.registerService("Intruder", Intruder())  # a client's own, served by the client
+        assert session.service("Intruder").x() == 1
+        with pytest.raises(RuntimeError, match="cannot be unregistered"):
+            session.service("ServiceDirectory").unregisterService(2)
     finally:
         session.close()
 

@@ -32,7 +32,7 @@ def test_side_and_front_walls_match_the_room(posters: int, distortion: bool) -> 
             # the detector when it is given the lens; a pinhole camera needs none. The
             # lens alone here: with AE, AWB and vignetting together the front wall's line
             # at 1.6 m reads about 20 % long after the head turned from the side wall (the
-            # skirting passes for floor; docs/RESULTS.md).
+            # skirting passes for floor; docs/history/RESULTS.md).
             "camera_realism": {"profile": "ideal", "distortion": True}
             if distortion
             else {"distortion": False},

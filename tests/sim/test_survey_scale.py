@@ -36,7 +36,7 @@ def _config(wall_poses: bool) -> Config:
             "robot": {"backend": "mujoco"},
             "world": {
                 # The world the scale measurement was built in (posters, a clean camera):
-                # in home rooms with NAO's lens it is not yet reliable (docs/RESULTS.md).
+                # in home rooms with NAO's lens it is not yet reliable (docs/history/RESULTS.md).
                 "room": {"size_m": [4.2, 3.8], "seed": 5, "furniture": False, "style": "posters"},
                 "camera_realism": {"profile": "ideal"},
                 "odometry": {

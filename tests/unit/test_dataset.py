@@ -13,7 +13,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from naoloc.data.dataset import DatasetWriter, _protobuf_fields, partial_path_for, read_dataset
+from naoloc.data.dataset import (
+    FORMAT_VERSION,
+    DatasetWriter,
+    _protobuf_fields,
+    partial_path_for,
+    read_dataset,
+)
 from naoloc.errors import DatasetError
 from naoloc.geometry import Pose2D
 from naoloc.robot.keyframe import CameraInfo, Keyframe
@@ -278,8 +284,8 @@ def test_newer_version_is_refused(tmp_path: Path) -> None:
     _write(path, 1, finish=False)  # no data-section CRC yet, so the edit is not a CRC error
     part = partial_path_for(path)
     raw = part.read_bytes()
-    version = b"\x07\x00\x00\x00version\x01\x00\x00\x002"
-    assert raw.count(version) == 1  # the version string "2" with its length
+    version = b"\x07\x00\x00\x00version\x01\x00\x00\x00" + str(FORMAT_VERSION).encode()
+    assert raw.count(version) == 1  # the one-digit version string with its length
     part.write_bytes(raw.replace(version, version[:-1] + b"9"))
     with pytest.raises(DatasetError, match="newer"):
         read_dataset(part)

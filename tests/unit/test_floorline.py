@@ -115,14 +115,16 @@ def test_corrected_step_returns_to_the_offset_and_is_bounded() -> None:
     assert used and move.x == pytest.approx(0.2) and move.y == pytest.approx(-0.05)
     assert move.theta == pytest.approx(0.0)
     # far off and turned: bounded sideways and in heading, never toward the wall beyond it
-    move, used = corrected_step(_line(0.6, -math.pi / 2 + 0.5), -math.pi / 2, 1.0, 0.2)
+    move, used = corrected_step(_line(0.6, -math.pi / 2 + 0.3), -math.pi / 2, 1.0, 0.2)
     assert used and abs(move.theta) <= MAX_TURN_RAD + 1e-9
     assert math.hypot(move.x - 0.2 * math.cos(move.theta), move.y - 0.2 * math.sin(move.theta)) <= (
         MAX_LATERAL_M + 1e-9
     )
     assert move.y > 0  # away from a wall on the right that is too near
-    # implausible line (furniture, a far wall): straight ahead
+    # implausible line (furniture, a far wall, another wall's corner): straight ahead
     move, used = corrected_step(_line(2.0, -math.pi / 2), -math.pi / 2, 1.0, 0.2)
+    assert not used and move == Pose2D(0.2, 0.0, 0.0)
+    move, used = corrected_step(_line(0.9, -math.pi / 2 + 0.5), -math.pi / 2, 1.0, 0.2)
     assert not used and move == Pose2D(0.2, 0.0, 0.0)
     assert corrected_step(None, math.pi / 2, 1.0, 0.2) == (Pose2D(0.2, 0.0, 0.0), False)
 

@@ -33,6 +33,7 @@ LAYERS = [
     "evaluation",
     "app",
     "qi",  # the public name of naoloc.backends.naoqi.qi
+    "run",  # the old-SDK launcher: python -m naoloc.run script.py
 ]
 
 

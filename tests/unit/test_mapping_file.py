@@ -118,6 +118,23 @@ def _rewrite(data: bytes, edit: dict[str, np.ndarray]) -> bytes:
     return out.getvalue()
 
 
+def test_a_version_1_map_is_read_through_the_migration(small_map: VisualMap) -> None:
+    data = map_bytes(small_map)
+    meta = json.loads(np.load(io.BytesIO(data))["meta_json"].tobytes())
+    assert meta["version"] == 2
+    meta["version"] = 1  # before the adaptive threshold and the look-ahead
+    del meta["features"]["min_keypoints"], meta["features"]["akaze_threshold"]
+    meta["meta"] = {**meta["meta"], "head_yaw": -1.57}
+    old = np.frombuffer(json.dumps(meta).encode(), np.uint8)
+    vmap = load_map(_rewrite(data, {"meta_json": old}))
+    assert vmap.feature_params["min_keypoints"] == 0
+    assert vmap.feature_params["akaze_threshold"] == 0.001
+    assert vmap.meta["picture_yaw"] == -1.57
+    meta["version"] = 2  # a current file must name them
+    with pytest.raises(MapFormatError, match="bad feature parameters"):
+        load_map(_rewrite(data, {"meta_json": np.frombuffer(json.dumps(meta).encode(), np.uint8)}))
+
+
 def test_tampered_newer_and_foreign_files(small_map: VisualMap, tmp_path: Path) -> None:
     data = map_bytes(small_map)
     poses = small_map.keyframe_poses.copy()

@@ -8,13 +8,16 @@ corner, as the survey records them. The wall-referenced poses must match the tru
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 import pytest
 
+from naoloc.data import dataset
 from naoloc.geometry import Pose2D
 from naoloc.localization.floorfix import map_walls
 from naoloc.mapping.wall_poses import _start_from_wall, side_distances, wall_poses
@@ -105,14 +108,26 @@ def test_a_line_off_the_wall_is_not_believed() -> None:
     assert walled.lines_used == len(keyframes) - 1
 
 
-def test_side_index_is_inferred_for_older_surveys() -> None:
+def test_side_index_is_inferred_for_older_surveys(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     keyframes, truth, meta = _survey()
-    for entry in meta["vision"]:
-        del entry["side_index"]
-    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    marked = [entry.pop("side_index") for entry in meta["vision"]]
+    path = tmp_path / "v2.mcap"
+    monkeypatch.setattr(dataset, "FORMAT_VERSION", 2)  # as naoloc wrote it before side_index
+    with dataset.DatasetWriter(path, config={}, meta=meta) as writer:
+        blank = np.zeros((240, 320), np.uint8)  # the keyframes' camera info says QVGA
+        for kf in keyframes:
+            writer.write(dataclasses.replace(kf, image=blank))
+    monkeypatch.undo()
+    data = dataset.read_dataset(path)
+    assert [entry["side_index"] for entry in data.meta["vision"]] == marked
+    walled = wall_poses(data.keyframes, data.meta, offset=OFFSET)
     assert walled is not None
     pos, _ = _errors(walled.keyframes, truth)
     assert pos.max() < 0.03
+    # a current file whose frames do not name their sides keeps its odometry
+    assert wall_poses(keyframes, meta, offset=OFFSET) is None
 
 
 def test_a_survey_without_floor_lines_keeps_its_odometry() -> None:

@@ -102,6 +102,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
                 curve_keys=cfg.robot.curve_keys,
                 thread=robot_thread,
                 speed=speed,
+                cfg=cfg,
             ) as server:
                 print(f"naoloc serve: listening on {server.endpoint} ({transport})", flush=True)
                 while not stop.wait(0.2):

@@ -8,7 +8,7 @@ from typing import Any
 
 from naoloc.backends.fake.world import ROBOT_RADIUS_M, FakeWorld
 from naoloc.errors import RobotError
-from naoloc.geometry import Pose2D
+from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.robot.kinematics import position6d
 
 
@@ -55,7 +55,7 @@ class FakeSim:
         if not w.is_free(x, y, ROBOT_RADIUS_M):
             raise RobotError(f"teleport target ({x:.2f}, {y:.2f}) is in or too close to a wall")
         w.stop_walk()
-        w.true_pose = Pose2D(x, y, math.atan2(math.sin(theta), math.cos(theta)))
+        w.true_pose = Pose2D(x, y, modulo2PI(theta))
 
     def room_size(self) -> tuple[float, float]:
         """Inner size of the room ``(x, y)`` in metres."""

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from naoloc.backends.simulated.pictures import FONTS
 from naoloc.config import RoomConfig
 from naoloc.errors import BackendError
 
@@ -35,13 +36,6 @@ _SYLLABLES = (
     "ka", "to", "mi", "ra", "ne", "su", "lo", "pe", "di", "vu", "bo", "ze", "ha", "qi",
     "nao", "lex", "tor", "min", "gra", "vel", "ost", "pri", "dun", "sal",
 )  # fmt: skip
-_FONTS = (
-    cv2.FONT_HERSHEY_SIMPLEX,
-    cv2.FONT_HERSHEY_DUPLEX,
-    cv2.FONT_HERSHEY_COMPLEX,
-    cv2.FONT_HERSHEY_TRIPLEX,
-    cv2.FONT_HERSHEY_PLAIN,
-)
 
 
 @dataclass(frozen=True, slots=True)
@@ -101,7 +95,7 @@ def _word(rng: np.random.Generator) -> str:
 def _draw_text(rng: np.random.Generator, img: np.ndarray, top: int, bottom: int) -> None:
     w = img.shape[1]
     text = " ".join(_word(rng) for _ in range(int(rng.integers(1, 3))))
-    font = _FONTS[int(rng.integers(0, len(_FONTS)))]
+    font = FONTS[int(rng.integers(0, len(FONTS)))]
     thickness = max(1, int(rng.integers(1, 4)) * w // 200)
     (tw, th), _ = cv2.getTextSize(text, font, 1.0, thickness)
     scale = min(0.9 * w / max(tw, 1), 0.9 * (bottom - top) / max(th, 1))

@@ -36,7 +36,7 @@ from naoloc.constants import (
     WALK_SPEED_Y,
 )
 from naoloc.errors import MotionError, RobotError
-from naoloc.geometry import Pose2D
+from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.robot import kinematics
 
 ROBOT_RADIUS_M = 0.15  # the robot's footprint, a disc, for wall collisions
@@ -194,7 +194,7 @@ class FakeWorld:
             self.last_move_failed = True
             self.stop_walk()
             return
-        self.true_pose = Pose2D(new_true.x, new_true.y, _wrap(new_true.theta))
+        self.true_pose = Pose2D(new_true.x, new_true.y, modulo2PI(new_true.theta))
         if isinstance(task, VelocityWalk):
             self.velocity = (task.vx, task.vy, task.wz)
         else:
@@ -281,7 +281,3 @@ class FakeWorld:
     def head_angles(self) -> tuple[float, float]:
         """Measured ``(HeadYaw, HeadPitch)`` in radians."""
         return self.joint_actual["HeadYaw"], self.joint_actual["HeadPitch"]
-
-
-def _wrap(angle: float) -> float:
-    return math.atan2(math.sin(angle), math.cos(angle))

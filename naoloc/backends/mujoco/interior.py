@@ -46,14 +46,14 @@ class WallArt:
 
 
 @dataclass(frozen=True)
-class Box:
-    """A visual or colliding primitive in the room frame (m); see ``room.Part``."""
+class Part:
+    """One visual primitive of a wall fixture or a piece of furniture (room frame, m)."""
 
-    kind: str
+    kind: str  # "box", "cylinder" or "sphere"
     pos: tuple[float, float, float]
     size: tuple[float, ...]
     rgba: tuple[float, float, float, float]
-    material: str = ""
+    material: str = ""  # a texture of RoomLayout.materials (tinted by rgba), or none
 
 
 @dataclass(frozen=True)
@@ -69,8 +69,8 @@ class WallPlan:
     """
 
     art: tuple[WallArt, ...]
-    fixtures: tuple[Box, ...]
-    objects: tuple[tuple[str, str, tuple[float, float, float, float], float, tuple[Box, ...]], ...]
+    fixtures: tuple[Part, ...]
+    objects: tuple[tuple[str, str, tuple[float, float, float, float], float, tuple[Part, ...]], ...]
 
 
 def wall_length(wall: str, size: tuple[float, float]) -> float:
@@ -89,7 +89,7 @@ def _wall_box(
     rgba: tuple[float, float, float, float] = _WHITE,
     material: str = "",
     offset: float = 0.0,
-) -> Box:
+) -> Part:
     """An axis-aligned box against a wall: ``offset`` m from its surface, ``depth`` m deep."""
     sx, sy = size
     d = offset + depth / 2
@@ -101,7 +101,7 @@ def _wall_box(
         pos, half = (d, along, z), (depth / 2, width / 2, height / 2)
     else:
         pos, half = (sx - d, along, z), (depth / 2, width / 2, height / 2)
-    return Box("box", pos, half, rgba, material)
+    return Part("box", pos, half, rgba, material)
 
 
 def _free(intervals: list[tuple[float, float]], a: float, b: float) -> bool:
@@ -142,8 +142,8 @@ def plan_walls(cfg: Config) -> WallPlan:
     top = float(room.wall_height_m)
     walls = ("y0", "x1", "y1", "x0")
     used: dict[str, list[tuple[float, float]]] = {w: [] for w in walls}
-    fixtures: list[Box] = []
-    objects: list[tuple[str, str, tuple[float, float, float, float], float, tuple[Box, ...]]] = []
+    fixtures: list[Part] = []
+    objects: list[tuple[str, str, tuple[float, float, float, float], float, tuple[Part, ...]]] = []
     skirting = (0.95, 0.95, 0.93, 1.0) if office or rng.random() < 0.5 else (0.45, 0.3, 0.18, 1.0)
     for w in walls:  # skirting boards
         fixtures.append(
@@ -290,37 +290,37 @@ def plan_walls(cfg: Config) -> WallPlan:
     return WallPlan(tuple(art), tuple(fixtures), tuple(objects))
 
 
-def _object_parts(kind: str, body: Box, rng: np.random.Generator) -> tuple[Box, ...]:
+def _object_parts(kind: str, body: Part, rng: np.random.Generator) -> tuple[Part, ...]:
     (cx, cy, cz), (hx, hy, hz) = body.pos, body.size
     if kind == "sideboard":
         return _sideboard(body, rng)
     if kind == "desk":
         return _desk(body, rng)
     if kind == "cabinet":
-        parts = [Box("box", body.pos, body.size, _METAL)]
+        parts = [Part("box", body.pos, body.size, _METAL)]
         for k in range(3):  # drawers with handles
             z = 0.17 + k * 0.33
             parts.append(
-                Box("box", (cx, cy, z), (hx * 1.01, hy * 1.01, 0.005), (0.3, 0.3, 0.32, 1))
+                Part("box", (cx, cy, z), (hx * 1.01, hy * 1.01, 0.005), (0.3, 0.3, 0.32, 1))
             )
         return tuple(parts)
     if kind == "bin":
         r = min(hx, hy)
-        return (Box("cylinder", (cx, cy, cz), (r, hz), (0.2, 0.35, 0.6, 1.0)),)
+        return (Part("cylinder", (cx, cy, cz), (r, hz), (0.2, 0.35, 0.6, 1.0)),)
     if kind == "box":
-        return (Box("box", body.pos, body.size, (0.65, 0.5, 0.32, 1.0), "cardboard"),)
+        return (Part("box", body.pos, body.size, (0.65, 0.5, 0.32, 1.0), "cardboard"),)
     r = min(hx, hy)
-    pot = Box("cylinder", (cx, cy, 0.12), (r * 0.7, 0.12), (0.6, 0.3, 0.2, 1.0))
-    leaves = Box("sphere", (cx, cy, 0.24 + r * 0.6), (r,), (0.15, 0.45, 0.15, 1.0), "fabric")
+    pot = Part("cylinder", (cx, cy, 0.12), (r * 0.7, 0.12), (0.6, 0.3, 0.2, 1.0))
+    leaves = Part("sphere", (cx, cy, 0.24 + r * 0.6), (r,), (0.15, 0.45, 0.15, 1.0), "fabric")
     return (pot, leaves)
 
 
-def _along(body: Box) -> tuple[int, int]:
+def _along(body: Part) -> tuple[int, int]:
     """Index of the axis along the wall and of the axis into the room for a wall box."""
     return (0, 1) if body.size[0] >= body.size[1] else (1, 0)
 
 
-def _at(body: Box, along: float, depth: float, z: float) -> tuple[float, float, float]:
+def _at(body: Part, along: float, depth: float, z: float) -> tuple[float, float, float]:
     """A point of a wall box: ``along`` and ``depth`` in [-1, 1] of its half sizes, z (m)."""
     a, d = _along(body)
     p = [body.pos[0], body.pos[1], z]
@@ -329,9 +329,21 @@ def _at(body: Box, along: float, depth: float, z: float) -> tuple[float, float, 
     return (p[0], p[1], p[2])
 
 
-def _half(body: Box, along: float, depth: float, up: float) -> tuple[float, float, float]:
+def _half(body: Part, along: float, depth: float, up: float) -> tuple[float, float, float]:
     a, _ = _along(body)
     return (along, depth, up) if a == 0 else (depth, along, up)
+
+
+def _box(
+    body: Part,
+    at: tuple[float, float, float],
+    half: tuple[float, float, float],
+    rgba: tuple[float, float, float, float],
+    material: str = "",
+) -> Part:
+    """A box on the wall box ``body``: centre ``at`` (along and depth in [-1, 1] of its half
+    sizes, height m, as :func:`_at`), half sizes ``half`` (along, depth, up; m)."""
+    return Part("box", _at(body, *at), _half(body, *half), rgba, material)
 
 
 def _colour(rng: np.random.Generator, lo: float, hi: float) -> tuple[float, float, float, float]:
@@ -339,14 +351,14 @@ def _colour(rng: np.random.Generator, lo: float, hi: float) -> tuple[float, floa
     return (r, g, b, 1.0)
 
 
-def _sideboard(body: Box, rng: np.random.Generator) -> tuple[Box, ...]:
+def _sideboard(body: Part, rng: np.random.Generator) -> tuple[Part, ...]:
     """A low wooden sideboard with doors, books, a vase and a lamp on top."""
     hz = body.size[2]
     white = (1.0, 1.0, 1.0, 1.0)
-    parts = [Box("box", (body.pos[0], body.pos[1], hz), body.size, white, "wood")]
+    parts = [Part("box", (body.pos[0], body.pos[1], hz), body.size, white, "wood")]
     for k in (-0.5, 0.5):  # two doors with knobs
         parts.append(
-            Box(
+            Part(
                 "box",
                 _at(body, k, 1.0, hz),
                 _half(body, 0.28, 0.006, hz * 0.8),
@@ -355,7 +367,7 @@ def _sideboard(body: Box, rng: np.random.Generator) -> tuple[Box, ...]:
             )
         )
         parts.append(
-            Box("sphere", _at(body, k * 0.2, 1.05, hz * 1.1), (0.015,), (0.8, 0.7, 0.3, 1))
+            Part("sphere", _at(body, k * 0.2, 1.05, hz * 1.1), (0.015,), (0.8, 0.7, 0.3, 1))
         )
     top = 2 * hz
     u = -0.9
@@ -364,80 +376,40 @@ def _sideboard(body: Box, rng: np.random.Generator) -> tuple[Box, ...]:
         h = float(rng.uniform(0.15, 0.28))
         colour = _colour(rng, 0.05, 0.9)
         parts.append(
-            Box("box", _at(body, u, 0.0, top + h / 2), _half(body, w / 2, 0.1, h / 2), colour)
+            Part("box", _at(body, u, 0.0, top + h / 2), _half(body, w / 2, 0.1, h / 2), colour)
         )
         u += (w + 0.005) / body.size[_along(body)[0]]
     vase = _colour(rng, 0.1, 0.9)
-    parts.append(Box("cylinder", _at(body, 0.2, 0.0, top + 0.12), (0.06, 0.12), vase))
-    parts.append(Box("cylinder", _at(body, 0.7, 0.0, top + 0.2), (0.012, 0.2), (0.2, 0.2, 0.2, 1)))
+    parts.append(Part("cylinder", _at(body, 0.2, 0.0, top + 0.12), (0.06, 0.12), vase))
+    parts.append(Part("cylinder", _at(body, 0.7, 0.0, top + 0.2), (0.012, 0.2), (0.2, 0.2, 0.2, 1)))
     parts.append(
-        Box(
+        Part(
             "cylinder", _at(body, 0.7, 0.0, top + 0.42), (0.12, 0.08), (0.95, 0.9, 0.8, 1), "fabric"
         )
     )
     return tuple(parts)
 
 
-def _desk(body: Box, rng: np.random.Generator) -> tuple[Box, ...]:
+def _desk(body: Part, rng: np.random.Generator) -> tuple[Part, ...]:
     """A desk with a monitor (showing a screen), keyboard, papers and a mug."""
     hz = body.size[2]
     top = 2 * hz
-    parts = [
-        Box(
-            "box",
-            _at(body, 0.0, 0.0, top - 0.02),
-            _half(body, body.size[_along(body)[0]], body.size[_along(body)[1]], 0.02),
-            (1.0, 1.0, 1.0, 1.0),
-            "wood",
-        )
-    ]
-    for a in (-0.95, 0.95):
-        for d in (-0.85, 0.85):
-            parts.append(
-                Box(
-                    "box",
-                    _at(body, a, d, (top - 0.04) / 2),
-                    _half(body, 0.02, 0.02, (top - 0.04) / 2),
-                    (0.3, 0.3, 0.32, 1.0),
-                )
-            )
-    parts.append(
-        Box(
-            "box",
-            _at(body, 0.0, -0.5, top + 0.28),
-            _half(body, 0.27, 0.015, 0.17),
-            (1.0, 1.0, 1.0, 1.0),
-            "screen",
-        )
-    )
-    parts.append(
-        Box(
-            "box",
-            _at(body, 0.0, -0.6, top + 0.06),
-            _half(body, 0.03, 0.02, 0.06),
-            (0.1, 0.1, 0.1, 1.0),
-        )
-    )
-    parts.append(
-        Box(
-            "box",
-            _at(body, 0.0, 0.4, top + 0.01),
-            _half(body, 0.22, 0.07, 0.01),
-            (0.12, 0.12, 0.13, 1.0),
-        )
-    )
+    a, d = _along(body)
+    white = (1.0, 1.0, 1.0, 1.0)
+    parts = [_box(body, (0.0, 0.0, top - 0.02), (body.size[a], body.size[d], 0.02), white, "wood")]
+    for u in (-0.95, 0.95):
+        for v in (-0.85, 0.85):
+            leg = (0.02, 0.02, (top - 0.04) / 2)
+            parts.append(_box(body, (u, v, (top - 0.04) / 2), leg, (0.3, 0.3, 0.32, 1.0)))
+    parts.append(_box(body, (0.0, -0.5, top + 0.28), (0.27, 0.015, 0.17), white, "screen"))
+    parts.append(_box(body, (0.0, -0.6, top + 0.06), (0.03, 0.02, 0.06), (0.1, 0.1, 0.1, 1.0)))
+    parts.append(_box(body, (0.0, 0.4, top + 0.01), (0.22, 0.07, 0.01), (0.12, 0.12, 0.13, 1.0)))
     for k in range(int(rng.integers(1, 4))):
         u = float(rng.uniform(-0.9, -0.5)) if k % 2 == 0 else float(rng.uniform(0.5, 0.9))
-        parts.append(
-            Box(
-                "box",
-                _at(body, u, float(rng.uniform(-0.3, 0.5)), top + 0.002 + 0.002 * k),
-                _half(body, 0.105, 0.148, 0.002),
-                (0.97, 0.97, 0.95, 1.0),
-            )
-        )
+        at = (u, float(rng.uniform(-0.3, 0.5)), top + 0.002 + 0.002 * k)
+        parts.append(_box(body, at, (0.105, 0.148, 0.002), (0.97, 0.97, 0.95, 1.0)))
     mug = _colour(rng, 0.1, 0.9)
-    parts.append(Box("cylinder", _at(body, 0.75, 0.3, top + 0.05), (0.04, 0.05), mug))
+    parts.append(Part("cylinder", _at(body, 0.75, 0.3, top + 0.05), (0.04, 0.05), mug))
     return tuple(parts)
 
 

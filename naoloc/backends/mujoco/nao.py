@@ -1,4 +1,4 @@
-"""Facts about the NAO model that the backend needs besides the MJCF: postures, head limits.
+"""Facts about the NAO model that the backend needs besides the MJCF: postures, radius.
 
 Joint limits and speeds live in ``model/nao.xml`` (joint ranges and ``speed/<joint>``
 custom numerics) and are read from the compiled model; see ``model/README.md`` for sources.
@@ -6,12 +6,9 @@ custom numerics) and are read from the compiled model; see ``model/README.md`` f
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from types import MappingProxyType
 from typing import Final
-
-import numpy as np
 
 from naoloc.robot import kinematics
 
@@ -20,31 +17,6 @@ NAO_XML: Final = MODEL_DIR / "nao.xml"
 
 # Link lengths (NAO H25 "Links" documentation page) live in naoloc/robot/kinematics.py.
 ROBOT_RADIUS: Final = 0.15  # m, radius of the collision capsule around the body
-
-# NAOqi's head anti-collision limits: HeadPitch range (deg) as a function of HeadYaw (deg),
-# linearly interpolated ("Joints" documentation page, head section); at yaw 0 the range is
-# the joint's own (-38.5..29.5 deg).
-_HEAD_YAW_DEG = (-119.52, -87.49, -62.45, -51.74, -43.32, -27.85, 0.0,
-                 27.85, 43.32, 51.74, 62.45, 87.49, 119.52)  # fmt: skip
-_HEAD_PITCH_MIN_DEG = (-25.73, -18.91, -24.64, -27.50, -31.40, -38.50, -38.50,
-                       -38.50, -31.40, -27.50, -24.64, -18.91, -25.73)  # fmt: skip
-_HEAD_PITCH_MAX_DEG = (18.91, 11.46, 17.19, 18.91, 21.20, 24.18, 29.51,
-                       24.18, 21.20, 18.91, 17.19, 11.46, 18.91)  # fmt: skip
-
-
-def head_pitch_limits(head_yaw: float) -> tuple[float, float]:
-    """HeadPitch range (rad) allowed at a HeadYaw (rad): the head shell hits the shoulders.
-
-    Args:
-        head_yaw: HeadYaw in radians.
-
-    Returns:
-        ``(min, max)`` HeadPitch in radians.
-    """
-    yaw = math.degrees(head_yaw)
-    lo = float(np.interp(yaw, _HEAD_YAW_DEG, _HEAD_PITCH_MIN_DEG))
-    hi = float(np.interp(yaw, _HEAD_YAW_DEG, _HEAD_PITCH_MAX_DEG))
-    return math.radians(lo), math.radians(hi)
 
 
 def _legs(hip: float, knee: float, ankle: float | None = None) -> dict[str, float]:

@@ -14,6 +14,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from naoloc.backends.simulated.pictures import FONTS
 from naoloc.errors import ConfigError
 
 _WORDS = (
@@ -21,13 +22,6 @@ _WORDS = (
     "WELCOME", "SCIENCE", "2024", "HOME", "WALK", "LOOK", "POSTER", "ART", "DATA", "PLAN",
     "NORTH", "SOUTH", "EAST", "WEST", "LIGHT", "COLOR", "SHAPE", "TEXT", "FEATURE", "KAZE",
 )  # fmt: skip
-_FONTS = (
-    cv2.FONT_HERSHEY_SIMPLEX,
-    cv2.FONT_HERSHEY_DUPLEX,
-    cv2.FONT_HERSHEY_COMPLEX,
-    cv2.FONT_HERSHEY_TRIPLEX,
-    cv2.FONT_HERSHEY_SCRIPT_SIMPLEX,
-)
 _PHOTO_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".webp")
 
 
@@ -147,7 +141,7 @@ def procedural_poster(width: int, height: int, rng: np.random.Generator) -> np.n
 def _text(img: np.ndarray, rng: np.random.Generator, lines: int, fscale: float) -> None:
     """Draw ``lines`` lines of random words in one colour that contrasts with the poster."""
     height, width = img.shape[:2]
-    font = _FONTS[int(rng.integers(0, len(_FONTS) - 1))]
+    font = FONTS[int(rng.integers(0, len(FONTS) - 1))]  # the first four (not PLAIN)
     thick = max(1, int(fscale * 2.0))
     dark = _luma(img.reshape(-1, 3).mean(axis=0)) > 120
     color = _color(rng, dark=dark)

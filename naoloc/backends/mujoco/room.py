@@ -27,6 +27,7 @@ import numpy as np
 
 from naoloc.backends.mujoco import interior
 from naoloc.backends.mujoco import posters as poster_images
+from naoloc.backends.mujoco.interior import Part
 from naoloc.config import Config
 
 WALL_THICKNESS = 0.1  # m
@@ -70,17 +71,6 @@ class Poster:
     height: float
     yaw: float
     image: np.ndarray = field(repr=False, compare=False)
-
-
-@dataclass(frozen=True)
-class Part:
-    """One visual primitive of a piece of furniture (room frame, m)."""
-
-    kind: str  # "box", "cylinder" or "sphere"
-    pos: tuple[float, float, float]
-    size: tuple[float, ...]
-    rgba: tuple[float, float, float, float]
-    material: str = ""  # a texture of RoomLayout.materials (tinted by rgba), or none
 
 
 @dataclass(frozen=True)
@@ -446,9 +436,8 @@ def _furnished_layout(cfg: Config, rng: np.random.Generator) -> RoomLayout:
             along_x = rect[2] - rect[0] > rect[3] - rect[1]
             furniture.append(_textured(_shelf(name, cx, cy, along_x, books)))
             continue
-        parts = tuple(Part(b.kind, b.pos, b.size, b.rgba, b.material) for b in boxes)
-        furniture.append(Furniture(name, kind, rect, height, parts))
-    fixtures = tuple(Part(b.kind, b.pos, b.size, b.rgba, b.material) for b in plan.fixtures)
+        furniture.append(Furniture(name, kind, rect, height, boxes))
+    fixtures = plan.fixtures
     materials = interior.material_images(room.seed)
     paint_rng = np.random.default_rng([room.seed, 0x7A1])
     if office:

@@ -34,7 +34,6 @@ from naoloc.backends.mujoco.nao import (
     POSTURES,
     ROBOT_RADIUS,
     STANDING_POSTURES,
-    head_pitch_limits,
 )
 from naoloc.backends.mujoco.room import RoomLayout, build_layout, room_mjcf
 from naoloc.backends.mujoco.walk import WalkController, WalkLimits
@@ -46,6 +45,7 @@ from naoloc.constants import FOV_V5, FOV_V6, JOINT_NAMES, MOTION_CYCLE_S
 from naoloc.errors import BackendError, RobotError
 from naoloc.geometry import Pose2D, modulo2PI, pose2DInverse
 from naoloc.robot import kinematics
+from naoloc.robot.kinematics import head_pitch_limits
 
 # mujoco reads MUJOCO_GL when first imported: import_mujoco chooses the platform first.
 mujoco: Any = import_mujoco()

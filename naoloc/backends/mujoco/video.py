@@ -1,10 +1,12 @@
-"""ALVideoDevice on the MuJoCo simulation: subscriptions, rendering, the NAOqi image array.
+"""ALVideoDevice on the MuJoCo simulation: rendering and the NAOqi image array.
 
-One ``mujoco.Renderer`` per image size, created on first use and reused; frames are
-rendered into preallocated buffers. Rendering happens only in ``getImageRemote``, which
-advances simulated time by one ALMotion cycle and then renders the scene at that time
-(the timestamp in slots [4] and [5]). The pipeline is render -> camera model -> colorspace:
-``naoloc.backends.simulated.camera_model`` (one per camera, shared with the fake backend) applies
+Subscriptions and NAOqi's rules are
+:class:`naoloc.backends.simulated.video.SimulatedVideo`'s. One ``mujoco.Renderer`` per
+image size, created on first use and reused; frames are rendered into preallocated
+buffers. Rendering happens only in ``getImageRemote``, which advances simulated time by one
+ALMotion cycle and then renders the scene at that time (the timestamp in slots [4], [5]).
+The pipeline is render -> camera model -> colorspace: ``naoloc.backends.simulated.
+camera_model`` (one per camera, shared with the fake backend) applies
 ``world.camera_realism`` (by default a NAO's camera: lens, auto exposure, white balance,
 noise, YUV422, motion blur from the camera's velocity in the physics).
 """
@@ -13,7 +15,6 @@ from __future__ import annotations
 
 import contextlib
 import math
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -21,6 +22,7 @@ import numpy as np
 from naoloc.backends.mujoco.gl import import_mujoco
 from naoloc.backends.mujoco.sim import CAMERA_NAMES, Simulation
 from naoloc.backends.simulated.camera_model import CameraModel, Motion
+from naoloc.backends.simulated.video import SimulatedVideo
 from naoloc.constants import (
     RESOLUTION_NAMES,
     RESOLUTIONS,
@@ -28,8 +30,7 @@ from naoloc.constants import (
     kBottomCamera,
     kTopCamera,
 )
-from naoloc.errors import HandleError, RenderError, RobotError
-from naoloc.robot import rules
+from naoloc.errors import RenderError, RobotError
 from naoloc.robot.image import from_rgb
 
 # mujoco reads MUJOCO_GL when first imported: import_mujoco chooses the platform first.
@@ -43,26 +44,15 @@ RENDER_PACKAGES = (
 )
 
 
-@dataclass
-class Subscription:
-    """One camera subscriber."""
-
-    camera: int
-    resolution: int
-    colorspace: int
-    fps: int
-
-
-class MujocoVideo:
-    """ALVideoDevice: subscribe to the simulated cameras and render their images."""
+class MujocoVideo(SimulatedVideo):
+    """ALVideoDevice of the simulated NAO (NAOqi's semantics: :class:`SimulatedVideo`)."""
 
     def __init__(self, sim: Simulation) -> None:
-        """Serve ALVideoDevice on a simulation."""
+        """Render the simulation's cameras."""
+        super().__init__()
         self._sim = sim
-        self._subs: dict[str, Subscription] = {}
         self._renderers: dict[tuple[int, int], Any] = {}
         self._buffers: dict[tuple[int, int], np.ndarray] = {}
-        self._active = kTopCamera
         self._option = mujoco.MjvOption()
         for g in HIDDEN_GROUPS:
             self._option.geomgroup[g] = 0
@@ -70,101 +60,22 @@ class MujocoVideo:
         self._cameras = {c: CameraModel(realism, seed, c) for c in (kTopCamera, kBottomCamera)}
         self._velocity = np.zeros(6)
 
-    # ------------------------------------------------------------------ subscriptions
-    def subscribeCamera(
-        self, name: str, cameraIndex: int, resolution: int, colorSpace: int, fps: int
-    ) -> str:
-        """Subscribe to a camera; returns a handle unique among subscribers.
+    def _check_open(self) -> None:
+        return None  # the simulation refuses calls by itself once closed
 
-        Raises:
-            RobotError: For an unknown camera, resolution, colorspace or frame rate.
-        """
-        camera = rules.camera_index(cameraIndex)
-        resolution, colorspace, fps = rules.subscription(resolution, colorSpace, fps)
-        if len(self._subs) >= rules.MAX_SUBSCRIBERS:
-            raise RobotError(
-                f"too many camera subscribers ({rules.MAX_SUBSCRIBERS}); unsubscribe some"
-            )
+    def _advance(self) -> None:
+        self._sim.cycle()
+
+    def _fov(self) -> tuple[float, float]:
+        return self._sim.fov
+
+    def _check_resolution(self, resolution: int) -> None:
         w, h = RESOLUTIONS[resolution]
         if w > MAX_SIZE[0] or h > MAX_SIZE[1]:
             raise RobotError(
                 f"resolution {RESOLUTION_NAMES[resolution]} is not supported by the simulator "
                 "(k4VGA at most)"
             )
-        handle, k = str(name), 0
-        while handle in self._subs:
-            k += 1
-            handle = f"{name}_{k}"
-        self._subs[handle] = Subscription(camera, int(resolution), colorspace, int(fps))
-        self._sim.cycle()
-        return handle
-
-    def _sub(self, handle: str) -> Subscription:
-        try:
-            return self._subs[handle]
-        except KeyError:
-            raise HandleError(f"no camera subscriber named {handle!r}") from None
-
-    def unsubscribe(self, nameId: str) -> bool:
-        """Drop a subscription; True when it existed."""
-        self._sim.cycle()
-        return self._subs.pop(nameId, None) is not None
-
-    def releaseImage(self, nameId: str) -> bool:
-        """Give the image buffer back (a no-op for remote images); True."""
-        self._sub(nameId)
-        self._sim.cycle()
-        return True
-
-    def setActiveCamera(self, cameraIndex: int) -> bool:
-        """Select the active camera; True on success, False for a camera NAO does not have."""
-        self._sim.cycle()
-        try:
-            self._active = rules.camera_index(cameraIndex)
-        except RobotError:
-            return False
-        return True
-
-    def getActiveCamera(self) -> int:
-        """Index of the active camera."""
-        self._sim.cycle()
-        return self._active
-
-    def getHorizontalFOV(self, cameraIndex: int) -> float:
-        """Horizontal field of view in radians."""
-        rules.camera_index(cameraIndex)
-        self._sim.cycle()
-        return self._sim.fov[0]
-
-    def getVerticalFOV(self, cameraIndex: int) -> float:
-        """Vertical field of view in radians."""
-        rules.camera_index(cameraIndex)
-        self._sim.cycle()
-        return self._sim.fov[1]
-
-    def getResolution(self, nameId: str) -> int:
-        """Resolution id of a subscription."""
-        sub = self._sub(nameId)
-        self._sim.cycle()
-        return sub.resolution
-
-    def getColorSpace(self, nameId: str) -> int:
-        """Colorspace id of a subscription."""
-        sub = self._sub(nameId)
-        self._sim.cycle()
-        return sub.colorspace
-
-    def getCameraIndex(self, nameId: str) -> int:
-        """Camera index of a subscription."""
-        sub = self._sub(nameId)
-        self._sim.cycle()
-        return sub.camera
-
-    def getFrameRate(self, nameId: str) -> int:
-        """Frame rate of a subscription (frames per second)."""
-        sub = self._sub(nameId)
-        self._sim.cycle()
-        return sub.fps
 
     # ------------------------------------------------------------------ images
     def _renderer(self, width: int, height: int) -> tuple[Any, np.ndarray]:
@@ -205,29 +116,22 @@ class MujocoVideo:
             (float(w[0]), -float(w[1]), -float(w[2])), (float(v[0]), -float(v[1]), -float(v[2]))
         )
 
-    def getImageRemote(self, nameId: str) -> list[Any]:
-        """Advance one cycle, render, and return the NAOqi image array.
-
-        Returns:
-            ``[width, height, layers, colorspace, sec, usec, bytes, camera, left, top,
-            right, bottom]`` with angles in radians from the field of view.
-        """
-        sub = self._sub(nameId)
-        self._sim.cycle()
-        width, height = RESOLUTIONS[sub.resolution]
+    def _image(self, camera: int, resolution: int, colorspace: int, fps: int) -> list[Any]:
+        """Render a camera now and return the NAOqi image array (stamped with sim time)."""
+        width, height = RESOLUTIONS[resolution]
         stamp = self._sim.sim_time()
         hfov, vfov = self._sim.render_fov
-        rgb = self._cameras[sub.camera].process(
-            self.render_rgb(sub.camera, width, height),
-            time_s=stamp, fps=sub.fps, hfov=hfov, vfov=vfov, motion=self._camera_motion(sub.camera),
+        rgb = self._cameras[camera].process(
+            self.render_rgb(camera, width, height),
+            time_s=stamp, fps=fps, hfov=hfov, vfov=vfov, motion=self._camera_motion(camera),
             radiance=self._sim.radiance,
         )  # fmt: skip
-        pixels = from_rgb(rgb, sub.colorspace)
+        pixels = from_rgb(rgb, colorspace)
         sec = math.floor(stamp)
         usec = min(999_999, round((stamp - sec) * 1e6))
         return [
-            width, height, int(pixels.shape[2]) if pixels.ndim == 3 else 1, sub.colorspace,
-            sec, usec, pixels.tobytes(), sub.camera,
+            width, height, int(pixels.shape[2]) if pixels.ndim == 3 else 1, colorspace,
+            sec, usec, pixels.tobytes(), camera,
             *self._angles(),
         ]  # fmt: skip
 

@@ -148,8 +148,9 @@ class LibqiServer:
     """The served NAOqi over libqi, behind a :class:`~.qi_relay.QiRelay`.
 
     libqi listens on a private loopback port; clients connect to ``url`` through the
-    relay, which names each connection (per-client dead-man), refuses service
-    (un)registration from clients and bounds the replies a slow reader can pile up.
+    relay, which names each connection (per-client dead-man), lets clients register
+    services of their own but not unregister the served ones, and bounds the replies a
+    slow reader can pile up.
 
     Args:
         core: The served robot (``invoke``, ``touch``, ``gone``, ``memory``).
@@ -194,6 +195,7 @@ class LibqiServer:
                     on_alive=core.touch,
                     on_gone=core.gone,
                     log=log,
+                    protected=frozenset(self._service_ids.values()),
                 )
             except OSError as err:
                 raise BackendError(f"cannot listen on {url}: {err.strerror or err}") from None

@@ -28,6 +28,7 @@ from collections.abc import Callable, Sequence
 from typing import Any, ClassVar, Final
 
 from naoloc.backends.naoqi import session as _shim
+from naoloc.backends.naoqi.qimessaging.codec import NamedStruct
 from naoloc.errors import NaolocError
 
 __all__ = [
@@ -85,6 +86,35 @@ class FutureState:
     FinishedWithError: Final = _shim.FINISHED_WITH_ERROR
 
 
+def _qi_value(value: Any) -> Any:
+    """A decoded value as qi's Python binding gives it.
+
+    Raw buffers (``r``) as ``bytearray`` (naoloc's client keeps zero-copy memoryviews),
+    structs with named fields as ``dict``; lists, maps and tuples converted inside.
+    """
+    if isinstance(value, memoryview):
+        return bytearray(value)
+    if isinstance(value, NamedStruct):
+        return {k: _qi_value(v) for k, v in value.as_dict().items()}
+    if isinstance(value, list):
+        return [_qi_value(v) for v in value] if _nested(value) else value
+    if isinstance(value, tuple):
+        return tuple(_qi_value(v) for v in value) if _nested(value) else value
+    if isinstance(value, dict):
+        return {_qi_value(k): _qi_value(v) for k, v in value.items()}
+    return value
+
+
+def _nested(items: list[Any] | tuple[Any, ...]) -> bool:
+    return any(isinstance(v, list | tuple | dict | memoryview) for v in items)
+
+
+def _runtime_error(err: NaolocError) -> RuntimeError:
+    """qi's RuntimeError: the remote error's text as the server sent it, else one line."""
+    text = getattr(err, "remote_text", None)
+    return RuntimeError(text if isinstance(text, str) and text else f"{type(err).__name__}: {err}")
+
+
 class Future:
     """qi.Future: ``value(ms)`` raises ``RuntimeError`` on a remote error, like qi."""
 
@@ -98,9 +128,9 @@ class Future:
             RuntimeError: The call failed or timed out.
         """
         try:
-            return self._inner.value(timeout)
+            return _qi_value(self._inner.value(timeout))
         except NaolocError as err:
-            raise RuntimeError(f"{type(err).__name__}: {err}") from None
+            raise _runtime_error(err) from None
 
     def wait(self, timeout: int | None = None) -> str:
         """Wait up to ``timeout`` ms; the state name."""
@@ -115,8 +145,10 @@ class Future:
         return self._inner.hasValue(timeout)
 
     def error(self) -> str:
-        """The error text ("" when none)."""
-        return self._inner.error()
+        """The error text ("" when none), as the server sent it."""
+        exception = getattr(self._inner, "exception", None)
+        err = exception() if callable(exception) else None
+        return str(_runtime_error(err)) if err is not None else self._inner.error()
 
     def isFinished(self) -> bool:
         """True once finished."""
@@ -359,6 +391,53 @@ class PeriodicTask:
         return self._thread is not None and self._thread.is_alive()
 
 
+class _SignalProxy:
+    """A remote signal or property whose callbacks and values are qi's Python types."""
+
+    def __init__(self, inner: Any) -> None:
+        self._inner = inner
+
+    def connect(self, callback: Callable[..., Any]) -> int:
+        """Call ``callback(*args)`` on every emission; the link id."""
+
+        def relay(*args: Any) -> Any:
+            return callback(*(_qi_value(a) for a in args))
+
+        link: int = self._inner.connect(relay)
+        return link
+
+    def disconnect(self, link: int) -> bool:
+        """Stop one link; True when it was connected."""
+        return bool(self._inner.disconnect(link))
+
+    def disconnectAll(self) -> None:
+        """Stop every link made through this proxy."""
+        self._inner.disconnectAll()
+
+    def value(self, _async: bool = False) -> Any:
+        """A property's value."""
+        try:
+            found = self._inner.value(_async=True)
+        except NaolocError as err:
+            raise _runtime_error(err) from None
+        wrapped = Future(found)
+        return wrapped if _async else wrapped.value()
+
+    def setValue(self, value: Any, _async: bool = False) -> Any:
+        """Change a property's value."""
+        try:
+            done = self._inner.setValue(value, _async=True)
+        except NaolocError as err:
+            raise _runtime_error(err) from None
+        wrapped = Future(done)
+        return wrapped if _async else wrapped.value()
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("__"):
+            raise AttributeError(name)
+        return getattr(self._inner, name)
+
+
 class _Proxy:
     """A service proxy whose calls raise RuntimeError and return qi-style Futures."""
 
@@ -369,6 +448,8 @@ class _Proxy:
         if name.startswith("__"):
             raise AttributeError(name)
         member = getattr(self._inner, name)
+        if callable(getattr(member, "connect", None)):
+            return _SignalProxy(member)
         if not callable(member):
             return member
 
@@ -376,7 +457,7 @@ class _Proxy:
             try:
                 future = member(*args, _async=True)
             except NaolocError as err:
-                raise RuntimeError(f"{type(err).__name__}: {err}") from None
+                raise _runtime_error(err) from None
             wrapped = Future(future)
             if _async:
                 return wrapped
@@ -503,15 +584,33 @@ class Session:
             raise RuntimeError(str(err)) from None
         self._session = inner
 
+    def listen(self, url: str) -> None:
+        """A connected session: serve the services it registers at ``url`` (qi's
+        ``Session.listen``; by default they are served on the address that reaches the
+        robot, any free port)."""
+        try:
+            self._inner().listen(url)
+        except NaolocError as err:
+            raise RuntimeError(str(err)) from None
+
     def registerService(self, name: str, obj: Any) -> int:
-        """Serve ``obj`` (methods marked with :func:`bind`, Signal/Property attributes)."""
+        """Serve ``obj`` (methods marked with :func:`bind`, Signal/Property attributes).
+
+        On a connected session the service is registered with the robot's service
+        directory (a NAO's or ``naoloc serve``'s), as qi does, until the session closes.
+        """
+        from naoloc.backends.naoqi.qimessaging.client import QiSession
         from naoloc.backends.naoqi.qimessaging.meta import describe
 
+        inner = self._inner()
+        if not isinstance(inner, QiSession):
+            raise RuntimeError(
+                "registerService: a zmq connection cannot serve services; connect with "
+                "tcp:// to a NAOqi that speaks libqi's protocol"
+            )
         methods, signals = describe(obj)
         try:
-            service_id: int = self._inner().registerService(
-                name, obj, methods=methods, signals=signals
-            )
+            service_id: int = inner.registerService(name, obj, methods=methods, signals=signals)
         except NaolocError as err:
             raise RuntimeError(str(err)) from None
         return service_id

@@ -11,8 +11,10 @@ action). The relay
   and who is gone (EOF), so the dead-man acts per client;
 - records which connection called which (service, action), so the service learns
   its caller (:meth:`QiRelay.caller_of`);
-- answers ServiceDirectory ``registerService`` / ``unregisterService`` from clients with
-  an error instead of forwarding them;
+- lets clients register services of their own (as on a NAO: libqi refuses a name
+  already taken), at most :data:`MAX_REGISTRATIONS` per connection, and answers
+  ``unregisterService`` of the served NAOqi's own services with an error instead of
+  forwarding it;
 - drops replies to a client that stopped reading once :data:`MAX_UNREAD_BYTES` wait
   for it, so a slow reader cannot make the server hold unbounded memory.
 """
@@ -36,7 +38,8 @@ HEADER_SIZE: Final = 28
 MAX_PAYLOAD: Final = 50 << 20  # libqi's default limit
 MAX_UNREAD_BYTES: Final = 32 << 20  # replies waiting for one client before new ones are dropped
 TYPE_CALL, TYPE_REPLY, TYPE_ERROR, TYPE_POST = 1, 2, 3, 4
-_REFUSED: Final = "clients of naoloc serve cannot register or unregister services"
+_REFUSED: Final = "clients of naoloc serve cannot unregister its own services"
+MAX_REGISTRATIONS: Final = 16  # registerService calls per client connection
 SERVICE_DIRECTORY: Final = 1
 SD_REGISTER, SD_UNREGISTER = 102, 103  # ServiceDirectory action ids in libqi
 
@@ -61,6 +64,7 @@ class _Conn:
         self.to_client = bytearray()
         self.to_upstream = bytearray()
         self.closed = False
+        self.registrations = 0
 
 
 class QiRelay:
@@ -72,6 +76,7 @@ class QiRelay:
         on_alive: ``on_alive(conn_name)`` for every message from a client.
         on_gone: ``on_gone(conn_name)`` when a client's connection closes.
         log: One-line notices.
+        protected: Service ids clients may not unregister (the served NAOqi's own).
     """
 
     def __init__(
@@ -81,8 +86,10 @@ class QiRelay:
         on_alive: Callable[[str], None],
         on_gone: Callable[[str], None],
         log: Callable[[str], None],
+        protected: frozenset[int] = frozenset(),
     ) -> None:
         self._upstream = upstream
+        self._protected = protected | {SERVICE_DIRECTORY}
         self._on_alive = on_alive
         self._on_gone = on_gone
         self._log = log
@@ -226,14 +233,13 @@ class QiRelay:
     def _parse_client(self, conn: _Conn) -> None:
         for fields, raw in self._messages(conn.from_client):
             _, ident, _, _, kind, _, service, obj, action = fields
-            if (
-                kind == TYPE_CALL
-                and service == SERVICE_DIRECTORY
-                and action in (SD_REGISTER, SD_UNREGISTER)
-            ):
+            refusal = ""
+            if service == SERVICE_DIRECTORY and action in (SD_REGISTER, SD_UNREGISTER):
+                refusal = self._refusal(conn, kind, action, raw)
+            if refusal:
                 self.refused += 1
                 what = "registerService" if action == SD_REGISTER else "unregisterService"
-                text = f"ServiceDirectory.{what}: refused: {_REFUSED}"
+                text = f"ServiceDirectory.{what}: refused: {refusal}"
                 payload = _error_payload(text)
                 conn.to_client += (
                     _header(ident, len(payload), TYPE_ERROR, service, obj, action) + payload
@@ -243,6 +249,20 @@ class QiRelay:
             if kind in (TYPE_CALL, TYPE_POST):
                 self._note_call(conn, ident, service, action)
             conn.to_upstream += raw
+
+    def _refusal(self, conn: _Conn, kind: int, action: int, raw: bytes) -> str:
+        """Why a client's (un)registration is refused ("" = forward it)."""
+        if kind != TYPE_CALL:
+            return "post (un)registration as a call"
+        if action == SD_REGISTER:
+            conn.registrations += 1
+            if conn.registrations > MAX_REGISTRATIONS:
+                return f"at most {MAX_REGISTRATIONS} services per client"
+            return ""
+        body = raw[HEADER_SIZE:]
+        if len(body) != 4 or struct.unpack("<I", body)[0] in self._protected:
+            return _REFUSED
+        return ""
 
     def _parse_upstream(self, conn: _Conn) -> None:
         for fields, raw in self._messages(conn.from_upstream):

@@ -23,9 +23,11 @@ from __future__ import annotations
 
 import contextlib
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, Final
 
 from naoloc.backends.naoqi.emulation import companions
@@ -37,24 +39,32 @@ from naoloc.backends.naoqi.emulation.video import VideoFront
 from naoloc.backends.naoqi.session import Transport, new_session
 from naoloc.backends.naoqi.signatures import (
     ANIMATED_SPEECH,
+    ANIMATION_PLAYER,
     AWARENESS,
     BATTERY,
     BLOCKING_WALKS,
     ENDS_MOTION,
+    FACE_DETECTION,
+    LANDMARK_DETECTION,
     LEDS,
     LIFE,
+    LOCALIZATION,
     MEMORY,
     MODULE_METHODS,
     MOTION,
+    NAVIGATION,
     POSTURE,
     SERVICES,
     SIM,
+    SONAR,
     SPEECH_RECOGNITION,
     STARTS_MOTION,
     SYSTEM,
     TOUCH,
+    TRACKER,
     TTS,
     VIDEO,
+    VIDEO_RECORDER,
     WATCHDOG,
     select_overload,
 )
@@ -64,7 +74,9 @@ from naoloc.robot import Robot, rules
 DEADMAN_S: Final = 0.4
 _CHECK_EVERY_S: Final = 0.05
 RobotThread = RobotLoop  # the robot's thread (kept under its old name for callers)
-_WALK_METHODS: Final = frozenset({"moveTo", "move", "moveToward", "waitUntilMoveIsFinished"})
+_WALK_METHODS: Final = frozenset(
+    {"moveTo", "move", "moveToward", "waitUntilMoveIsFinished", "walkTo", "setWalkTargetVelocity"}
+)
 _JOINT_METHODS: Final = frozenset(
     {"angleInterpolation", "angleInterpolationWithSpeed", "openHand", "closeHand"}
 )
@@ -91,6 +103,10 @@ class ServedRobot:
         deadman_s: Silence (s, wall clock) of a heartbeating owner before its walk stops.
         log: Where one-line notices go (stderr by default).
         robot_name: What ALSystem.robotName answers.
+        cfg: The served config: with it, NaolocLocalization is served (its home map and
+            survey are kept in ``record_dir``/home).
+        record_dir: Where ALVideoRecorder's files and the home map go (default: a
+            ``naoloc-serve`` folder in the system's temporary folder).
     """
 
     def __init__(
@@ -102,13 +118,15 @@ class ServedRobot:
         deadman_s: float = DEADMAN_S,
         log: Callable[[str], None] = _stderr,
         robot_name: str = "nao",
+        cfg: Any = None,
+        record_dir: Path | None = None,
     ) -> None:
         self.robot = robot
         self.deadman_s = deadman_s
         self._log = log
         self._own_loop = thread is None
         self.loop = thread or RobotLoop()
-        self.ctx = FrontContext(run=self._run, speed=speed or 1.0, log=log)
+        self.ctx = FrontContext(run=self._run, submit=self._submit, speed=speed or 1.0, log=log)
         self.clock: SimClock | None = None
         if speed is not None and isinstance(robot.sim, ClockHost):
             clock = SimClock(self.loop, speed, log)
@@ -139,6 +157,7 @@ class ServedRobot:
             SYSTEM: companions.SystemFront(robot_name),
             SPEECH_RECOGNITION: companions.SpeechRecognitionFront(ctx),
         }
+        self._add_scripted_services(robot, cfg, record_dir)
         self._seen_lock = threading.Lock()
         self._last_seen: dict[str, float] = {}
         self._heartbeating: set[str] = set()
@@ -150,10 +169,44 @@ class ServedRobot:
         self.errors = 0
         self.deadman_stops = 0
 
+    def _add_scripted_services(self, robot: Robot, cfg: Any, record_dir: Path | None) -> None:
+        """The services NAO scripts open first (issue 32): sensors, navigation, media,
+        vision stand-ins and NaolocLocalization."""
+        from naoloc.backends.naoqi.emulation import media, navigation, sensors, vision
+
+        ctx, folder = self.ctx, record_dir or Path(tempfile.gettempdir()) / "naoloc-serve"
+        self.fronts[ANIMATION_PLAYER] = media.AnimationPlayerFront(ctx, self.motion)
+        self.fronts[VIDEO_RECORDER] = media.VideoRecorderFront(ctx, self.video, folder)
+        self.fronts[FACE_DETECTION] = vision.FaceDetectionFront(ctx, self.memory)
+        self.fronts[LANDMARK_DETECTION] = vision.LandMarkDetectionFront(ctx, self.memory)
+        self.fronts[TRACKER] = vision.TrackerFront(ctx, self.motion)
+        inertial = sensors.InertialUnit(
+            lambda: self.motion.getPosition("Torso", 1, True), ctx.speed
+        )
+        self.memory.add_provider(sensors.INERTIAL_KEYS, inertial.read)
+        if robot.sim is not None:
+            self.fronts[SONAR] = sensors.SonarFront(ctx, robot.sim, self.memory)
+            self.fronts[NAVIGATION] = navigation.NavigationFront(ctx, robot.sim, self.motion)
+        if cfg is not None:
+            from naoloc.backends.naoqi.home import HomeLocalization, LocalizationFront
+
+            home = HomeLocalization(robot, cfg, folder / "home")
+            self.fronts[LOCALIZATION] = LocalizationFront(home, self._run)
+
     # ------------------------------------------------------------------ robot access
     def _run(self, function: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
         self.calls += 1
         return self.loop.run(function, *args, caller=self.ctx.caller or "server", **kwargs)
+
+    def _submit(self, function: Callable[..., Any], *args: Any) -> None:
+        self.calls += 1
+        name = getattr(function, "__name__", "call")
+        self.loop.submit(
+            function,
+            *args,
+            caller=self.ctx.caller or "server",
+            report=lambda err: self._log(f"naoloc serve: {name} failed on the robot: {err}"),
+        )
 
     def _joint_angles(self, names: list[str], use_sensors: bool) -> list[float]:
         return [float(v) for v in self._run(self.robot.motion.getAngles, names, use_sensors)]
@@ -323,6 +376,13 @@ class ServedRobot:
     def stop(self) -> None:
         """Stop the dead-man thread, the robot's motion, and the clock. Safe to call twice."""
         self._stop.set()
+        for front in self.fronts.values():  # sonar thread, a running recording
+            close = getattr(front, "close", None)
+            if callable(close):
+                try:
+                    close()
+                except NaolocError as err:
+                    self._log(f"naoloc serve: {err}")
         if self._thread is not None:
             self._thread.join(timeout=2.0)
             self._thread = None
@@ -374,6 +434,8 @@ class VirtualNaoqi:
         speed: Simulated seconds per wall second (None = no clock).
         deadman_s: Silence (s, wall clock) after which a walk is stopped.
         log: Where one-line notices go.
+        cfg: The served config (serves NaolocLocalization).
+        record_dir: Where recordings and the home map go.
     """
 
     def __init__(
@@ -387,8 +449,18 @@ class VirtualNaoqi:
         speed: float | None = 1.0,
         deadman_s: float = DEADMAN_S,
         log: Callable[[str], None] = _stderr,
+        cfg: Any = None,
+        record_dir: Path | None = None,
     ) -> None:
-        self.core = ServedRobot(robot, thread=thread, speed=speed, deadman_s=deadman_s, log=log)
+        self.core = ServedRobot(
+            robot,
+            thread=thread,
+            speed=speed,
+            deadman_s=deadman_s,
+            log=log,
+            cfg=cfg,
+            record_dir=record_dir,
+        )
         self.transport = transport
         self._relay: Any = None
         names = self.core.services

@@ -240,6 +240,12 @@ def error_from_text(text: str) -> NaolocError:
     msg"`` followed by a traceback, or a plain NAOqi message); keeps the first line.
     Known naoloc error names are re-raised as themselves, anything else as RobotError.
     """
+    err = _error_from_line(text)
+    err.remote_text = text  # type: ignore[attr-defined]  # naoloc.qi raises it verbatim, as qi
+    return err
+
+
+def _error_from_line(text: str) -> NaolocError:
     from naoloc import errors
 
     known: dict[str, type[NaolocError]] = {

@@ -30,6 +30,14 @@ SYSTEM: Final = "ALSystem"
 SPEECH_RECOGNITION: Final = "ALSpeechRecognition"
 SIM: Final = "NaolocSim"
 WATCHDOG: Final = "NaolocWatchdog"
+SONAR: Final = "ALSonar"
+NAVIGATION: Final = "ALNavigation"
+ANIMATION_PLAYER: Final = "ALAnimationPlayer"
+VIDEO_RECORDER: Final = "ALVideoRecorder"
+FACE_DETECTION: Final = "ALFaceDetection"
+TRACKER: Final = "ALTracker"
+LANDMARK_DETECTION: Final = "ALLandMarkDetection"
+LOCALIZATION: Final = "NaolocLocalization"
 
 # Service name -> attribute of naoloc.robot.Robot that implements it (the robot's own
 # services); the companion services are implemented by naoloc.backends.naoqi.emulation.companions.
@@ -147,6 +155,15 @@ _SERVICES: dict[str, dict[str, tuple[Overload, ...]]] = {
         "getJointNames": _o("[s]", "s"),
         "getSensorNames": _o("[s]"),
         "getSummary": _o("s"),
+        # NAOqi 1.x names, still called by old SDK scripts
+        "walkTo": (Overload("b", ("d", "d", "d")), Overload("b", ("d", "d", "d", "m"))),
+        "walkInit": _o("v"),
+        "setWalkTargetVelocity": _o("v", "d", "d", "d", "d"),
+        "waitUntilWalkIsFinished": _o("v"),
+        "walkIsActive": _o("b"),
+        "stopWalk": _o("b"),
+        "setWalkArmsEnabled": _o("v", "b", "b"),
+        "getWalkArmsEnabled": _o("[b]"),
     },
     VIDEO: {
         "subscribeCamera": _o("s", "s", "i", "i", "i", "i"),
@@ -301,6 +318,100 @@ _SERVICES: dict[str, dict[str, tuple[Overload, ...]]] = {
     },
 }
 
+_EXTRACTOR: dict[str, tuple[Overload, ...]] = {
+    "subscribe": (Overload("v", ("s",)), Overload("v", ("s", "i", "d"))),
+    "unsubscribe": _o("v", "s"),
+    "getSubscribersInfo": _o("m"),
+    "updatePeriod": _o("v", "s", "i"),
+    "getCurrentPeriod": _o("i"),
+    "getOutputNames": _o("[s]"),
+}
+# Issue 32: the services NAO scripts open first (see naoloc.backends.naoqi.emulation).
+_SERVICES.update(
+    {
+        SONAR: {
+            "subscribe": (Overload("v", ("s",)), Overload("v", ("s", "i", "d"))),
+            "unsubscribe": _o("v", "s"),
+            "getSubscribersInfo": _o("m"),
+            "getCurrentPeriod": _o("i"),
+            "getCurrentPrecision": _o("d"),
+            "getMyPeriod": _o("i", "s"),
+            "getOutputNames": _o("[s]"),
+            "getEventList": _o("[s]"),
+        },
+        NAVIGATION: {
+            "navigateTo": (Overload("b", ("d", "d")), Overload("b", ("d", "d", "d"))),
+            "moveAlong": _m("b", 1),
+            "stopNavigateTo": _o("v"),
+            "setSecurityDistance": _o("v", "d"),
+            "getSecurityDistance": _o("d"),
+        },
+        ANIMATION_PLAYER: {
+            "run": (Overload("v", ("s",)), Overload("v", ("s", "m"))),
+            "runTag": (Overload("v", ("s",)), Overload("v", ("s", "m"))),
+            "reset": _o("v"),
+            "declarePathForTags": _o("v", "s"),
+            "addTagForAnimations": _m("v", 1),
+        },
+        VIDEO_RECORDER: {
+            "setCameraID": _o("v", "i"),
+            "getCameraID": _o("i"),
+            "setResolution": _o("v", "i"),
+            "getResolution": _o("i"),
+            "setFrameRate": _o("v", "d"),
+            "getFrameRate": _o("i"),
+            "setColorSpace": _o("v", "i"),
+            "getColorSpace": _o("i"),
+            "setVideoFormat": _o("v", "s"),
+            "getVideoFormat": _o("s"),
+            "startRecording": (Overload("v", ("s", "s")), Overload("v", ("s", "s", "b"))),
+            "stopRecording": _o("m"),
+            "isRecording": _o("b"),
+        },
+        FACE_DETECTION: {
+            **_EXTRACTOR,
+            "setTrackingEnabled": _o("v", "b"),
+            "isTrackingEnabled": _o("b"),
+            "setRecognitionEnabled": _o("v", "b"),
+            "isRecognitionEnabled": _o("b"),
+            "learnFace": _o("b", "s"),
+            "reLearnFace": _o("b", "s"),
+            "forgetPerson": _o("b", "s"),
+            "clearDatabase": _o("b"),
+            "getLearnedFacesList": _o("[s]"),
+        },
+        LANDMARK_DETECTION: dict(_EXTRACTOR),
+        TRACKER: {
+            "registerTarget": _o("v", "s", "m"),
+            "unregisterTarget": _o("v", "s"),
+            "unregisterAllTargets": _o("v"),
+            "getRegisteredTargets": _o("[s]"),
+            "getSupportedTargets": _o("[s]"),
+            "track": _o("v", "s"),
+            "trackEvent": _o("v", "s"),
+            "stopTracker": _o("v"),
+            "isActive": _o("b"),
+            "getActiveTarget": _o("s"),
+            "isNewTargetDetected": _o("b"),
+            "isTargetLost": _o("b"),
+            "getTargetPosition": (Overload("[d]", ()), Overload("[d]", ("i",))),
+            "setMode": _o("v", "s"),
+            "getMode": _o("s"),
+            "setMaximumDistanceDetection": _o("v", "d"),
+            "getMaximumDistanceDetection": _o("d"),
+            "lookAt": _o("v", "[d]", "i", "d", "b"),
+            "pointAt": _o("v", "s", "[d]", "i", "d"),
+        },
+        LOCALIZATION: {
+            "learnHome": _o("i"),
+            "localize": _o("i"),
+            "goToHome": _o("i"),
+            "getRobotPosition": _o("[d]"),
+            "isDataAvailable": _o("b"),
+        },
+    }
+)
+
 SERVICES: Final[dict[str, dict[str, tuple[Overload, ...]]]] = {
     name: {**MODULE_METHODS, **methods} for name, methods in _SERVICES.items()
 }
@@ -316,19 +427,33 @@ SERVICES[WATCHDOG] = {"ping": _o("b")}
 
 # Calls that start a walk that keeps going after the call returns (dead-man applies),
 # and blocking walks (dead-man applies while they run).
-STARTS_MOTION: Final = frozenset({(MOTION, "move"), (MOTION, "moveToward")})
-BLOCKING_WALKS: Final = frozenset({(MOTION, "moveTo")})
+STARTS_MOTION: Final = frozenset(
+    {(MOTION, "move"), (MOTION, "moveToward"), (MOTION, "setWalkTargetVelocity")}
+)
+BLOCKING_WALKS: Final = frozenset(
+    {
+        (MOTION, "moveTo"),
+        (MOTION, "walkTo"),
+        (NAVIGATION, "navigateTo"),
+        (NAVIGATION, "moveAlong"),
+        (LOCALIZATION, "learnHome"),
+        (LOCALIZATION, "localize"),
+        (LOCALIZATION, "goToHome"),
+    }
+)
 # Calls after which no walk started by a client is running any more.
 ENDS_MOTION: Final = frozenset(
     {
         (MOTION, "stopMove"),
         (MOTION, "killMove"),
         (MOTION, "killAll"),
+        (MOTION, "stopWalk"),
         (MOTION, "rest"),
         (MOTION, "waitUntilMoveIsFinished"),
         (POSTURE, "stopMove"),
         (POSTURE, "goToPosture"),
         (POSTURE, "applyPosture"),
+        (NAVIGATION, "stopNavigateTo"),
     }
 )
 

@@ -210,7 +210,7 @@ class OdometryModel:
         Returns:
             The true increment of the body in the same frame.
         """
-        self.command = _wrapped(self.command * step)
+        self.command = (self.command * step).normalized()
         sd = self.errors.sensor_noise_per_sqrt_m
         noise = self._rng.standard_normal(3)
         if sd > 0.0:
@@ -222,9 +222,5 @@ class OdometryModel:
             )
         else:
             step_read = step
-        self.sensor = _wrapped(self.sensor * step_read)
+        self.sensor = (self.sensor * step_read).normalized()
         return self.true_increment(step)
-
-
-def _wrapped(p: Pose2D) -> Pose2D:
-    return Pose2D(p.x, p.y, math.atan2(math.sin(p.theta), math.cos(p.theta)))

@@ -16,6 +16,15 @@ import functools
 import cv2
 import numpy as np
 
+#: OpenCV's Hershey fonts the simulated posters' and walls' text is drawn in.
+FONTS = (
+    cv2.FONT_HERSHEY_SIMPLEX,
+    cv2.FONT_HERSHEY_DUPLEX,
+    cv2.FONT_HERSHEY_COMPLEX,
+    cv2.FONT_HERSHEY_TRIPLEX,
+    cv2.FONT_HERSHEY_PLAIN,
+)
+
 
 @functools.lru_cache(maxsize=1)
 def sample_photographs() -> tuple[np.ndarray, ...]:

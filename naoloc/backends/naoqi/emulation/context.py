@@ -28,9 +28,12 @@ class FrontContext:
         log: One-line notices (stderr of ``naoloc serve``).
         tasks: The task table shared by every service.
         caller: The client of the current call (per thread).
+        submit: ``submit(function, *args)`` queues a call on the robot thread for the
+            current client and returns at once (None = run it and wait).
     """
 
     run: Callable[..., Any]
+    submit: Callable[..., None] | None = None
     speed: float = 1.0
     clocked: bool = False
     cycle_s: float = 0.02
@@ -48,6 +51,14 @@ class FrontContext:
     def caller(self, value: str) -> None:
         self._local.caller = value
 
+    def post(self, function: Callable[..., Any], *args: Any) -> None:
+        """Run ``function(*args)`` on the robot thread without waiting for it (NAOqi's
+        non-blocking calls); the calling client's order of calls is kept."""
+        if self.submit is None:
+            self.run(function, *args)
+        else:
+            self.submit(function, *args)
+
     def sleep_sim(self, seconds: float, stop: threading.Event | None = None) -> bool:
         """Wait ``seconds`` of simulated time; False when ``stop`` was set first."""
         wall = max(0.0, seconds) / self.speed
@@ -61,3 +72,22 @@ class FrontContext:
         if what not in self._said:
             self._said.add(what)
             self.log(f"naoloc serve: {what} is not simulated; the call is accepted and ignored")
+
+
+def forwarded(ctx: FrontContext, backend: Any, name: str) -> Callable[..., Any]:
+    """``backend.<name>`` as a call that runs on the robot thread (a front's fallback).
+
+    Raises:
+        AttributeError: ``name`` is private, or not a callable of ``backend``.
+    """
+    if name.startswith("_"):
+        raise AttributeError(name)
+    target = getattr(backend, name)
+    if not callable(target):
+        raise AttributeError(name)
+
+    def call(*args: Any) -> Any:
+        return ctx.run(target, *args)
+
+    call.__name__ = name
+    return call

@@ -51,6 +51,7 @@ class _Job:
     done: threading.Event = field(default_factory=threading.Event)
     value: Any = None
     error: BaseException | None = None
+    report: Callable[[BaseException], None] | None = None  # a submitted job's error goes here
 
 
 class RobotLoop:
@@ -86,6 +87,34 @@ class RobotLoop:
         if self.on_loop:
             return function(*args, **kwargs)
         job = _Job(function, args, kwargs)
+        self._enqueue(job, caller)
+        job.done.wait()
+        if job.error is not None:
+            raise job.error
+        return job.value
+
+    def submit(
+        self,
+        function: Callable[..., Any],
+        *args: Any,
+        caller: str = "server",
+        report: Callable[[BaseException], None] | None = None,
+    ) -> None:
+        """Queue ``function(*args)`` behind ``caller``'s earlier calls and return at once.
+
+        NAOqi's non-blocking calls (``move``, ``moveToward``) answer before the robot
+        acts; the order of one caller's calls is kept. ``report`` gets the error, if any.
+
+        Raises:
+            RobotError: ``caller`` has too many calls queued, or the loop is closed.
+        """
+        job = _Job(function, args, {}, report=report)
+        if self.on_loop:
+            self._execute(job)
+            return
+        self._enqueue(job, caller)
+
+    def _enqueue(self, job: _Job, caller: str) -> None:
         with self._cond:
             if self._closed:
                 raise RobotError("the robot is closed")
@@ -98,10 +127,6 @@ class RobotLoop:
             if len(queue) == 1:
                 self._order.append(caller)
             self._cond.notify()
-        job.done.wait()
-        if job.error is not None:
-            raise job.error
-        return job.value
 
     def _next(self, timeout_s: float | None) -> _Job | None:
         with self._cond:
@@ -131,6 +156,8 @@ class RobotLoop:
             if clock is not None:
                 clock.end_call(saved)
             job.done.set()
+        if job.report is not None and job.error is not None:
+            job.report(job.error)
 
     def serve_until(self, deadline: float) -> None:
         """Run queued jobs until ``deadline`` (time.monotonic); used inside blocking calls."""

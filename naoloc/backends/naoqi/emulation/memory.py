@@ -64,6 +64,11 @@ class MemoryFront:
         self._joints = joints
         self._stiffness = stiffness
         self._listeners: list[Callable[[str, Any], None]] = []
+        self._providers: list[tuple[tuple[str, ...], Callable[[str], Any]]] = []
+
+    def add_provider(self, keys: tuple[str, ...], read: Callable[[str], Any]) -> None:
+        """Serve ``keys`` live: ``read(key)`` answers getData (sensors of other fronts)."""
+        self._providers.append((tuple(keys), read))
 
     def add_listener(self, listener: Callable[[str, Any], None]) -> None:
         """Call ``listener(key, value)`` on every event and data change."""
@@ -74,6 +79,9 @@ class MemoryFront:
             listener(key, value)
 
     def _live(self, key: str) -> tuple[bool, Any]:
+        for keys, read in self._providers:
+            if key in keys:
+                return True, read(key)
         for template, kind in ((_SENSOR, "sensor"), (_ACTUATOR, "actuator"), (_STIFFNESS, "stiff")):
             prefix, _, suffix = template.partition("{}")
             if key.startswith(prefix) and key.endswith(suffix):
@@ -160,6 +168,7 @@ class MemoryFront:
     def getDataListName(self) -> list[str]:
         """Every key."""
         live = [t.format(j) for j in JOINT_NAMES for t in (_SENSOR, _ACTUATOR, _STIFFNESS)]
+        live += [k for keys, _ in self._providers for k in keys]
         with self._lock:
             return sorted(set(self._data) | set(live))
 

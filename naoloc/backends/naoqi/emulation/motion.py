@@ -1,39 +1,36 @@
-"""ALMotion in front of a simulated backend: NAOqi's arguments, errors, tasks and coverage.
+"""ALMotion served: the simulated robot's own ALMotion with NAOqi's tasks, threads and clock.
 
-The backend (``robot.motion`` of the fake or MuJoCo robot) supplies walking, joints,
-stiffness and odometry; this front checks every argument with :mod:`.rules`, expands
-names, runs blocking calls as tasks (see :mod:`.tasks`), and adds the methods that are
-pure bookkeeping (flags, configs, summaries) or composed of backend calls
-(angleInterpolation, stiffnessInterpolation, openHand...). Not simulated, accepted and
-logged once: whole-body balance (``wb*``) and Cartesian control
-(``positionInterpolations``, ``transformInterpolations``, ``setPositions``,
-``setTransforms``): they block for their duration without moving the body.
+ALMotion's call surface and NAOqi's argument rules are the backend's
+(:class:`naoloc.backends.simulated.motion.SimulatedMotion`, the same in process and
+served): every call this front does not define runs there, on the robot thread. The
+front adds what only a served robot has: blocking calls run as tasks other clients can
+list and kill (see :mod:`.tasks`), ``move``/``moveToward`` answer at once and walk in the
+caller's order, wakeUp/rest/posture changes take a NAO's time on the wall clock, calls
+composed over time (angleInterpolation, stiffnessInterpolation), ALMotion/MoveFailed, and
+the calls that are accepted but not simulated (logged once): whole-body balance (``wb*``)
+and Cartesian control (``positionInterpolations``, ``transformInterpolations``,
+``setPositions``, ``setTransforms``): they block for their duration without moving the
+body.
 """
 
 from __future__ import annotations
 
 import threading
+import time
+from collections.abc import Callable
 from typing import Any
 
-from naoloc.backends.naoqi.emulation.context import FrontContext
+from naoloc.backends.naoqi.emulation.context import FrontContext, forwarded
+from naoloc.backends.naoqi.emulation.posture import REST_S, WAKE_UP_S, hold_until
 from naoloc.backends.naoqi.emulation.tasks import Task
+from naoloc.backends.simulated.motion import walk_fractions
 from naoloc.constants import JOINT_NAMES
 from naoloc.errors import RobotError
 from naoloc.robot import rules
 
-_CHAINS_WITH_FLAGS = ("LArm", "RArm", "Arms", "LLeg", "RLeg", "Legs", "Head", "Body", "All", "Move")
-
-
-def _chain(name: Any, what: str) -> str:
-    if name not in _CHAINS_WITH_FLAGS:
-        raise RobotError(
-            f"{what}: unknown chain name {name!r}; valid: {', '.join(_CHAINS_WITH_FLAGS)}"
-        )
-    return str(name)
-
 
 class MotionFront:
-    """ALMotion with NAOqi's rules in front of a backend's ``motion``.
+    """ALMotion of a served robot: the backend's ``motion`` with NAOqi's tasks and clock.
 
     Args:
         backend: The backend's ALMotion (fake or MuJoCo).
@@ -45,14 +42,11 @@ class MotionFront:
         self._ctx = ctx
         self._lock = threading.Lock()
         self._walk_gen = 0
-        self._move_arms = {"LArm": True, "RArm": True}
-        self._collision = {"LArm": True, "RArm": True}
-        self._external = {"All": True, "Move": True, "Arms": True, "LArm": True, "RArm": True}
-        self._flags: dict[str, bool] = {"fall": True, "smart": True}
-        self._breath: dict[str, bool] = {}
-        self._idle: dict[str, bool] = {}
-        self._motion_config: dict[str, Any] = {}
         self.on_move_failed: Any = None  # called with NAOqi's MoveFailed value on a failed walk
+
+    def __getattr__(self, name: str) -> Callable[..., Any]:
+        """Any other ALMotion call: the backend's, on the robot thread."""
+        return forwarded(self._ctx, self._b, name)
 
     # ------------------------------------------------------------------ helpers
     def _run(self, method: str, *args: Any) -> Any:
@@ -82,31 +76,26 @@ class MotionFront:
         self._run("setAngles", list(JOINT_NAMES), angles, 1.0)
 
     # ------------------------------------------------------------------ stiffness
+    def _timed(self, name: str, seconds: float) -> None:
+        """Run the backend's ``name`` as a posture task held for a NAO's ``seconds``."""
+        task = self._ctx.tasks.start(name, "posture", self._stopper("walk"), self._ctx.caller)
+        try:
+            started = time.monotonic()
+            self._run(name)
+            hold_until(self._ctx, started, seconds, task.stopped)
+        finally:
+            self._ctx.tasks.end(task)
+
     def wakeUp(self) -> None:
-        """Motors on, walk-ready posture; blocking."""
-        self._blocking("wakeUp", "posture", "wakeUp")
+        """Motors on, walk-ready posture; blocking (a NAO's 2.5 s from rest, else at once)."""
+        awake = bool(self._run("robotIsWakeUp"))
+        self._timed("wakeUp", 0.0 if awake else WAKE_UP_S)
 
     def rest(self) -> None:
-        """Stop, crouch, motors off; blocking."""
+        """Stop, crouch, motors off; blocking (a NAO's 3 s when awake, else at once)."""
         self._new_walk()
-        self._blocking("rest", "posture", "rest")
-
-    def robotIsWakeUp(self) -> bool:
-        """True when the leg joints are stiff."""
-        return bool(self._run("robotIsWakeUp"))
-
-    def setStiffnesses(self, names: Any, stiffnesses: Any) -> None:
-        """Stiffness in [0, 1] (clipped) of joints, chains or groups; non-blocking."""
-        joints = rules.expand_names(names)
-        values = rules.per_joint(stiffnesses, len(joints), "stiffnesses")
-        self._run("setStiffnesses", joints, [min(1.0, max(0.0, v)) for v in values])
-
-    def getStiffnesses(self, jointName: Any) -> list[float]:
-        """Stiffness in [0, 1] of each expanded joint."""
-        joints = rules.expand_names(jointName)
-        if not hasattr(self._b, "getStiffnesses"):
-            raise RobotError("getStiffnesses is not available on this backend")
-        return [float(v) for v in self._run("getStiffnesses", joints)]
+        awake = bool(self._run("robotIsWakeUp"))
+        self._timed("rest", REST_S if awake else 0.0)
 
     def stiffnessInterpolation(self, names: Any, stiffnessLists: Any, timeLists: Any) -> None:
         """Set stiffness at key times (s); blocking for the last time."""
@@ -132,37 +121,6 @@ class MotionFront:
             self._ctx.tasks.end(task)
 
     # ------------------------------------------------------------------ joints
-    def setAngles(self, names: Any, angles: Any, fractionMaxSpeed: Any) -> None:
-        """Move joints toward angles (rad) at a speed fraction (one, or one per joint)."""
-        joints = rules.expand_names(names)
-        values = rules.per_joint(angles, len(joints), "angles")
-        if isinstance(fractionMaxSpeed, list | tuple):
-            fractions = [
-                rules.fraction(f)
-                for f in rules.per_joint(fractionMaxSpeed, len(joints), "speed fractions")
-            ]
-        else:
-            fractions = [rules.fraction(fractionMaxSpeed)] * len(joints)
-        groups: dict[float, tuple[list[str], list[float]]] = {}
-        for joint, value, frac in zip(joints, values, fractions, strict=True):
-            group = groups.setdefault(frac, ([], []))
-            group[0].append(joint)
-            group[1].append(value)
-        for frac, (js, vs) in groups.items():
-            self._run("setAngles", js, vs, frac)
-
-    def changeAngles(self, names: Any, changes: Any, fractionMaxSpeed: Any) -> None:
-        """Move joints by ``changes`` (rad) from their commanded angles; non-blocking."""
-        joints = rules.expand_names(names)
-        deltas = rules.per_joint(changes, len(joints), "changes")
-        now = self._run("getAngles", joints, False)
-        self.setAngles(joints, [a + d for a, d in zip(now, deltas, strict=True)], fractionMaxSpeed)
-
-    def getAngles(self, names: Any, useSensors: Any) -> list[float]:
-        """Joint angles (rad) in the order of the expanded names."""
-        joints = rules.expand_names(names)
-        return [float(v) for v in self._run("getAngles", joints, bool(useSensors))]
-
     def angleInterpolationWithSpeed(
         self, names: Any, targetAngles: Any, maxSpeedFraction: Any
     ) -> None:
@@ -231,13 +189,11 @@ class MotionFront:
 
     def openHand(self, handName: Any) -> None:
         """Open a hand (LHand or RHand); blocking."""
-        hand = rules.hand_name(handName)
-        self._blocking("openHand", "joints", "angleInterpolationWithSpeed", [hand], [1.0], 0.5)
+        self._blocking("openHand", "joints", "openHand", handName)
 
     def closeHand(self, handName: Any) -> None:
         """Close a hand (LHand or RHand); blocking."""
-        hand = rules.hand_name(handName)
-        self._blocking("closeHand", "joints", "angleInterpolationWithSpeed", [hand], [0.0], 0.5)
+        self._blocking("closeHand", "joints", "closeHand", handName)
 
     # ------------------------------------------------------------------ walking
     def moveInit(self) -> None:
@@ -283,25 +239,37 @@ class MotionFront:
     def move(self, *args: Any) -> None:
         """Walk at a velocity (m/s, m/s, rad/s; FRAME_ROBOT) until changed; non-blocking.
 
-        The moveConfig of ``move(x, y, theta, moveConfig)`` is checked, then not used.
+        Returns at once, as NAOqi does: the walk starts on the robot thread after the
+        answer, in the order of the caller's calls. The moveConfig of ``move(x, y,
+        theta, moveConfig)`` is checked, then not used.
         """
         values, _ = rules.velocity(args, False, "move")
         self._new_walk()
-        self._run("move", *values)
+        self._ctx.post(self._b.move, *values)
 
     def moveToward(self, *args: Any) -> None:
-        """Walk at a normalised velocity (each in [-1, 1]); non-blocking."""
-        values, _ = rules.velocity(args, True, "moveToward")
+        """Walk at a normalised velocity (each in [-1, 1]); non-blocking, returns at once.
+
+        The moveConfig (with the SDK examples' ``Frequency``) scales the speed as
+        :func:`naoloc.backends.simulated.motion.walk_fractions` says.
+        """
+        fractions = walk_fractions(args)  # errors reach the caller before anything is queued
         self._new_walk()
-        self._run("moveToward", *values)
+        self._ctx.post(self._b.moveToward, *fractions)
+
+    def _posted_walks(self) -> list[Task]:
+        """Walks started with ``post``/``pCall`` that are still running (or about to)."""
+        return [t for t in self._ctx.tasks.running("post") if t.name in ("moveTo", "walkTo")]
 
     def waitUntilMoveIsFinished(self) -> None:
-        """Block until the moveTo task ends."""
+        """Block until the moveTo task ends (also one just posted: ``post.moveTo``)."""
+        for task in self._posted_walks():
+            task.done.wait()
         self._blocking("waitUntilMoveIsFinished", "wait", "waitUntilMoveIsFinished")
 
     def moveIsActive(self) -> bool:
-        """True while a walk runs."""
-        return bool(self._run("moveIsActive"))
+        """True while a walk runs (also one just posted)."""
+        return bool(self._posted_walks()) or bool(self._run("moveIsActive"))
 
     def stopMove(self) -> bool:
         """End the walk now (a blocking moveTo returns False); True."""
@@ -315,10 +283,11 @@ class MotionFront:
         self._run("stopMove")
 
     def killAll(self) -> None:
-        """Stop every motion task: walks and joint interpolations."""
+        """Stop every motion task: walks, joint interpolations and posture changes."""
         self._new_walk()
         self._run("stopMove")
         self._ctx.tasks.stop_all("joints")
+        self._ctx.tasks.stop_all("posture")
 
     def killTask(self, motionTaskID: Any) -> bool:
         """Stop one task by id; True when it was running."""
@@ -333,50 +302,7 @@ class MotionFront:
         rules.expand_names(resourceNames)
         return not self._ctx.tasks.running("joints")
 
-    def getRobotPosition(self, useSensors: Any) -> list[float]:
-        """``[x, y, theta]`` in FRAME_WORLD (odometry)."""
-        return [float(v) for v in self._run("getRobotPosition", bool(useSensors))]
-
-    def getNextRobotPosition(self) -> list[float]:
-        """Where the current move ends, FRAME_WORLD."""
-        return [float(v) for v in self._run("getNextRobotPosition")]
-
-    def getRobotVelocity(self) -> list[float]:
-        """``[vx, vy, wz]`` in FRAME_ROBOT."""
-        return [float(v) for v in self._run("getRobotVelocity")]
-
-    def getMoveConfig(self, config: Any) -> list[list[Any]]:
-        """``[[name, value], ...]`` of the walk's "Default", "Min" or "Max" parameters."""
-        column = {"Default": 0, "Min": 1, "Max": 2}.get(config)
-        if column is None:
-            raise RobotError(f"config must be Default, Min or Max, got {config!r}")
-        return [[k, float(v[column])] for k, v in rules.MOVE_CONFIG_KEYS.items()]
-
-    def setMoveArmsEnabled(self, leftArmEnabled: Any, rightArmEnabled: Any) -> None:
-        """Whether the arms swing while walking (stored; the simulated arms do not swing)."""
-        self._move_arms.update(LArm=bool(leftArmEnabled), RArm=bool(rightArmEnabled))
-
-    def getMoveArmsEnabled(self, chainName: Any) -> bool:
-        """Arm swing flag of "LArm", "RArm" or "Arms" (both)."""
-        if chainName == "Arms":
-            return all(self._move_arms.values())
-        if chainName not in self._move_arms:
-            raise RobotError(f"chain name must be LArm, RArm or Arms, got {chainName!r}")
-        return self._move_arms[chainName]
-
     # ------------------------------------------------------------------ Cartesian
-    def getPosition(self, name: Any, frame: Any, useSensorValues: Any) -> list[float]:
-        """6D position ``[x, y, z, wx, wy, wz]`` of a chain, sensor or joint in a frame."""
-        if not hasattr(self._b, "getPosition"):
-            raise RobotError("getPosition is not available on this backend yet")
-        return [float(v) for v in self._run("getPosition", name, frame, bool(useSensorValues))]
-
-    def getTransform(self, name: Any, frame: Any, useSensorValues: Any) -> list[float]:
-        """4x4 transform (row-major, 16 floats) of a chain, sensor or joint in a frame."""
-        if not hasattr(self._b, "getTransform"):
-            raise RobotError("getTransform is not available on this backend yet")
-        return [float(v) for v in self._run("getTransform", name, frame, bool(useSensorValues))]
-
     def _cartesian(self, method: str, times: Any) -> None:
         self._ctx.not_simulated(f"ALMotion.{method} (Cartesian control)")
         flat: list[float] = []
@@ -435,92 +361,7 @@ class MotionFront:
         """Not simulated; accepted."""
         self._ctx.not_simulated("ALMotion.wbEnableEffectorControl (whole-body balance)")
 
-    # ------------------------------------------------------------------ reflexes, config
-    def setCollisionProtectionEnabled(self, pChainName: Any, pEnable: Any) -> bool:
-        """Self-collision protection of "LArm", "RArm" or "Arms"; True when set."""
-        chain = _chain(pChainName, "setCollisionProtectionEnabled")
-        for arm in ("LArm", "RArm") if chain == "Arms" else (chain,):
-            if arm not in self._collision:
-                return False
-            self._collision[arm] = bool(pEnable)
-        return True
-
-    def getCollisionProtectionEnabled(self, pChainName: Any) -> bool:
-        """Self-collision protection flag of an arm."""
-        chain = _chain(pChainName, "getCollisionProtectionEnabled")
-        if chain == "Arms":
-            return all(self._collision.values())
-        return self._collision.get(chain, False)
-
-    def setExternalCollisionProtectionEnabled(self, pName: Any, pEnable: Any) -> None:
-        """External-collision protection of "All", "Move", "Arms", "LArm" or "RArm" (stored)."""
-        if pName not in self._external:
-            raise RobotError(f"name must be one of {', '.join(self._external)}, got {pName!r}")
-        if pName == "All":
-            for key in self._external:
-                self._external[key] = bool(pEnable)
-        else:
-            self._external[pName] = bool(pEnable)
-
-    def getExternalCollisionProtectionEnabled(self, pName: Any) -> bool:
-        """External-collision protection flag."""
-        if pName not in self._external:
-            raise RobotError(f"name must be one of {', '.join(self._external)}, got {pName!r}")
-        return self._external[pName]
-
-    def setFallManagerEnabled(self, pEnable: Any) -> None:
-        """Fall manager flag (stored; the simulated NAO does not fall)."""
-        self._flags["fall"] = bool(pEnable)
-
-    def getFallManagerEnabled(self) -> bool:
-        """Fall manager flag."""
-        return self._flags["fall"]
-
-    def setSmartStiffnessEnabled(self, pEnable: Any) -> None:
-        """Smart stiffness flag (stored)."""
-        self._flags["smart"] = bool(pEnable)
-
-    def getSmartStiffnessEnabled(self) -> bool:
-        """Smart stiffness flag."""
-        return self._flags["smart"]
-
-    def setBreathEnabled(self, pChain: Any, pIsEnabled: Any) -> None:
-        """Breathing animation flag of a chain (stored; not animated)."""
-        self._breath[_chain(pChain, "setBreathEnabled")] = bool(pIsEnabled)
-
-    def getBreathEnabled(self, pChain: Any) -> bool:
-        """Breathing flag of a chain."""
-        return self._breath.get(_chain(pChain, "getBreathEnabled"), False)
-
-    def setIdlePostureEnabled(self, pChain: Any, pIsEnabled: Any) -> None:
-        """Idle posture flag of a chain (stored)."""
-        self._idle[_chain(pChain, "setIdlePostureEnabled")] = bool(pIsEnabled)
-
-    def getIdlePostureEnabled(self, pChain: Any) -> bool:
-        """Idle posture flag of a chain."""
-        return self._idle.get(_chain(pChain, "getIdlePostureEnabled"), False)
-
-    def setMotionConfig(self, config: Any) -> None:
-        """Store ``[[name, value], ...]`` motion options (none changes the simulation)."""
-        try:
-            pairs = [(str(k), v) for k, v in config]
-        except (TypeError, ValueError):
-            raise RobotError(f"config must be [[name, value], ...], got {config!r}") from None
-        self._motion_config.update(pairs)
-
-    # ------------------------------------------------------------------ body facts
-    def getBodyNames(self, name: Any) -> list[str]:
-        """Joint names of a joint, chain or group ("Body", "JointActuators", ...)."""
-        return rules.expand_names(name)
-
-    def getJointNames(self, name: Any) -> list[str]:
-        """As getBodyNames."""
-        return rules.expand_names(name)
-
-    def getSensorNames(self) -> list[str]:
-        """Names of the joints with position sensors."""
-        return list(JOINT_NAMES)
-
+    # ------------------------------------------------------------------ summary
     def getSummary(self) -> str:
         """A text summary: joint angles and stiffness, running tasks."""
         angles = self._run("getAngles", list(JOINT_NAMES), True)
@@ -538,3 +379,36 @@ class MotionFront:
         tasks = self._ctx.tasks.running()
         lines += [f"  {t.name} (id {t.id})" for t in tasks] or ["  none"]
         return "\n".join(lines)
+
+    # ------------------------------------------------------------------ NAOqi 1.x names
+    def walkTo(self, *args: Any) -> bool:
+        """Deprecated NAOqi 1.x name of moveTo (old SDK scripts call it)."""
+        return self.moveTo(*args)
+
+    def walkInit(self) -> None:
+        """Deprecated name of moveInit."""
+        self.moveInit()
+
+    def setWalkTargetVelocity(self, x: Any, y: Any, theta: Any, frequency: Any) -> None:
+        """Deprecated: moveToward(x, y, theta, [["Frequency", frequency]])."""
+        self.moveToward(x, y, theta, [["Frequency", frequency]])
+
+    def waitUntilWalkIsFinished(self) -> None:
+        """Deprecated name of waitUntilMoveIsFinished."""
+        self.waitUntilMoveIsFinished()
+
+    def walkIsActive(self) -> bool:
+        """Deprecated name of moveIsActive."""
+        return self.moveIsActive()
+
+    def stopWalk(self) -> bool:
+        """Deprecated name of stopMove."""
+        return self.stopMove()
+
+    def setWalkArmsEnabled(self, leftArmEnabled: Any, rightArmEnabled: Any) -> None:
+        """Deprecated name of setMoveArmsEnabled."""
+        self.setMoveArmsEnabled(leftArmEnabled, rightArmEnabled)
+
+    def getWalkArmsEnabled(self) -> list[bool]:
+        """Deprecated: ``[left, right]`` arm swing flags."""
+        return [self.getMoveArmsEnabled("LArm"), self.getMoveArmsEnabled("RArm")]

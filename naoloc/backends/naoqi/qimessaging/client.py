@@ -198,7 +198,12 @@ class Channel:
         except ProtocolError as err:
             print(f"naoloc: dropped a bad event from {self.url}: {err}", file=sys.stderr)
             return
-        args = tuple(value) if isinstance(value, tuple | list) and sig.kind == "(" else (value,)
+        if sig.kind == "m":  # a dynamic signal: libqi sends its arguments as one tuple
+            args = tuple(value) if isinstance(value, tuple) else (value,)
+        elif isinstance(value, tuple | list) and sig.kind == "(":
+            args = tuple(value)
+        else:
+            args = (value,)
         for callback, _ in links:
             self.session._dispatch(callback, args)
 
@@ -237,6 +242,8 @@ class QiSession:
         self._events: queue.Queue[Any] = queue.Queue()
         self._event_thread: threading.Thread | None = None
         self._server: Any = None
+        self._registered: set[int] = set()  # ids given by a remote directory
+        self._sd_process: tuple[str, int] | None = None  # the directory's (machine, pid)
         self._closed = False
         self.connected = Signal()
         self.disconnected = Signal()
@@ -302,7 +309,7 @@ class QiSession:
 
     def services(self, _async: bool = False) -> Any:
         """The ServiceInfo dicts of every service (like qi: name, serviceId, endpoints...)."""
-        if self._server is not None:
+        if self._server is not None and self._main is None:
             return self._server.services_info()
         raw = self._directory().services(_async=True)
         result = Future()
@@ -342,20 +349,35 @@ class QiSession:
             info = service_info_dict(self._directory().service(name, _async=True).value(timeout_ms))
         except RobotError as err:
             raise RobotError(f"no service {name!r} at {self._url} ({err})") from None
-        channel = self._channel_for(info["endpoints"])
+        channel = self._channel_for(info["endpoints"], self._with_directory(info))
         service_id = int(info["serviceId"])
         meta = MetaObject.from_wire(channel.call(service_id, 1, _META, (0,)).value(timeout_ms))
         proxy = RemoteObject(channel, service_id, 1, meta, name)
         self._proxies[name] = proxy
         return proxy
 
-    def _channel_for(self, endpoints: list[str]) -> Channel:
+    def _with_directory(self, info: dict[str, Any]) -> bool:
+        """True when the service lives in the service directory's own process."""
+        if self._sd_process is None:
+            timeout_ms = max(1, int(self._timeout_s * 1000))
+            try:
+                sd = service_info_dict(
+                    self._directory().service("ServiceDirectory", _async=True).value(timeout_ms)
+                )
+                self._sd_process = (str(sd["machineId"]), int(sd["processId"]))
+            except (NaolocError, KeyError, ValueError, TypeError):
+                return True
+        return (str(info.get("machineId")), int(info.get("processId", -1))) == self._sd_process
+
+    def _channel_for(self, endpoints: list[str], local: bool = True) -> Channel:
         """The channel to reach a service listed at ``endpoints``.
 
-        The service directory's own connection when an endpoint is relative
-        (``qi:<name>``) or names the same peer (its URL, or its address and port, as a
+        The service directory's own connection when the service lives in the
+        directory's process (``local``) and an endpoint is relative (``qi:<name>``), or
+        when an endpoint names the same peer (its URL, or its address and port, as a
         NAO lists ``tcp://<each interface>:9559``); otherwise a new authenticated
-        connection, trying the peer's host first and loopback last.
+        connection, trying the peer's host first and loopback last. A service another
+        client registered is reached at its own endpoints, never through the directory.
         """
         assert self._main is not None
         scheme, host, port = parse_url(self._url)
@@ -363,7 +385,11 @@ class QiSession:
         same = {(host, port), (peer[0], peer[1])} if peer else {(host, port)}
         usable = []
         for endpoint in endpoints:
-            if endpoint.startswith("qi:") or endpoint == self._url:
+            if endpoint.startswith("qi:"):
+                if local:
+                    return self._main
+                continue
+            if endpoint == self._url:
                 return self._main
             try:
                 e_scheme, e_host, e_port = parse_url(endpoint)
@@ -456,23 +482,91 @@ class QiSession:
         self._server = QiServer()
         self._server.listen(url)
 
+    def listen(self, url: str) -> None:
+        """A connected session: accept calls to the services it registers at ``url``.
+
+        Without it, :meth:`registerService` listens on the address this machine uses
+        to reach the service directory (loopback for a local NAOqi), on any free port.
+        """
+        from naoloc.backends.naoqi.qimessaging.server import QiServer
+
+        if self._main is None:
+            raise BackendError("listen needs a connected session (or use listenStandalone)")
+        if self._server is not None:
+            raise BackendError("this session already listens")
+        server = QiServer()
+        server.listen(url)
+        self._server = server
+
+    def local_address(self) -> str:
+        """The address of this machine that reaches the service directory.
+
+        Raises:
+            ConnectionLost: Not connected.
+        """
+        if self._main is None or self._main.closed:
+            raise ConnectionLost("not connected")
+        sock: Any = self._main._conn.sock
+        raw: Any = getattr(sock, "_sock", sock)  # a TLS socket wraps the TCP one
+        return str(raw.getsockname()[0])
+
     def registerService(self, name: str, obj: Any, **kwargs: Any) -> int:
-        """Serve ``obj`` as ``name`` (listening sessions only); returns its service id."""
+        """Serve ``obj`` as ``name``; returns its service id.
+
+        A listening session (``listenStandalone``) lists it in its own directory. A
+        connected session registers it with the remote service directory (a NAO's, or
+        ``naoloc serve``'s) and serves its calls on its own endpoint, as libqi does;
+        the service is listed until this session closes.
+
+        Raises:
+            BackendError: The session neither listens nor is connected.
+            RobotError: The directory refused it (a name already taken...).
+        """
+        if self._main is not None:
+            return self._register_remote(name, obj, **kwargs)
         if self._server is None:
-            raise BackendError("registerService needs listenStandalone first (qimessaging)")
+            raise BackendError("registerService needs listenStandalone or connect first")
         service_id: int = self._server.register(name, obj, **kwargs)
+        return service_id
+
+    def _register_remote(self, name: str, obj: Any, **kwargs: Any) -> int:
+        import hashlib
+        import os
+
+        assert self._main is not None
+        if self._server is None:
+            self.listen(f"tcp://{self.local_address()}:0")
+        assert self._server is not None
+        directory = self._directory()
+        timeout_ms = max(1, int(self._timeout_s * 1000))
+        machine = local_machine_id()
+        uid = hashlib.sha1(f"{machine}/{os.getpid()}/{name}".encode()).digest()
+        info = (name, 0, machine, os.getpid(), self._server.endpoints(), "", uid)
+        service_id = int(directory.registerService(info, _async=True).value(timeout_ms))
+        try:
+            self._server.register(name, obj, service_id=service_id, **kwargs)
+            directory.serviceReady(service_id, _async=True).value(timeout_ms)
+        except NaolocError:
+            with contextlib.suppress(NaolocError):
+                directory.unregisterService(service_id, _async=True).value(timeout_ms)
+            raise
+        self._registered.add(service_id)
         return service_id
 
     def set_core(self, core: Any) -> None:
         """Listening sessions: tell ``core.gone(caller)`` when a client disconnects."""
-        if self._server is None:
+        if self._server is None or self._main is not None:
             raise BackendError("set_core needs listenStandalone first (qimessaging)")
         self._server.set_core(core)
 
     def unregisterService(self, service_id: int) -> None:
-        """Stop serving a service (listening sessions only)."""
+        """Stop serving a service (one this session registered)."""
         if self._server is None:
-            raise BackendError("unregisterService needs listenStandalone first (qimessaging)")
+            raise BackendError("unregisterService: this session serves nothing")
+        if service_id in self._registered:
+            self._registered.discard(service_id)
+            timeout_ms = max(1, int(self._timeout_s * 1000))
+            self._directory().unregisterService(service_id, _async=True).value(timeout_ms)
         self._server.unregister(service_id)
 
     def endpoints(self) -> list[str]:
@@ -492,6 +586,25 @@ class QiSession:
             self._server.close()
         if self._event_thread is not None:
             self._events.put(None)
+
+
+def local_machine_id() -> str:
+    """This machine's id as libqi knows it (``~/.config/qimessaging/machine_id``, which
+    libqi writes), else a stable id from the host name (never written anywhere).
+
+    libqi clients compare it with their own: on the same machine they may use loopback
+    endpoints, on another they skip them.
+    """
+    import socket
+    import uuid
+    from pathlib import Path
+
+    path = Path.home() / ".config" / "qimessaging" / "machine_id"
+    try:
+        text = path.read_text(encoding="utf-8").strip()
+    except OSError:
+        text = ""
+    return text or str(uuid.uuid5(uuid.NAMESPACE_DNS, socket.gethostname()))
 
 
 def urlhost(url: str) -> str:

@@ -358,11 +358,13 @@ def decoder(sig: Sig) -> Decoder:
             return inner(buf, pos + 1, _depth(depth), uid)
 
         return dec_optional
+    fields = sig.fields if sig.fields and len(sig.fields) == len(sig.items) else ()
     if sig.items and all(s.kind in _FORMAT for s in sig.items):
         packed = struct.Struct("<" + "".join(_FORMAT[s.kind] for s in sig.items))
 
         def dec_flat(buf: memoryview, pos: int, depth: int, uid: bool) -> tuple[Any, int]:
-            return packed.unpack_from(buf, pos), pos + packed.size
+            values = packed.unpack_from(buf, pos)
+            return (NamedStruct(values, fields) if fields else values), pos + packed.size
 
         return dec_flat
     members = [decoder(s) for s in sig.items]
@@ -373,9 +375,25 @@ def decoder(sig: Sig) -> Decoder:
         for dec in members:
             v, pos = dec(buf, pos, depth, uid)
             out.append(v)
-        return tuple(out), pos
+        return (NamedStruct(out, fields) if fields else tuple(out)), pos
 
     return dec_tuple
+
+
+class NamedStruct(tuple[Any, ...]):
+    """A decoded struct whose signature names its fields (``(ss)<Name,a,b>``): a tuple
+    that also knows ``fields`` (qi's Python binding gives such structs as dicts)."""
+
+    fields: tuple[str, ...]
+
+    def __new__(cls, values: Any, fields: tuple[str, ...]) -> NamedStruct:
+        made = super().__new__(cls, values)
+        made.fields = fields
+        return made
+
+    def as_dict(self) -> dict[str, Any]:
+        """``{field: value}``."""
+        return dict(zip(self.fields, self, strict=True))
 
 
 def _hashable(key: Any) -> Any:

@@ -4,9 +4,13 @@ Real libqi clients (the ``qi`` package, NAOqi tools) connect to it as to a NAO: 
 authenticate (service 0), find services in the directory (service 1) and call
 methods described by MetaObjects built from :mod:`naoloc.backends.naoqi.signatures`
 (or a table given at registration). Every connection is its own caller
-(``qim-<n>``), so the virtual NAOqi's dead-man tells clients apart. Clients cannot
-register or unregister services. Every incoming message is validated before it is
-trusted; a bad payload gets an error reply, a bad header closes that connection.
+(``qim-<n>``), so the virtual NAOqi's dead-man tells clients apart. Clients may
+register services of their own under new names (as on a NAO: an old-SDK ALBroker's
+modules, NaolocLocalization from another process), at most
+:data:`MAX_CLIENT_SERVICES`; they are listed until their connection closes, and the
+server's own services cannot be replaced or unregistered. Every incoming message is
+validated before it is trusted; a bad payload gets an error reply, a bad header closes
+that connection.
 """
 
 from __future__ import annotations
@@ -59,7 +63,8 @@ SEND_TIMEOUT_S: Final = 5.0  # a client that stops reading is dropped after this
 AUTH_TIMEOUT_S: Final = 10.0  # a connection that does not authenticate is dropped
 SD_NAME: Final = "ServiceDirectory"
 MEMORY: Final = "ALMemory"
-_REFUSED: Final = "naoloc serve does not accept service (un)registration from clients"
+MAX_CLIENT_SERVICES: Final = 32  # services registered by clients, all together
+_REFUSED: Final = "naoloc serve's own services cannot be unregistered by clients"
 
 
 @dataclass
@@ -84,6 +89,7 @@ class _Client:
     in_flight: int = 0
     links: dict[tuple[int, int, int], set[int]] = field(default_factory=dict)
     exported: set[tuple[int, int]] = field(default_factory=set)
+    registered: set[int] = field(default_factory=set)  # service ids it registered here
 
 
 def _send_timeout(sock: socket.socket, seconds: float) -> None:
@@ -168,6 +174,7 @@ class QiServer:
         self._core: Any = None
         self._in_flight = 0
         self._memory: MemoryHub | None = None
+        self._external: dict[int, tuple[Any, ...]] = {}  # clients' services: id -> ServiceInfo
         self.protocol_errors = 0
 
     # ------------------------------------------------------------------ lifecycle
@@ -272,6 +279,7 @@ class QiServer:
         *,
         methods: Iterable[tuple[str, str, str]] | None = None,
         signals: dict[str, str] | None = None,
+        service_id: int | None = None,
     ) -> int:
         """Serve ``target`` as ``name``; returns its service id (2, 3, ...).
 
@@ -283,16 +291,21 @@ class QiServer:
             signals: ``{name: tuple signature}``: ``target.<name>`` is a
                 :class:`~naoloc.backends.naoqi.session.Signal` whose emissions reach
                 subscribed clients.
+            service_id: The id another service directory gave it (a client session
+                serving its own services); None = the next id of this server.
 
         Raises:
             BackendError: The name is taken or has no signatures.
         """
         with self._lock:
-            if any(s.name == name for s in self._services.values()):
+            taken = any(s.name == name for s in self._services.values()) or any(
+                i[0] == name for i in self._external.values()
+            )
+            if taken or service_id in self._services:
                 raise BackendError(f"service {name!r} is already registered")
         table = list(methods) if methods is not None else _table(name)
         meta = build(table, signals=(signals or {}).items(), description=name)
-        service_id = next(self._ids)
+        service_id = next(self._ids) if service_id is None else service_id
         served = _Served(name, service_id, target, meta)
         self._hook_signals(served)
         with self._lock:
@@ -409,6 +422,8 @@ class QiServer:
             return
         for key in list(client.exported):
             self._drop(key)
+        for service_id in list(client.registered):  # as libqi: a client's services go with it
+            self._unregister_external(service_id)
         gone = getattr(self._core, "gone", None)
         if callable(gone):
             try:
@@ -552,7 +567,7 @@ class QiServer:
     ) -> None:
         try:
             if served.service_id == 1:
-                value = self._directory(method.name, args)
+                value = self._directory(client, method.name, args)
             elif served.name == MEMORY and method.name == "subscriber" and self._memory:
                 value = self._memory.new(args[0] if args else None)
             elif hasattr(served.target, "invoke"):
@@ -573,19 +588,62 @@ class QiServer:
                 client.in_flight -= 1
                 self._in_flight -= 1
 
-    def _directory(self, name: str, args: list[Any]) -> Any:
+    def _directory(self, client: _Client, name: str, args: list[Any]) -> Any:
         with self._lock:
             served = list(self._services.values())
+            external = dict(self._external)
         if name == "service":
             found = next((s for s in served if s.name == args[0]), None)
-            if found is None:
+            if found is not None:
+                return self._info(found)
+            info = next((i for i in external.values() if i[0] == args[0]), None)
+            if info is None:
                 raise RobotError(f"Cannot find service '{args[0]}' in index")
-            return self._info(found)
+            return info
         if name == "services":
-            return [self._info(s) for s in served]
+            return [self._info(s) for s in served] + list(external.values())
         if name == "machineId":
             return self.machine_id
-        raise RobotError(_REFUSED)
+        if name == "registerService":
+            return self._register_external(client, tuple(args[0]))
+        if name == "serviceReady":
+            return None
+        if name == "unregisterService":
+            service_id = int(args[0])
+            if service_id in external:
+                self._unregister_external(service_id)
+                return None
+            if service_id in (s.service_id for s in served):
+                raise RobotError(_REFUSED)
+            raise RobotError(f"no service #{service_id} to unregister")
+        raise RobotError(f"ServiceDirectory.{name} is not offered by naoloc serve")
+
+    def _register_external(self, client: _Client, info: tuple[Any, ...]) -> int:
+        """A client's own service: listed here, called at the endpoints it gives."""
+        name = info[0]
+        if not isinstance(name, str) or not name:
+            raise RobotError("registerService: a service needs a name")
+        with self._lock:
+            taken = any(s.name == name for s in self._services.values()) or any(
+                i[0] == name for i in self._external.values()
+            )
+            if taken:
+                raise RobotError(f'Service "{name}" is already registered')
+            if len(self._external) >= MAX_CLIENT_SERVICES:
+                raise RobotError(f"registerService: at most {MAX_CLIENT_SERVICES} client services")
+            service_id = next(self._ids)
+            self._external[service_id] = (name, service_id, *info[2:])
+            client.registered.add(service_id)
+        self._emit(self._services[1], 106, (service_id, name))
+        return service_id
+
+    def _unregister_external(self, service_id: int) -> None:
+        with self._lock:
+            info = self._external.pop(service_id, None)
+            for c in self._clients.values():
+                c.registered.discard(service_id)
+        if info is not None:
+            self._emit(self._services[1], 107, (service_id, info[0]))
 
     def _reply(self, client: _Client, header: Header, sig: Any, value: Any) -> None:
         try:

@@ -1,0 +1,58 @@
+"""When a floor-wall line is believed: one sensor range and one side-line gate.
+
+The bottom camera's floor-wall lines (:mod:`naoloc.perception.floorline`) are read by the
+survey while it walks (keeping its distance from the side wall, finding the corner from the
+front wall), by the survey's metric scale (:func:`naoloc.behaviours.wall_follow.metric_scale`)
+and by the map's wall-referenced poses (:mod:`naoloc.mapping.wall_poses`). They all trust a
+line by the rules here, so the robot steers by the same lines the map is later built from.
+
+Frames: a line's ``distance`` is metres from FRAME_ROBOT's origin, its ``normal`` the
+direction (rad, FRAME_ROBOT) from the origin to the line's nearest point.
+"""
+
+from __future__ import annotations
+
+from typing import Final
+
+from naoloc.geometry import modulo2PI
+
+# The floor line of a wall ahead is trusted up to this distance, m. The detector is scored
+# to it (tools/floorline_accuracy.py: fronts 0.9-2.2 m ahead); the survey's lines read
+# 1-2 cm short at every distance to it (tools/wall_pose_accuracy.py).
+FRONT_RANGE_M: Final = 2.2
+# A side line farther than this from the wall offset the survey keeps, m, sees something
+# else (a piece of furniture, a doorway's recess, a rug's edge): the robot does not steer by
+# it and the map does not place frames by it.
+SIDE_OFFSET_ERROR_M: Final = 0.5
+# Nor does a side line at a larger angle to the wall the survey walks along, rad.
+SIDE_ANGLE_ERROR_RAD: Final = 0.35
+# Nor one nearer than this, m: no view of the bottom camera sees a wall's foot that near
+# beside the robot; what it shows there is the robot's own arm (tools/floorline_views.py).
+SIDE_MIN_M: Final = 0.35
+
+
+def in_front_range(distance: float) -> bool:
+    """Whether a front line ``distance`` m ahead is within the trusted range."""
+    return distance <= FRONT_RANGE_M
+
+
+def side_line_angle(
+    distance: float, normal: float, offset: float, side_normal: float
+) -> float | None:
+    """The robot's heading to the side wall's direction, if the side line is trusted.
+
+    Args:
+        distance: The line's distance, m.
+        normal: The line's normal, rad (FRAME_ROBOT).
+        offset: The distance the survey keeps from the side wall, m.
+        side_normal: Where the side wall should be, rad (``-pi/2`` right, ``+pi/2`` left).
+
+    Returns:
+        ``side_normal - normal`` wrapped to (-pi, pi] (rad) when the line is within
+        :data:`SIDE_OFFSET_ERROR_M` of ``offset`` and :data:`SIDE_ANGLE_ERROR_RAD` of
+        ``side_normal``, and not nearer than :data:`SIDE_MIN_M`, else None.
+    """
+    delta = modulo2PI(side_normal - normal)
+    if abs(distance - offset) > SIDE_OFFSET_ERROR_M or abs(delta) > SIDE_ANGLE_ERROR_RAD:
+        return None
+    return None if distance < SIDE_MIN_M else delta
