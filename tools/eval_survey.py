@@ -103,11 +103,18 @@ def start_of(room: dict[str, Any]) -> tuple[tuple[float, float, float], tuple[fl
 def room_config(room: dict[str, Any], laps: int) -> Config:
     """The config of one drawn room (default honest world)."""
     start, sides = start_of(room)
+    if "start" in room:  # a start of one's own (room frame) and the circuit's sides
+        start, sides = tuple(room["start"]), tuple(room["sides"])
     return load_config(
         {
             "robot": {"backend": "mujoco"},
             "world": {
-                "room": {"size_m": room["size_m"], "seed": room["seed"], "style": room["style"]},
+                "room": {
+                    "size_m": room["size_m"],
+                    "seed": room["seed"],
+                    "style": room["style"],
+                    **({"posters_per_wall": room["posters"]} if "posters" in room else {}),
+                },
                 "sim": {"light": room["light"]},
                 "start_pose": list(start),
             },
@@ -252,8 +259,16 @@ def analyse(row: dict[str, Any], cfg: Config, path: Path) -> dict[str, Any]:
     row.update(complete=data.complete, frames=len(data.keyframes))
     if len(data.keyframes) < 3:
         return row
-    from naoloc.mapping.from_survey import pose_survey, run_checks
+    try:
+        from naoloc.mapping.from_survey import pose_survey, run_checks
+    except ImportError:  # a tree from before the checks (PYTHONPATH=that tree): no checks
+        from naoloc.mapping.from_survey import survey_keyframes
 
+        posed, facts = survey_keyframes(data, cfg.map, cfg.survey.wall_offset_m)
+        row["keyframes"] = frame_error(data.keyframes, data.meta, posed)
+        row["room"] = room_frame_error(facts["wall_poses"], data.meta)
+        row["checks"] = None
+        return row
     posed, facts, walled = pose_survey(data, cfg.map, cfg.survey.wall_offset_m)
     row["wall_poses"] = walled is not None
     row["keyframes"] = frame_error(data.keyframes, data.meta, posed)
@@ -322,7 +337,8 @@ def main() -> int:
     )  # fmt: skip
     parser.add_argument(
         "--room", type=str, default=None,
-        help="one room as JSON (size_m, style, light, offset_m, corner, wall, seed)",
+        help="one room as JSON (size_m, style, light, offset_m, corner, wall, seed; optional "
+        "posters, and start [x, y, theta] with sides [a, b])",
     )  # fmt: skip
     args = parser.parse_args()
     if args.room:

@@ -21,7 +21,8 @@ import numpy as np
 
 from naoloc.behaviours.wall_follow import FloorEye, look_for_line, side_views
 from naoloc.errors import FeatureError, MotionError
-from naoloc.perception.wall_gate import SIDE_OFFSET_ERROR_M
+from naoloc.perception.floorline import WallLine
+from naoloc.perception.wall_gate import SIDE_MIN_M, SIDE_OFFSET_ERROR_M
 from naoloc.robot import Robot
 from naoloc.robot.camera import DEFAULT_HEAD_PITCH, Camera, look
 
@@ -222,6 +223,12 @@ class FloorLineWall:
     right_m: float | None
 
 
+def _not_the_arm(line: WallLine) -> bool:
+    """A line nearer than :data:`naoloc.perception.wall_gate.SIDE_MIN_M` is the robot's own
+    arm's edge: no view sees a wall's foot that near."""
+    return line.distance >= SIDE_MIN_M
+
+
 def decide_side(
     left: float | None, right: float | None, offset: float | None = None
 ) -> Side | None:
@@ -274,7 +281,7 @@ def detect_wall_by_floorline(
             look(robot, yaw, pitch)
             line = eye.measure(yaw)
         else:
-            line, _ = look_for_line(robot, eye, yaw, side_views(offset))
+            line, _ = look_for_line(robot, eye, yaw, side_views(offset), _not_the_arm)
         seen[name] = None if line is None else line.distance
     left, right = seen["left"], seen["right"]
     side = decide_side(left, right, offset)

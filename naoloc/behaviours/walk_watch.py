@@ -37,15 +37,17 @@ from naoloc.robot import Robot
 FRONT_CHECK_M = 1.6  # front lines farther than this err too much to say a step did not close
 MAX_SIDE_DEVIATION_M = 0.25  # side lines farther than this from the offset are not judged
 MIN_SIDE_STEP_M = 0.1  # odometry steps toward or away from the wall smaller are not judged
-CONTACT_CLEARANCE_M = 0.15  # simulator only: the body's disc (MuJoCo's capsule) touches
+CONTACT_CLEARANCE_M = 0.155  # simulator only: the body's disc (MuJoCo's 0.15 m capsule) touches
 MIN_STEP_M = 0.08  # odometry steps shorter than this are not judged by the pictures
 STILL_PX = 2.0  # a matched feature that moved less than this (px) stayed put
 MIN_STILL_SHARE = 0.7  # pictures with this share of their features still: the robot did not move
 MIN_MATCHES = 12  # matched features a picture comparison needs
 MIN_FRONT_ADVANCE_M = 0.15  # odometry advance toward the front wall a comparison needs
+MAX_FRONT_ADVANCE_M = 0.6  # and the most: lines measured farther apart are not compared
 MIN_FRONT_SHARE = 0.3  # the front line must close at least this share of that advance
 STRIKES = 2  # evidence on this many steps in a row stops the survey
 MIN_AHEAD_M = 0.35  # lines nearer than this ahead are the feet or a seam at them, m
+PATH_HALF_M = 0.2  # half the robot's way: its body (0.15 m) and a margin, m
 MIN_AHEAD_SPAN_M = 0.5  # a wall across the path fills the view; a door frame's edge does not
 FRONT_WATCH_M = 1.2  # a line ahead this near, sooner than expected, is looked at every stop
 MAX_AHEAD_DISAGREEMENT_M = 0.3  # and a quarter of the side: how much sooner the wall ahead
@@ -82,6 +84,16 @@ def image_shift(
     )
     dx = [abs(kp2[m.trainIdx].pt[0] - kp1[m.queryIdx].pt[0]) for m in good]
     return float(np.median(dx)), float(np.mean(moved < STILL_PX)), len(good)
+
+
+def _across_the_path(line: WallLine) -> bool:
+    """Whether a line ahead crosses the robot's way (within :data:`PATH_HALF_M` of its
+    centre line), as a wall across it would: a chair's or a cabinet's face beside the way
+    does not (a line whose ends are not known is taken to cross it)."""
+    if line.ends_m is None:
+        return True
+    low, high = line.ends_m
+    return low < PATH_HALF_M and high > -PATH_HALF_M
 
 
 def features(gray: np.ndarray) -> tuple[Any, Any]:
@@ -271,6 +283,7 @@ class WalkWatch:
             "ahead",
             line.distance < self.offset + MIN_STEP_M
             and line.span_m >= MIN_AHEAD_SPAN_M
+            and _across_the_path(line)
             and early > 0.25 * length + MAX_AHEAD_DISAGREEMENT_M,
             f"the wall ahead is {line.distance:.2f} m away with {remaining:.1f} m of the "
             "side still to walk by the odometry",
@@ -282,8 +295,8 @@ class WalkWatch:
         distance, there = before
         heading = there.theta + line.normal
         advance = (here.x - there.x) * math.cos(heading) + (here.y - there.y) * math.sin(heading)
-        if advance < MIN_FRONT_ADVANCE_M:
-            return
+        if not MIN_FRONT_ADVANCE_M <= advance <= MAX_FRONT_ADVANCE_M:
+            return  # too short to judge, or so long since that it may be another thing
         closed = distance - line.distance
         self._strike(
             "front",

@@ -21,9 +21,9 @@ the survey's own records can contradict, and gives a figure, its limit and a ver
 - ``odometry``: the odometry against the wall poses: each side's metres per odometry metre
   and the corners' turn per odometry turn, against what a NAO's odometry errs;
 - ``room_size``: the circuit's sides against the room the config gives: the metres per
-  odometry metre the sides imply (configured length over the odometry's walk) against
-  the survey's own metric scale (front wall distances, camera height from the
-  kinematics), and the sides along x against those along y.
+  odometry metre the sides imply (configured length over the odometry's walk) along x
+  against those along y, and against the survey's own metric scale (front wall distances,
+  camera height from the kinematics) when its samples agree.
 
 The limits are the config's ``map.checks`` tuning record. :func:`check_survey` runs them,
 :func:`failed` names the failing ones, and :func:`map_checked` tells whether a map (its
@@ -270,8 +270,8 @@ def _room_size(walled: Any, meta: dict[str, Any], tuning: MapCheckTuning) -> Che
         )
     sx, sy = (statistics.median(v) for v in by_axis)
     errors = {"x against y": abs(sx / sy - 1.0) * 100}
-    metric = meta.get("metric_scale")
-    if isinstance(metric, (int, float)) and metric > 0:
+    metric = _consistent_metric(meta, tuning)
+    if metric is not None:
         errors["x against the metric scale"] = abs(sx / metric - 1.0) * 100
         errors["y against the metric scale"] = abs(sy / metric - 1.0) * 100
     which, worst = max(errors.items(), key=lambda kv: kv[1])
@@ -283,6 +283,21 @@ def _room_size(walled: Any, meta: dict[str, Any], tuning: MapCheckTuning) -> Che
         worst <= tuning.max_size_error_pct,
         f"the configured sides against the walk, largest: {which}",
     )
+
+
+def _consistent_metric(meta: dict[str, Any], tuning: MapCheckTuning) -> float | None:
+    """The survey's floor-line metric scale when its per-side samples agree (relative
+    median absolute deviation within ``tuning.max_metric_spread_pct``, at least 4): in
+    furnished rooms the front lines see furniture, and the samples scatter 0.6-1.2."""
+    metric, samples = meta.get("metric_scale"), meta.get("metric_scale_samples")
+    if not isinstance(metric, (int, float)) or metric <= 0 or not isinstance(samples, list):
+        return None
+    values = [float(v) for v in samples if isinstance(v, (int, float)) and v > 0]
+    if len(values) < 4:
+        return None
+    middle = statistics.median(values)
+    spread = statistics.median(abs(v - middle) for v in values) / middle * 100
+    return float(metric) if spread <= tuning.max_metric_spread_pct else None
 
 
 def failed(checks: list[Check]) -> list[Check]:
