@@ -493,7 +493,7 @@ class MapCheckTuning(_Model):
         "from its first steps' (deg)",
     )
     min_coverage: float = Field(
-        0.5, ge=0, le=1, description="least share of each wall's stops with its floor line"
+        0.7, ge=0, le=1, description="least share of each wall's stops with its floor line"
     )
     max_wall_fit_m: float = Field(
         0.06,

@@ -426,7 +426,7 @@ def _walk_laps(
         side_line = median_line(start_lines)
         if side_line is None:
             side_line = measure_side(robot, eye, side_normal, offset)
-        memory.seen_side(trusted(side_line, offset, side_normal), here)
+        memory.start(trusted(side_line, offset, side_normal), here, offset)
         result.meta["start_side"] = line_dict(side_line)  # where the map frame's origin stands
         result.meta["start_views"] = [line_dict(line) for line in start_lines]
         # The wall ahead at the start: its angle is the origin's heading when the side wall

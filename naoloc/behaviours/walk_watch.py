@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from naoloc.behaviours.wall_follow import carry
 from naoloc.errors import SurveyBlocked
 from naoloc.geometry import Pose2D
 from naoloc.perception.floorline import WallLine
@@ -137,6 +138,7 @@ class WalkWatch:
     walked: float = 0.0
     _picture: tuple[Any, Any] | None = None
     _front: tuple[float, Pose2D] | None = None
+    _seen_ahead: tuple[WallLine, Pose2D] | None = None
     _near: bool = False
     _side: tuple[float, float, Pose2D] | None = None
     _strikes: dict[str, int] = field(default_factory=dict)
@@ -145,6 +147,7 @@ class WalkWatch:
         """A new side begins (after a corner): the pictures and front line start over."""
         self.lap, self.side, self.walked = lap, side, 0.0
         self._picture, self._front, self._near, self._side = None, None, False, None
+        self._seen_ahead = None
         self._strikes.clear()
 
     def clear(self, name: str) -> None:
@@ -276,19 +279,19 @@ class WalkWatch:
                 :data:`MIN_FRONT_SHARE` of the odometry's advance toward it. Lines nearer
                 than :data:`MIN_AHEAD_M` are no evidence (the feet, a seam at them).
         """
+        if line is None and self._seen_ahead is not None:
+            # Unseen is not gone: the last wall seen ahead, carried by the odometry (a wall
+            # at the bottom camera's near edge can vanish from both pitches).
+            seen, there = self._seen_ahead
+            motion = there.inverse() * here
+            if math.hypot(motion.x, motion.y) <= MAX_FRONT_ADVANCE_M:
+                self._ahead(carry(seen, motion), remaining, length)
+            return
         if line is None or line.distance < MIN_AHEAD_M:
             return  # no view sees a wall that near: the robot's own feet, a seam at them
-        early = remaining - (line.distance - self.offset)
-        self._strike(
-            "ahead",
-            line.distance < self.offset + MIN_STEP_M
-            and line.span_m >= MIN_AHEAD_SPAN_M
-            and _across_the_path(line)
-            and early > 0.25 * length + MAX_AHEAD_DISAGREEMENT_M,
-            f"the wall ahead is {line.distance:.2f} m away with {remaining:.1f} m of the "
-            "side still to walk by the odometry",
-        )
-        self._near = line.distance < FRONT_WATCH_M and early > MAX_AHEAD_DISAGREEMENT_M
+        if _across_the_path(line):
+            self._seen_ahead = (line, here)
+        self._ahead(line, remaining, length)
         before, self._front = self._front, (line.distance, here)
         if before is None or line.distance > FRONT_CHECK_M:
             return
@@ -304,3 +307,17 @@ class WalkWatch:
             f"the wall ahead is {line.distance:.2f} m away and came {max(0.0, closed):.2f} m "
             f"nearer while the odometry walked {advance:.2f} m toward it",
         )
+
+    def _ahead(self, line: WallLine, remaining: float, length: float) -> None:
+        """The 'ahead' evidence of one line (measured or carried) and the near flag."""
+        early = remaining - (line.distance - self.offset)
+        self._strike(
+            "ahead",
+            line.distance < self.offset + MIN_STEP_M
+            and line.span_m >= MIN_AHEAD_SPAN_M
+            and _across_the_path(line)
+            and early > 0.25 * length + MAX_AHEAD_DISAGREEMENT_M,
+            f"the wall ahead is {line.distance:.2f} m away with {remaining:.1f} m of the "
+            "side still to walk by the odometry",
+        )
+        self._near = line.distance < FRONT_WATCH_M and early > MAX_AHEAD_DISAGREEMENT_M

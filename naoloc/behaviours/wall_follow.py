@@ -325,6 +325,21 @@ class SideMemory:
         self.side, self.angle_known = (wall, here), True
         return wall
 
+    def start(self, line: WallLine | None, here: Pose2D, offset: float) -> WallLine | None:
+        """The survey start's side line: the robot was set ``offset`` m from its wall, so a
+        line more than :data:`JUMP_M` nearer sees furniture in front of the wall (a
+        sideboard beside the start), whose depth is the first stretch's level.
+
+        Returns:
+            The wall it shows (None: no line).
+        """
+        if line is None or line.inliers == 0:
+            return None
+        self.level = offset - line.distance if offset - line.distance > JUMP_M else 0.0
+        wall = _moved(line, self.level, line.normal)
+        self.side, self.angle_known = (wall, here), True
+        return wall
+
     def seen_front(self, line: WallLine | None, here: Pose2D) -> None:
         """A front line measured (or not) at odometry pose ``here``."""
         if line is not None:

@@ -164,3 +164,21 @@ def test_the_simulator_contacts_stop_the_survey() -> None:
     watch = WalkWatch(SimpleNamespace(sim=sim), 0.5, "right", 0.77, 272.0)  # type: ignore[arg-type]
     with pytest.raises(SurveyBlocked, match="simulator reports the body touching"):
         watch.stepped(0.2)
+
+
+def test_a_start_beside_a_sideboard_keeps_the_wall_behind_it() -> None:
+    memory = SideMemory()
+    right = -math.pi / 2
+    wall = memory.start(_line(0.55, right), Pose2D(), offset=1.0)  # set 1 m from the wall
+    assert wall is not None and wall.distance == pytest.approx(1.0)
+    assert memory.level == pytest.approx(0.45)
+    assert memory.start(_line(0.95, right), Pose2D(), offset=1.0).distance == pytest.approx(0.95)
+
+
+def test_a_wall_ahead_that_vanishes_near_is_carried_not_forgotten() -> None:
+    watch = _watch()
+    watch.new_side(0, 0)
+    watch.front_line(_line(0.7, 0.0), Pose2D(1.3, 0.0, 0.0), 1.7, 3.0)  # seen, then unseen
+    watch.front_line(None, Pose2D(1.52, 0.0, 0.0), 1.48, 3.0)  # carried: 0.48 m, one strike
+    with pytest.raises(SurveyBlocked, match="the wall ahead is 0.26 m away"):
+        watch.front_line(None, Pose2D(1.74, 0.0, 0.0), 1.26, 3.0)
