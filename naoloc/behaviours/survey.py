@@ -71,7 +71,7 @@ FRONT_LOOKAHEAD_M = 1.0  # start looking at the front wall this far before the c
 MAX_EXTRA_STEPS = 8  # steps a side may take beyond its planned count (odometry too short)
 PROBE_STEP_M = 0.4  # the nearest-wall detector's step out of a corner, m
 PROBE_CLEAR_M = 0.45  # room the body needs beyond the step before the wall ahead, m
-FLOOR_BEYOND_M = 0.6  # floor seen this far past a line ahead: the line is no wall, m
+FLOOR_BEYOND_M = 0.4  # floor seen this far past a line ahead: the line is no wall, m
 
 FrameSink = Callable[[Keyframe, int, Pose2D], None]
 """Called with (keyframe, lap, raw FRAME_WORLD odometry) right after each picture."""
@@ -433,7 +433,7 @@ def _walk_laps(
         # is too near to be seen (a small offset's corner); the watch's first front line.
         start_front = measure_front(robot, eye, sides[0] + offset)
         if start_front is not None and in_front_range(start_front.distance):
-            watch.front_line(start_front, here, sides[0], sides[0])
+            _watch_ahead(robot, eye, watch, start_front, here, sides[0], sides[0])
         gate = _front_gate(offset, sides[0], sides[0])
         result.meta["start_front"] = line_dict(
             start_front if start_front is not None and gate(start_front) else None
@@ -459,13 +459,7 @@ def _walk_laps(
                         # the evidence: the nearest line any pitch showed (head up, a wall
                         # at the picture's bottom edge reads 0.1 m far)
                         raw_front = front if front is not None else _nearest(seen)
-                        watch.front_line(raw_front, here, remaining, length)  # any: evidence
-                        if raw_front is not None and watch.pending("ahead"):  # look again
-                            if _floor_goes_on(robot, eye, raw_front.distance):
-                                watch.clear("ahead")  # a plank's edge, not a wall
-                            else:
-                                again = measure_front(robot, eye, raw_front.distance)
-                                watch.front_line(again, here, remaining, length)
+                        _watch_ahead(robot, eye, watch, raw_front, here, remaining, length)
                         if front is not None:
                             fronts.append(FrontSample(lap * 4 + k, here, front))
                             memory.seen_front(front, here)
@@ -497,7 +491,10 @@ def _walk_laps(
                         far.append(camera.keyframe(origin, command_origin))
                         result.far_frames += 1
                         if far_yaw == 0.0:  # the wall ahead: its line is the watch's too
-                            watch.front_line(
+                            _watch_ahead(
+                                robot,
+                                eye,
+                                watch,
                                 _front_in_range(eye),
                                 keyframe.pose,
                                 length - walked - length_now,
@@ -571,19 +568,43 @@ def _front_gate(
     return gate
 
 
+def _watch_ahead(
+    robot: Robot,
+    eye: FloorEye,
+    watch: WalkWatch,
+    line: WallLine | None,
+    here: Pose2D,
+    remaining: float,
+    length: float,
+) -> None:
+    """Hand a line ahead to the watch; a wall ahead it now holds against the odometry is
+    looked at again with the head up first (:func:`_floor_goes_on`): a plank's edge is
+    cleared, a wall's second sighting at the next stop stops the survey.
+
+    Raises:
+        SurveyBlocked: The watch's evidence (:meth:`WalkWatch.front_line`).
+    """
+    watch.front_line(line, here, remaining, length)
+    if watch.pending("ahead") and _floor_goes_on(robot, eye, watch.ahead_m):
+        watch.clear("ahead")  # the floor goes on past it: a plank's edge, not a wall
+
+
 def _floor_goes_on(robot: Robot, eye: FloorEye, distance: float) -> bool:
     """Whether the floor visibly goes on past a line ``distance`` m ahead: looking ahead
-    with the head up, a wall's line beyond it, or a side wall's line running on more than
-    :data:`FLOOR_BEYOND_M` past it (a wall across the way would end both). A plank's edge
-    or a rug's reads as a wall ahead to the level view; the wall itself does not let the
-    floor go on."""
-    look(robot, 0.0, FRONT_PITCH)
-    for line in eye.lines():
-        ahead = abs(modulo2PI(line.normal)) <= 0.4
-        if ahead and line.distance > distance + FLOOR_BEYOND_M:
-            return True
-        if not ahead and line.span_m > distance + FLOOR_BEYOND_M:
-            return True
+    with the head up (twice as far up the second time), a wall's line beyond it, or a side
+    wall's line whose far end lies more than :data:`FLOOR_BEYOND_M` past it (a wall across
+    the way would end it there). A plank's edge or a rug's reads as a wall ahead to the
+    level view; a wall does not let the floor go on."""
+    for pitch in (FRONT_PITCH, 2 * FRONT_PITCH):
+        look(robot, 0.0, pitch)
+        for line in eye.lines():
+            c, s = math.cos(line.normal), math.sin(line.normal)
+            if c > 0.9 and line.distance > distance + FLOOR_BEYOND_M:
+                return True  # a wall ahead, beyond the line
+            if abs(s) > 0.8 and line.ends_m is not None:
+                reach = max(-s * e for e in line.ends_m)  # how far ahead the side line runs
+                if reach > distance + FLOOR_BEYOND_M:
+                    return True
     return False
 
 

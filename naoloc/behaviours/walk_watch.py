@@ -139,6 +139,7 @@ class WalkWatch:
     _picture: tuple[Any, Any] | None = None
     _front: tuple[float, Pose2D] | None = None
     _seen_ahead: tuple[WallLine, Pose2D] | None = None
+    ahead_m: float = math.inf  # the last line ahead judged (measured or carried), m
     _near: bool = False
     _side: tuple[float, float, Pose2D] | None = None
     _strikes: dict[str, int] = field(default_factory=dict)
@@ -155,7 +156,7 @@ class WalkWatch:
         seemed)."""
         self._strikes[name] = 0
         if name == "ahead":
-            self._near = False
+            self._near, self._seen_ahead = False, None
 
     def pending(self, name: str) -> bool:
         """Whether evidence ``name`` (``ahead``, ``front``, ``side``, ``picture``) has one
@@ -310,6 +311,7 @@ class WalkWatch:
 
     def _ahead(self, line: WallLine, remaining: float, length: float) -> None:
         """The 'ahead' evidence of one line (measured or carried) and the near flag."""
+        self.ahead_m = line.distance
         early = remaining - (line.distance - self.offset)
         self._strike(
             "ahead",
