@@ -510,17 +510,11 @@ class MapCheckTuning(_Model):
     odometry_scale_range: tuple[float, float] = Field(
         (0.75, 1.33), description="a side's metres per odometry metre a NAO's walk can give"
     )
-    max_metric_spread_pct: float = Field(
-        3.0,
-        gt=0,
-        description="the survey's metric scale judges the room size only when its per-side "
-        "samples agree this well (relative median absolute deviation, %)",
-    )
     max_size_error_pct: float = Field(
-        10.0,
+        12.0,
         gt=0,
-        description="largest disagreement of the configured sides with the walk (%): x "
-        "against y, and each against the survey's floor-line metric scale",
+        description="largest disagreement of the configured sides along x with those along y, "
+        "by the metres per odometry metre each implies (%)",
     )
 
 

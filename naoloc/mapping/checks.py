@@ -22,8 +22,7 @@ the survey's own records can contradict, and gives a figure, its limit and a ver
   and the corners' turn per odometry turn, against what a NAO's odometry errs;
 - ``room_size``: the circuit's sides against the room the config gives: the metres per
   odometry metre the sides imply (configured length over the odometry's walk) along x
-  against those along y, and against the survey's own metric scale (front wall distances,
-  camera height from the kinematics) when its samples agree.
+  against those along y.
 
 The limits are the config's ``map.checks`` tuning record. :func:`check_survey` runs them,
 :func:`failed` names the failing ones, and :func:`map_checked` tells whether a map (its
@@ -255,49 +254,26 @@ def _odometry(walled: Any, tuning: MapCheckTuning) -> Check:
 
 
 def _room_size(walled: Any, meta: dict[str, Any], tuning: MapCheckTuning) -> Check:
+    """The configured sides along x against those along y: the metres per odometry metre
+    each implies (configured length over the odometry's walk) should agree, a NAO's
+    odometry erring alike in every direction; a side configured wrong stands out. (The
+    survey's own floor-line metric scale is no judge: front lines that see furniture, or
+    a simulated floor's, scatter it 0.6-1.5.)"""
     scales = walled.side_scales
     by_axis = [
         [s for k, s in enumerate(scales) if s is not None and k % 2 == axis] for axis in (0, 1)
     ]
     if not by_axis[0] or not by_axis[1]:
         return _check(
-            "room_size",
-            None,
-            tuning.max_size_error_pct,
-            "%",
-            None,
+            "room_size", None, tuning.max_size_error_pct, "%", None,
             "the sides along x or along y have no measured corner",
-        )
+        )  # fmt: skip
     sx, sy = (statistics.median(v) for v in by_axis)
-    errors = {"x against y": abs(sx / sy - 1.0) * 100}
-    metric = _consistent_metric(meta, tuning)
-    if metric is not None:
-        errors["x against the metric scale"] = abs(sx / metric - 1.0) * 100
-        errors["y against the metric scale"] = abs(sy / metric - 1.0) * 100
-    which, worst = max(errors.items(), key=lambda kv: kv[1])
+    worst = abs(sx / sy - 1.0) * 100
     return _check(
-        "room_size",
-        worst,
-        tuning.max_size_error_pct,
-        "%",
-        worst <= tuning.max_size_error_pct,
-        f"the configured sides against the walk, largest: {which}",
-    )
-
-
-def _consistent_metric(meta: dict[str, Any], tuning: MapCheckTuning) -> float | None:
-    """The survey's floor-line metric scale when its per-side samples agree (relative
-    median absolute deviation within ``tuning.max_metric_spread_pct``, at least 4): in
-    furnished rooms the front lines see furniture, and the samples scatter 0.6-1.2."""
-    metric, samples = meta.get("metric_scale"), meta.get("metric_scale_samples")
-    if not isinstance(metric, (int, float)) or metric <= 0 or not isinstance(samples, list):
-        return None
-    values = [float(v) for v in samples if isinstance(v, (int, float)) and v > 0]
-    if len(values) < 4:
-        return None
-    middle = statistics.median(values)
-    spread = statistics.median(abs(v - middle) for v in values) / middle * 100
-    return float(metric) if spread <= tuning.max_metric_spread_pct else None
+        "room_size", worst, tuning.max_size_error_pct, "%", worst <= tuning.max_size_error_pct,
+        "the configured sides along x against those along y, by the walk",
+    )  # fmt: skip
 
 
 def failed(checks: list[Check]) -> list[Check]:

@@ -150,7 +150,7 @@ def build_from_survey(
     offset: float | None = None,
     meta: dict[str, Any] | None = None,
     progress: ProgressFn | None = None,
-    keep_unchecked: bool = False,
+    keep_unchecked: bool = True,
     on_checks: Callable[[list[Check]], None] | None = None,
 ) -> tuple[VisualMap, dict[str, Any]]:
     """Build the map of a survey dataset with ``cfg`` (not saved), after checking it.
@@ -165,7 +165,9 @@ def build_from_survey(
         offset: ``survey.wall_offset_m`` when the dataset's own config lacks it.
         meta: Extra entries for the map's meta (e.g. the dataset's path).
         progress: Called as ``progress(stage, done, total)`` while building.
-        keep_unchecked: Build a map that failed a check anyway, marked ``checked: False``.
+        keep_unchecked: Build a map that failed a check anyway, marked ``checked: False``
+            (the default: the evaluation and the demo keep their maps and say so);
+            False refuses it, as ``naoloc build-map`` does without ``--keep-unchecked``.
         on_checks: Called with the checks once they ran (before any refusal).
 
     Returns:

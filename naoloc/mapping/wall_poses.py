@@ -533,7 +533,9 @@ def _along_sides(
                 s = (t - kept[-1][1]) / (o - kept[-1][0])
                 if SCALE_RANGE[0] <= s <= SCALE_RANGE[1] or len(kept) > 1:
                     kept.append((o, t))
-        scale = kept[-1][1] / kept[-1][0] if len(kept) > 1 else None
+        # metres per odometry metre between the side's first and last anchors (its start
+        # may stand off the corner: where the previous side's last frame stood)
+        scale = (kept[-1][1] - kept[0][1]) / (kept[-1][0] - kept[0][0]) if len(kept) > 1 else None
         scales.append(scale if scale is None or SCALE_RANGE[0] <= scale <= SCALE_RANGE[1] else None)
         if len(kept) > 1:  # sides without an anchor stay NaN: scaled below
             xs, ys = np.array([a[0] for a in kept]), np.array([a[1] for a in kept])

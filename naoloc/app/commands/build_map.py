@@ -31,7 +31,7 @@ def build_from_dataset(
     *,
     show_progress: bool | None = None,
     config_copy: Path | None = None,
-    keep_unchecked: bool = False,
+    keep_unchecked: bool = True,
     on_checks: Any = None,
 ) -> tuple[Any, dict[str, Any]]:
     """Read a dataset, build the map with ``cfg.map``, save it and its PNG.
@@ -42,7 +42,8 @@ def build_from_dataset(
         output: The map file (``.npz``); the PNG goes beside it (``MAP.png``).
         show_progress: Force progress bars on or off; default: on a terminal.
         config_copy: Also write the resolved config (no secrets) here, with the map.
-        keep_unchecked: Keep a map that failed a check, marked unchecked.
+        keep_unchecked: Keep a map that failed a check, marked unchecked (the default,
+            for the demo); ``naoloc build-map`` refuses it unless ``--keep-unchecked``.
         on_checks: Called with the checks (:class:`naoloc.mapping.checks.Check`) once run.
 
     Returns:
