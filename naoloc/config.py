@@ -269,12 +269,13 @@ class SurveyConfig(_Model):
         None,
         description="[along x, along y] sides of the circuit (m); null = room size - 2 * offset",
     )
-    skirting_m: float = Field(
-        0.012,
+    skirting_m: float | None = Field(
+        None,
         ge=0.0,
         le=0.1,
         description="how far the skirting boards stand out of the walls (m): the floor line "
-        "sees their face, the room and the map's walls are measured wall to wall (0: none)",
+        "sees their face, the room and the map's walls are measured wall to wall (0: none); "
+        "null: 0.012, or 0 in a simulated room without boards (style posters, the fake robot)",
     )
     head_yaw_rad: float | None = Field(
         None, description="head yaw while walking; null = from the nearest-wall detector"

@@ -461,7 +461,8 @@ def _walk_laps(
                         raw_front = front if front is not None else _nearest(seen)
                         _watch_ahead(robot, eye, watch, raw_front, here, remaining, length)
                         if front is not None:
-                            fronts.append(FrontSample(lap * 4 + k, here, front))
+                            if eye.last_pitch == FRONT_PITCH:  # the scale's lines, head up
+                                fronts.append(FrontSample(lap * 4 + k, here, front))
                             memory.seen_front(front, here)
                     if front is not None:
                         to_go = front.distance - keep

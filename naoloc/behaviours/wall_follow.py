@@ -80,6 +80,7 @@ class FloorEye:
     ) -> None:
         self.robot = robot
         self.lens = lens
+        self.last_pitch: float | None = None  # the pitch of measure_front's last line
         cfg = CameraConfig(
             index=BOTTOM_CAMERA,
             resolution=like.resolution,
@@ -241,7 +242,8 @@ def measure_front(
     pitches = [FRONT_PITCH, FRONT_NEAR_PITCH]
     if expected < FRONT_NEAR_M:
         pitches.reverse()
-    line, _ = look_for_line(robot, eye, 0.0, [(0.0, p, 0) for p in pitches], accept, 0.4)
+    line, view = look_for_line(robot, eye, 0.0, [(0.0, p, 0) for p in pitches], accept, 0.4)
+    eye.last_pitch = None if view is None else view[1]
     return line
 
 

@@ -89,7 +89,7 @@ def pose_survey(
     facts: dict[str, Any] = {"metric_scale": None, "wall_poses": None}
     if cfg.wall_poses:
         offset = survey_offset(data, offset)
-        skirting = survey_value(data, "skirting_m", 0.0)
+        skirting = survey_skirting(data)
         walled = (
             None
             if offset is None
@@ -108,6 +108,27 @@ def survey_offset(data: Any, offset: float | None = None) -> float | None:
     """The wall offset the survey walked at: its own config's, else ``offset``."""
     value = survey_value(data, "wall_offset_m", None)
     return value if value is not None and value > 0 else offset
+
+
+DEFAULT_SKIRTING_M = 0.012  # a common skirting board's depth, m (MuJoCo's home and office)
+
+
+def survey_skirting(data: Any) -> float:
+    """How far the survey's skirting boards stood out of its walls, m: ``survey.skirting_m``,
+    else 0.012, or 0 in a simulated room without boards (the fake robot's, a MuJoCo room of
+    style ``posters``); datasets from before the key: 0 (their maps were built so)."""
+    config = data.config if isinstance(data.config, dict) else {}
+    survey = config.get("survey")
+    if not isinstance(survey, dict) or "skirting_m" not in survey:
+        return 0.0
+    value = survey.get("skirting_m")
+    if isinstance(value, (int, float)):
+        return float(value)
+    robot, world = config.get("robot") or {}, config.get("world") or {}
+    style = (world.get("room") or {}).get("style") if isinstance(world, dict) else None
+    backend = robot.get("backend") if isinstance(robot, dict) else None
+    bare = backend == "fake" or (backend == "mujoco" and style == "posters")
+    return 0.0 if bare else DEFAULT_SKIRTING_M
 
 
 def survey_value(data: Any, key: str, default: Any) -> Any:
