@@ -54,6 +54,9 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "metric_scale": "the survey's metric scale applied to the keyframe poses (null: none)",
         "wall_poses": "keyframe poses from the survey's walls (`map.wall_poses`): sides, "
         "sides_with_corner, median_scale, lines_used, frames (null: odometry poses kept)",
+        "checked": "true when the map passed every check; false: kept with --keep-unchecked",
+        "checks": "the map frame's checks: each {name, figure, limit, unit, verdict "
+        "(pass | fail | skip), detail} (`map.tuning.checks` holds the limits)",
     },
     "localize": {
         "x": "estimate, map frame (m); null when nothing was recognised",
