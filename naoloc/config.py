@@ -288,12 +288,21 @@ class SurveyConfig(_Model):
     wall_offset_m: float = Field(
         1.0,
         gt=0.2,
-        description="circuit's distance from the walls (m); keep it 0.65 or more: nearer, "
-        "the robot's arm hides the floor beside it from the bottom camera (no floor line)",
+        description="circuit's distance from the walls (m); 0.5 or more (nearer, the bottom "
+        "camera cannot see the wall's foot beside the robot: the survey refuses it); below "
+        "0.6 the robot keeps 0.6 m from the walls, the circuit's sides as configured",
     )
     side_m: tuple[float, float] | None = Field(
         None,
         description="[along x, along y] sides of the circuit (m); null = room size - 2 * offset",
+    )
+    skirting_m: float | None = Field(
+        None,
+        ge=0.0,
+        le=0.1,
+        description="how far the skirting boards stand out of the walls (m): the floor line "
+        "sees their face, the room and the map's walls are measured wall to wall (0: none); "
+        "null: 0.012, or 0 in a simulated room without boards (style posters, the fake robot)",
     )
     head_yaw_rad: float | None = Field(
         None, description="head yaw while walking; null = from the nearest-wall detector"
@@ -458,12 +467,51 @@ class BundleTuning(_Model):
     )
 
 
+class MapCheckTuning(_Model):
+    """Limits of build-map's checks of a survey's map frame (naoloc.mapping.checks)."""
+
+    min_corner_share: float = Field(
+        0.75, ge=0, le=1, description="least share of the circuit's corners a wall placed"
+    )
+    max_origin_heading_deg: float = Field(
+        2.5,
+        gt=0,
+        description="largest difference between the start's heading from its own lines and "
+        "from its first steps' (deg)",
+    )
+    min_coverage: float = Field(
+        0.7, ge=0, le=1, description="least share of each wall's stops with its floor line"
+    )
+    max_wall_fit_m: float = Field(
+        0.06,
+        gt=0,
+        description="largest RMS of the side lines' change between stops against the "
+        "odometry's walk away from the wall (m)",
+    )
+    max_lap_difference_pct: float = Field(
+        20.0,
+        gt=0,
+        description="largest lap-to-lap difference of a side's metres per odometry metre (%): "
+        "a NAO's odometry alone varies 5-15 % between laps",
+    )
+    odometry_scale_range: tuple[float, float] = Field(
+        (0.75, 1.33), description="a side's metres per odometry metre a NAO's walk can give"
+    )
+    max_size_error_pct: float = Field(
+        12.0,
+        gt=0,
+        description="largest disagreement of the configured sides along x with those along y, "
+        "by the metres per odometry metre each implies (%)",
+    )
+
+
 class MapTuning(_Model):
     """Tuning of map building (landmarks, pose graph, bundle adjustment)."""
 
     landmarks: LandmarkTuning = LandmarkTuning()
     pose_graph: PoseGraphTuning = PoseGraphTuning()
     bundle: BundleTuning = BundleTuning()
+    checks: MapCheckTuning = MapCheckTuning()
 
 
 class MapConfig(_Model):

@@ -40,6 +40,19 @@ class MotionError(RobotError):
     """A motion could not be started or finished."""
 
 
+class SurveyBlocked(MotionError):
+    """The survey's walk did not happen: the robot is blocked, pressed or sliding (its
+    evidence disagrees with its odometry); the partial dataset is kept, marked incomplete."""
+
+
+class SurveyError(NaolocError):
+    """The survey cannot start: no wall beside the robot to follow."""
+
+
+class MapCheckFailed(NaolocError):
+    """A map failed one of build-map's checks (``--keep-unchecked`` keeps it, unchecked)."""
+
+
 class ConnectionLost(NaolocError):
     """The connection to a (real or virtual) NAOqi is dead or timed out."""
 

@@ -54,6 +54,9 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "metric_scale": "the survey's metric scale applied to the keyframe poses (null: none)",
         "wall_poses": "keyframe poses from the survey's walls (`map.wall_poses`): sides, "
         "sides_with_corner, median_scale, lines_used, frames (null: odometry poses kept)",
+        "checked": "true when the map passed every check; false: kept with --keep-unchecked",
+        "checks": "the map frame's checks: each {name, figure, limit, unit, verdict "
+        "(pass | fail | skip), detail} (`map.tuning.checks` holds the limits)",
     },
     "localize": {
         "x": "the belief's pose, map frame (m); null without one",
@@ -80,6 +83,7 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "covariance": "3 x 3 covariance of x, y, theta (m^2, rad^2): the belief's spread; "
         "absent without a pose",
         "png": "the picture written with --png",
+        "map_checked": "false for a map kept with --keep-unchecked after failing a check",
     },
     "go-home": {
         "x": "the belief's final pose, map frame (m); null without one",

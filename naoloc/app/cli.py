@@ -115,6 +115,10 @@ def build_parser() -> argparse.ArgumentParser:
         "-o", "--output", required=True, metavar="MAP.npz", type=Path,
         help="the map to write (a picture of it goes beside it)",
     )  # fmt: skip
+    p.add_argument(
+        "--keep-unchecked", action="store_true",
+        help="keep a map that failed a check, marked unchecked (localize says so)",
+    )  # fmt: skip
     for verb in ("localize", "go-home", "track"):
         p = add(verb)
         p.add_argument(

@@ -19,8 +19,10 @@ from typing import Literal
 
 import numpy as np
 
-from naoloc.behaviours.wall_follow import FloorEye
+from naoloc.behaviours.wall_follow import FloorEye, look_for_line, side_views
 from naoloc.errors import FeatureError, MotionError
+from naoloc.perception.floorline import WallLine
+from naoloc.perception.wall_gate import SIDE_MIN_M, SIDE_OFFSET_ERROR_M
 from naoloc.robot import Robot
 from naoloc.robot.camera import DEFAULT_HEAD_PITCH, Camera, look
 
@@ -221,8 +223,43 @@ class FloorLineWall:
     right_m: float | None
 
 
+def _not_the_arm(line: WallLine) -> bool:
+    """A line nearer than :data:`naoloc.perception.wall_gate.SIDE_MIN_M` is the robot's own
+    arm's edge: no view sees a wall's foot that near."""
+    return line.distance >= SIDE_MIN_M
+
+
+def decide_side(
+    left: float | None, right: float | None, offset: float | None = None
+) -> Side | None:
+    """The nearer side wall from the floor lines actually seen (distances in m).
+
+    A side that shows no line is unseen, not far: it never makes the other side the
+    nearer one by itself. Both seen: the nearer. One seen: that side. With the survey's
+    ``offset``, the chosen line must also be within
+    :data:`naoloc.perception.wall_gate.SIDE_OFFSET_ERROR_M` of it (the wall the survey was
+    set beside): a lone line farther away says nothing about the unseen side, which may be
+    the nearer, and a wall far from the offset cannot be followed. Else None.
+
+    Args:
+        left: Distance to the left wall's line, m (None: unseen).
+        right: The same on the right.
+        offset: The survey's wall offset, m (None: any lone line decides).
+    """
+    seen: Side
+    if left is not None and (right is None or left < right):
+        seen, distance = "left", left
+    elif right is not None:
+        seen, distance = "right", right
+    else:
+        return None
+    if offset is not None and distance > offset + SIDE_OFFSET_ERROR_M:
+        return None
+    return seen
+
+
 def detect_wall_by_floorline(
-    robot: Robot, eye: FloorEye, pitch: float = DEFAULT_HEAD_PITCH
+    robot: Robot, eye: FloorEye, pitch: float = DEFAULT_HEAD_PITCH, offset: float | None = None
 ) -> FloorLineWall:
     """Look left and right with the bottom camera; the nearer floor-wall line wins.
 
@@ -231,19 +268,24 @@ def detect_wall_by_floorline(
     Args:
         robot: The robot (the head is moved).
         eye: The bottom camera (:class:`naoloc.behaviours.wall_follow.FloorEye`).
-        pitch: Head pitch for the pictures, rad.
+        pitch: Head pitch for the pictures, rad (without ``offset``).
+        offset: The survey's wall offset, m. Given, each side is looked at beside and
+            behind the arm (:func:`naoloc.behaviours.wall_follow.side_views`) until a line
+            shows, and :func:`decide_side` decides on the lines seen; None: one look per
+            side at ``pitch``, and the nearer line seen decides.
     """
     yaws = {"left": math.pi / 2, "right": -math.pi / 2}
     seen: dict[str, float | None] = {}
     for name, yaw in yaws.items():
-        look(robot, yaw, pitch)
-        line = eye.measure(yaw)
+        if offset is None:
+            look(robot, yaw, pitch)
+            line = eye.measure(yaw)
+        else:
+            line, _ = look_for_line(robot, eye, yaw, side_views(offset), _not_the_arm)
         seen[name] = None if line is None else line.distance
     left, right = seen["left"], seen["right"]
-    if left is None and right is None:
-        return FloorLineWall(None, 0.0, None, None)
-    side: Side = "left" if right is None or (left is not None and left < right) else "right"
-    return FloorLineWall(side, yaws[side], left, right)
+    side = decide_side(left, right, offset)
+    return FloorLineWall(side, 0.0 if side is None else yaws[side], left, right)
 
 
 def nearest_side_in_room(size: tuple[float, float], start: tuple[float, float, float]) -> WallSide:

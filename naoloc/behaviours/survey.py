@@ -35,21 +35,31 @@ from naoloc.behaviours.nearest_wall import (
     FloorLineWall,
     ParallaxWall,
     WallSide,
+    decide_side,
     detect_nearest_wall,
     detect_wall_by_floorline,
-    detect_wall_by_parallax,
 )
+from naoloc.behaviours.walk_watch import WalkWatch
 from naoloc.behaviours.wall_follow import (
+    BESIDE_VIEW,
     FRONT_PITCH,
+    MIN_KEEP_M,
+    MIN_OFFSET_M,
     FloorEye,
     FrontSample,
+    SideMemory,
     corrected_step,
     line_dict,
+    look_for_line,
+    measure_front,
+    measure_side,
+    measure_side_views,
+    median_line,
     metric_scale,
     trusted,
 )
 from naoloc.config import Config
-from naoloc.errors import MotionError
+from naoloc.errors import ConfigError, MotionError, SurveyError
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
 from naoloc.perception.floorline import WallLine
 from naoloc.perception.wall_gate import in_front_range
@@ -59,6 +69,9 @@ from naoloc.robot.keyframe import Keyframe
 
 FRONT_LOOKAHEAD_M = 1.0  # start looking at the front wall this far before the corner
 MAX_EXTRA_STEPS = 8  # steps a side may take beyond its planned count (odometry too short)
+PROBE_STEP_M = 0.4  # the nearest-wall detector's step out of a corner, m
+PROBE_CLEAR_M = 0.45  # room the body needs beyond the step before the wall ahead, m
+FLOOR_BEYOND_M = 0.4  # floor seen this far past a line ahead: the line is no wall, m
 
 FrameSink = Callable[[Keyframe, int, Pose2D], None]
 """Called with (keyframe, lap, raw FRAME_WORLD odometry) right after each picture."""
@@ -185,18 +198,20 @@ def survey(
     head_pitch: float | None = None,
     head_yaw: float | None = None,
     on_far: FarSink | None = None,
+    result: SurveyResult | None = None,
 ) -> SurveyResult:
     """Walk ``cfg.survey.laps`` closed laps and record a picture after each step.
 
-    The robot stands up, runs the paper's nearest-wall detector (recorded) and turns its
-    head to a wall: ``cfg.survey.head_yaw_rad`` if set, else ``head_yaw`` if given, else the
-    side whose floor-wall line (bottom camera) is nearer, else, when neither line is in
-    reach, the side the parallax detector finds (the paper's image cue is weak, and a wrong
-    side walks the robot into a wall; the probe steps forward and back, so the start pose
-    is kept). Then it records the origin and walks, steered by the floor-wall lines
-    (:func:`_walk_laps`). Motion is stopped on every
-    exit path (an exception or Ctrl-C included); frames already handed to ``on_frame``
-    stay with the caller.
+    An offset below :data:`naoloc.behaviours.wall_follow.MIN_OFFSET_M` is refused before
+    the robot moves. The robot stands up, runs the paper's nearest-wall detector (recorded)
+    and turns its head to a wall: ``cfg.survey.head_yaw_rad`` if set, else ``head_yaw`` if
+    given, else the side whose floor-wall line (bottom camera, looked for beside and behind
+    the arm) is nearer; a side that shows no line is unseen, not far, and when no side
+    can be told the survey stops before walking. Then it records the origin and walks,
+    steered by the floor-wall lines and watched by the robot's own evidence
+    (:func:`_walk_laps`, :class:`naoloc.behaviours.walk_watch.WalkWatch`). Motion is stopped
+    on every exit path (an exception or Ctrl-C included); frames already handed to
+    ``on_frame`` stay with the caller.
 
     Args:
         robot: The robot, standing where the survey starts (that pose is the map origin).
@@ -213,16 +228,23 @@ def survey(
         on_far: Receives each far picture (``survey.far_yaws_rad``: the room across its
             interior, taken at each stop after the wall picture) with its lap and stop;
             None takes no far pictures.
+        result: Filled in as the survey goes and returned (a caller that passes one keeps
+            what the survey measured, ``meta`` included, when it raises).
 
     Returns:
         The survey's summary.
 
     Raises:
-        MotionError: A step failed (the robot is stopped; frames so far were delivered).
+        ConfigError: ``survey.wall_offset_m`` is below the smallest offset that works.
+        SurveyError: Neither side shows a floor line to follow (nothing was walked).
+        SurveyBlocked: The robot's evidence says a step did not happen (blocked, pressed
+            or sliding), or ``moveTo`` failed (the robot is stopped; frames so far were
+            delivered).
         RobotError: A service refused a call.
     """
+    check_offset(cfg.survey.wall_offset_m)
     t0 = time.monotonic()
-    result = SurveyResult()
+    result = SurveyResult() if result is None else result
     head_pitch = cfg.survey.head_pitch_rad if head_pitch is None else head_pitch
     try:
         stand(robot)
@@ -235,15 +257,15 @@ def survey(
                 yaw = head_yaw
                 result.yaw_source = "caller"
             else:
-                yaw = _detect_side(robot, cfg, camera, head_pitch, result)
+                yaw = _detect_side(robot, cfg, head_pitch, result)
             yaw, pitch = look(robot, yaw, head_pitch)
             result.head_yaw = yaw
             turn = -math.copysign(math.pi / 2, yaw) if yaw != 0 else math.pi / 2
             origin = pose_of(robot.motion, True)
             command_origin = pose_of(robot.motion, False)
             probe = camera.info(camera.frame())
-            result.meta = _meta(
-                robot, cfg, origin, probe, yaw, pitch, turn, result.wall, result.parallax
+            result.meta.update(
+                _meta(robot, cfg, origin, probe, yaw, pitch, turn, result.wall, result.parallax)
             )
             result.meta["head_yaw_source"] = result.yaw_source
             result.meta["lens"] = lens_of(cfg).to_dict()  # undone by build-map and localize
@@ -258,7 +280,7 @@ def survey(
             eye = FloorEye(robot, cfg.camera, lens=lens_of(cfg))
             try:
                 _walk_laps(robot, cfg, camera, eye, origin, command_origin, yaw, pitch, turn,
-                           result, on_frame, progress, on_far)  # fmt: skip
+                           result, on_frame, progress, on_far, probe.fx)  # fmt: skip
             finally:
                 eye.close()
     finally:
@@ -267,21 +289,84 @@ def survey(
     return result
 
 
-def _detect_side(
-    robot: Robot, cfg: Config, camera: Camera, head_pitch: float, result: SurveyResult
-) -> float:
-    """Head yaw toward the nearer side wall: floor-wall lines first, parallax if unseen."""
+def check_offset(offset: float) -> None:
+    """Refuse a wall offset the survey cannot keep, before the robot moves.
+
+    Raises:
+        ConfigError: ``offset`` is below :data:`naoloc.behaviours.wall_follow.MIN_OFFSET_M`.
+    """
+    if offset < MIN_OFFSET_M:
+        raise ConfigError(
+            f"survey.wall_offset_m {offset:g} m is too near the walls: the bottom camera does "
+            f"not see a wall's foot that near beside the robot; the smallest offset that "
+            f"works is {MIN_OFFSET_M:g} m"
+        )
+
+
+def _detect_side(robot: Robot, cfg: Config, head_pitch: float, result: SurveyResult) -> float:
+    """Head yaw toward the nearer side wall from the floor lines seen (beside and behind
+    the arm, :func:`detect_wall_by_floorline` with the survey's offset).
+
+    Raises:
+        SurveyError: No side can be told from the lines seen (before any step).
+    """
     eye = FloorEye(robot, cfg.camera, "naoloc_side", lens=lens_of(cfg))
+    offset = cfg.survey.wall_offset_m
     try:
-        result.floorline = detect_wall_by_floorline(robot, eye, head_pitch)
+        seen = detect_wall_by_floorline(robot, eye, head_pitch, offset=offset)
+        if seen.side is None and None in (seen.left_m, seen.right_m):
+            seen = _look_after_a_step(robot, eye, seen, offset, cfg.survey_sides()[0])
     finally:
         eye.close()
-    if result.floorline.side is not None:
-        result.yaw_source = "floorline"
-        return result.floorline.head_yaw
-    result.parallax = detect_wall_by_parallax(robot, camera, cfg.survey.step_m, head_pitch)
-    result.yaw_source = "parallax"
-    return result.parallax.head_yaw
+    result.floorline = seen
+    if seen.side is None:
+
+        def where(d: float | None) -> str:
+            return "no floor line" if d is None else f"a floor line {d:.2f} m away"
+
+        raise SurveyError(
+            f"no wall to follow: the left shows {where(seen.left_m)} and the right "
+            f"{where(seen.right_m)}; put the robot {offset:g} m (survey.wall_offset_m) "
+            "from a wall and parallel to it, or set survey.head_yaw_rad"
+        )
+    result.yaw_source = "floorline"
+    return seen.head_yaw
+
+
+def _look_after_a_step(
+    robot: Robot, eye: FloorEye, seen: FloorLineWall, offset: float, first_side: float
+) -> FloorLineWall:
+    """Look again for the unseen sides' lines :data:`PROBE_STEP_M` ahead, then step back.
+
+    In a corner the views behind the arm see two walls meeting and no line; a small step
+    along the wall clears the corner. No step when the circuit's first side
+    (``first_side``, m) is shorter than the step, or a front wall's line seen leaves less
+    room than the step and the body (none seen: the wall is beyond the bottom camera's
+    2.6 m, and the first side says the way is free).
+
+    Returns:
+        The detection with the lines seen after the step for the sides unseen before.
+
+    Raises:
+        MotionError: The probe step failed.
+    """
+    ahead = measure_front(robot, eye, PROBE_STEP_M + offset)
+    if first_side < PROBE_STEP_M or (
+        ahead is not None and ahead.distance < PROBE_STEP_M + PROBE_CLEAR_M
+    ):
+        return seen
+    if not robot.motion.moveTo(PROBE_STEP_M, 0.0, 0.0):
+        raise MotionError(f"the nearest-wall probe could not step {PROBE_STEP_M:.2f} m forward")
+    try:
+        again = detect_wall_by_floorline(robot, eye, offset=offset)
+    finally:
+        if not robot.motion.moveTo(-PROBE_STEP_M, 0.0, 0.0):
+            raise MotionError(f"the nearest-wall probe could not step {PROBE_STEP_M:.2f} m back")
+    left = again.left_m if seen.left_m is None else seen.left_m
+    right = again.right_m if seen.right_m is None else seen.right_m
+    side = decide_side(left, right, offset)
+    yaw = 0.0 if side is None else math.copysign(math.pi / 2, 1.0 if side == "left" else -1.0)
+    return FloorLineWall(side, yaw, left, right)
 
 
 def _walk_laps(
@@ -298,20 +383,26 @@ def _walk_laps(
     on_frame: FrameSink,
     progress: Callable[[int], None] | None,
     on_far: FarSink | None = None,
+    f_px: float = 272.0,
 ) -> None:
     """The laps, steered by the floor-wall lines of the side and front walls.
 
     Each side is walked in steps of about ``survey.step_m``: after each step a picture
     (the survey's camera, the head turned ``survey.look_ahead_rad`` from the wall toward
-    the walking direction) and the side wall's line (the bottom camera, facing the wall);
-    the next step goes back to ``survey.wall_offset_m`` and parallel to the wall. Near the
-    side's end (by odometry), the head turns forward and the front wall's line sets where
-    the corner is. With no line in view the step goes straight and the side ends by
-    odometry. Vision and scale facts go to ``result.meta``. With ``on_far``, each stop also
-    takes ``survey.far_per_stop`` far pictures (:func:`far_yaws`) after its wall picture.
+    the walking direction) and the side wall's line (the bottom camera, beside or behind
+    the arm: :func:`naoloc.behaviours.wall_follow.measure_side`); the next step goes back
+    to ``survey.wall_offset_m`` and parallel to the wall. Near the side's end (by
+    odometry), the head turns forward and the front wall's line sets where the corner is.
+    With no line in view the step goes straight and the side ends by odometry. A
+    :class:`WalkWatch` compares each step with the pictures, the lines and (simulator
+    only) the contacts. Vision and scale facts go to ``result.meta`` as they come (a
+    survey that raises keeps them). With ``on_far``, each stop also takes
+    ``survey.far_per_stop`` far pictures (:func:`far_yaws`) after its wall picture; one
+    looking ahead also gives the watch the front wall's line.
     """
     sides = cfg.survey_sides()
     offset, step = cfg.survey.wall_offset_m, cfg.survey.step_m
+    keep = max(offset, MIN_KEEP_M)  # the distance steered to: never where the wall is unseen
     ahead = cfg.survey.look_ahead_rad
     picture_yaw = yaw - math.copysign(ahead, yaw) if yaw != 0 and ahead > 0 else yaw
     result.meta["picture_yaw"] = picture_yaw
@@ -320,97 +411,229 @@ def _walk_laps(
     if fars:
         result.meta["far_views"] = {"yaws": fars, "pitch": cfg.survey.far_pitch_rad}
     vision: list[dict[str, Any]] = []
+    result.meta["vision"] = vision  # filled as the survey goes: a partial dataset keeps it
     fronts: list[FrontSample] = []
     deviations: list[float] = []
-    here = Pose2D()
-    side_line = eye.measure(side_normal)
-    result.meta["start_side"] = line_dict(side_line)  # where the map frame's origin stands
-    for lap in range(cfg.survey.laps):
-        for k in range(4):
-            length = sides[k % 2]
-            n = max(1, round(length / step))
-            nominal = length / n
-            walked, steps, last = 0.0, 0, False
-            while not last:
-                front = None
-                if walked >= length - nominal * 1.5 - FRONT_LOOKAHEAD_M - 0.15 * length:
-                    look(robot, 0.0, FRONT_PITCH)
-                    front = trusted_front(eye.measure(0.0, 0.4), offset, length - walked, length)
-                    look(robot, yaw, pitch)
+    watch = WalkWatch(
+        robot, offset, "left" if side_normal > 0 else "right", abs(picture_yaw - yaw), f_px
+    )
+    memory = SideMemory()
+    try:
+        here = Pose2D()
+        # The origin's own line gives the map frame's heading: every view's, the median
+        # (in a corner one view's line can mix in the other wall).
+        start_lines = measure_side_views(robot, eye, side_normal, offset)
+        side_line = median_line(start_lines)
+        if side_line is None:
+            side_line = measure_side(robot, eye, side_normal, offset)
+        memory.start(trusted(side_line, offset, side_normal), here, offset)
+        result.meta["start_side"] = line_dict(side_line)  # where the map frame's origin stands
+        result.meta["start_views"] = [line_dict(line) for line in start_lines]
+        # The wall ahead at the start: its angle is the origin's heading when the side wall
+        # is too near to be seen (a small offset's corner); the watch's first front line.
+        start_front = measure_front(robot, eye, sides[0] + offset)
+        if start_front is not None and in_front_range(start_front.distance):
+            _watch_ahead(robot, eye, watch, start_front, here, sides[0], sides[0])
+        gate = _front_gate(offset, sides[0], sides[0])
+        result.meta["start_front"] = line_dict(
+            start_front if start_front is not None and gate(start_front) else None
+        )
+        across, _ = look_for_line(robot, eye, -side_normal, [BESIDE_VIEW])  # a heading too
+        result.meta["start_across"] = line_dict(across)
+        turn_side: WallLine | None = None
+        for lap in range(cfg.survey.laps):
+            for k in range(4):
+                watch.new_side(lap, k)
+                length = sides[k % 2]
+                n = max(1, round(length / step))
+                nominal = length / n
+                walked, steps, last = 0.0, 0, False
+                while not last:
+                    front = raw_front = None
+                    lookahead = length - nominal * 1.5 - FRONT_LOOKAHEAD_M - 0.15 * length
+                    if walked >= lookahead or watch.wants_front:
+                        remaining = length - walked
+                        seen: list[WallLine] = []
+                        agrees = _front_gate(offset, remaining, length, seen)
+                        front = measure_front(robot, eye, remaining + offset, agrees)
+                        # the evidence: the nearest line any pitch showed (head up, a wall
+                        # at the picture's bottom edge reads 0.1 m far)
+                        raw_front = front if front is not None else _nearest(seen)
+                        _watch_ahead(robot, eye, watch, raw_front, here, remaining, length)
+                        if front is not None:
+                            if eye.last_pitch == FRONT_PITCH:  # the scale's lines, head up
+                                fronts.append(FrontSample(lap * 4 + k, here, front))
+                            memory.seen_front(front, here)
                     if front is not None:
-                        fronts.append(FrontSample(lap * 4 + k, here, front))
-                if front is not None:
-                    to_go = front.distance - offset
-                    if to_go < 0.5 * nominal:
-                        break  # at the corner already: no step, no picture
-                    length_now = min(nominal, to_go)
-                    last = to_go <= 1.5 * nominal
-                    if last:
-                        length_now = to_go
-                else:
-                    length_now = nominal
-                    last = steps + 1 >= n
-                if steps >= n + MAX_EXTRA_STEPS:
-                    break
-                move, steered = corrected_step(side_line, side_normal, offset, length_now)
-                if not robot.motion.moveTo(move.x, move.y, move.theta):
-                    raise MotionError(
-                        f"moveTo({move.x:.2f}, {move.y:.2f}, {move.theta:.2f}) failed "
-                        f"on side {k + 1} of lap {lap + 1}"
-                    )
-                if picture_yaw != yaw:
+                        to_go = front.distance - keep
+                        if to_go < 0.5 * nominal:
+                            break  # at the corner already: no step, no picture
+                        length_now = min(nominal, to_go)
+                        last = to_go <= 1.5 * nominal
+                        if last:
+                            length_now = to_go
+                    else:
+                        length_now = nominal
+                        last = steps + 1 >= n
+                    if steps >= n + MAX_EXTRA_STEPS:
+                        break
+                    steer = memory.steer(here)
+                    move, steered = corrected_step(steer, side_normal, keep, length_now)
+                    if not robot.motion.moveTo(move.x, move.y, move.theta):
+                        raise watch.blocked(f"moveTo failed; {_ahead(robot, eye)}")
+                    watch.stepped(length_now)
                     look(robot, picture_yaw, pitch)
-                keyframe, odometry = camera.keyframe(origin, command_origin)
-                far: list[tuple[Keyframe, Pose2D]] = []
-                for _ in range(cfg.survey.far_per_stop if fars else 0):
-                    look(robot, fars[result.far_frames % len(fars)], cfg.survey.far_pitch_rad)
-                    far.append(camera.keyframe(origin, command_origin))
-                    result.far_frames += 1
-                if picture_yaw != yaw or far:
-                    look(robot, yaw, pitch)
-                result.path_m += here.distance(keyframe.pose)
-                here = keyframe.pose
-                walked += length_now
-                steps += 1
-                side_line = eye.measure(side_normal)
-                good = trusted(side_line, offset, side_normal)
-                if good is not None:
-                    deviations.append(good.distance - offset)
-                vision.append(
-                    {
-                        "frame": result.frames,
-                        "side_index": lap * 4 + k,
-                        "side": line_dict(side_line),
-                        "front": line_dict(front),
-                        "steered": steered,
-                    }
-                )
-                on_frame(keyframe, lap, odometry)
-                for far_keyframe, far_odometry in far:
-                    assert on_far is not None  # far pictures are taken only for it
-                    on_far(far_keyframe, lap, result.frames, far_odometry)
-                result.frames += 1
-                if progress is not None:
-                    progress(1)
-            if not robot.motion.moveTo(0.0, 0.0, turn):
-                raise MotionError(f"the corner turn after side {k + 1} of lap {lap + 1} failed")
-            after = relative_pose(origin, pose_of(robot.motion, True))
-            result.path_m += here.distance(after)
-            here = after
-            side_line = eye.measure(side_normal)
-        result.laps = lap + 1
-    scale, ratios = metric_scale(fronts)
-    result.meta["vision"] = vision
-    result.meta["wall_follow"] = {
-        "side_normal": side_normal,
-        "side_seen": sum(1 for v in vision if v["side"] is not None),
-        "steered_steps": sum(1 for v in vision if v["steered"]),
-        "front_seen": len(fronts),
-        "offset_dev_mean_m": None if not deviations else float(np.mean(np.abs(deviations))),
-        "offset_dev_max_m": None if not deviations else float(np.max(np.abs(deviations))),
-    }
-    result.meta["metric_scale"] = scale
-    result.meta["metric_scale_samples"] = ratios
+                    keyframe, odometry = camera.keyframe(origin, command_origin)
+                    motion = watch.picture(_gray(keyframe.image), here.distance(keyframe.pose))
+                    far: list[tuple[Keyframe, Pose2D]] = []
+                    for _ in range(cfg.survey.far_per_stop if fars else 0):
+                        far_yaw = fars[result.far_frames % len(fars)]
+                        look(robot, far_yaw, cfg.survey.far_pitch_rad)
+                        far.append(camera.keyframe(origin, command_origin))
+                        result.far_frames += 1
+                        if far_yaw == 0.0:  # the wall ahead: its line is the watch's too
+                            _watch_ahead(
+                                robot,
+                                eye,
+                                watch,
+                                _front_in_range(eye),
+                                keyframe.pose,
+                                length - walked - length_now,
+                                length,
+                            )
+                    result.path_m += here.distance(keyframe.pose)
+                    here = keyframe.pose
+                    walked += length_now
+                    steps += 1
+                    side_line = measure_side(robot, eye, side_normal, offset)
+                    memory.seen_side(trusted(side_line, offset, side_normal), here)
+                    watch.side_line(side_line, here, memory.level)
+                    good = trusted(side_line, offset, side_normal)
+                    if good is not None:
+                        deviations.append(good.distance - offset)
+                    vision.append(
+                        {
+                            "frame": result.frames,
+                            "side_index": lap * 4 + k,
+                            "side": line_dict(side_line),
+                            "front": line_dict(front),
+                            "front_seen": line_dict(raw_front),
+                            "steered": steered,
+                            "carried": steered and steer is not None and steer.inliers == 0,
+                            "level_m": round(memory.level, 3),
+                            "motion": motion,
+                            **({"turn_side": line_dict(turn_side)} if steps == 1 else {}),
+                        }
+                    )
+                    on_frame(keyframe, lap, odometry)
+                    for far_keyframe, far_odometry in far:
+                        assert on_far is not None  # far pictures are taken only for it
+                        on_far(far_keyframe, lap, result.frames, far_odometry)
+                    result.frames += 1
+                    if progress is not None:
+                        progress(1)
+                if not robot.motion.moveTo(0.0, 0.0, turn):
+                    raise watch.blocked(f"the corner turn failed; {_ahead(robot, eye)}")
+                after = relative_pose(origin, pose_of(robot.motion, True))
+                result.path_m += here.distance(after)
+                here = after
+                memory.turned()  # the front wall is the next side's
+                side_line = turn_side = measure_side(robot, eye, side_normal, offset)
+                memory.seen_side(trusted(side_line, offset, side_normal), here)
+            result.laps = lap + 1
+    finally:
+        scale, ratios = metric_scale(fronts)
+        result.meta["wall_follow"] = {
+            "side_normal": side_normal,
+            "side_seen": sum(1 for v in vision if v["side"] is not None),
+            "steered_steps": sum(1 for v in vision if v["steered"]),
+            "front_seen": len(fronts),
+            "offset_dev_mean_m": None if not deviations else float(np.mean(np.abs(deviations))),
+            "offset_dev_max_m": None if not deviations else float(np.max(np.abs(deviations))),
+        }
+        result.meta["metric_scale"] = scale
+        result.meta["metric_scale_samples"] = ratios
+
+
+def _front_gate(
+    offset: float, remaining: float, length: float, seen: list[WallLine] | None = None
+) -> Callable[[WallLine], bool]:
+    """Whether a front line agrees with the odometry (:func:`trusted_front`); every line
+    judged is appended to ``seen``."""
+
+    def gate(line: WallLine) -> bool:
+        if seen is not None:
+            seen.append(line)
+        return trusted_front(line, offset, remaining, length) is not None
+
+    return gate
+
+
+def _watch_ahead(
+    robot: Robot,
+    eye: FloorEye,
+    watch: WalkWatch,
+    line: WallLine | None,
+    here: Pose2D,
+    remaining: float,
+    length: float,
+) -> None:
+    """Hand a line ahead to the watch; a wall ahead it now holds against the odometry is
+    looked at again with the head up first (:func:`_floor_goes_on`): a plank's edge is
+    cleared, a wall's second sighting at the next stop stops the survey.
+
+    Raises:
+        SurveyBlocked: The watch's evidence (:meth:`WalkWatch.front_line`).
+    """
+    watch.front_line(line, here, remaining, length)
+    if watch.pending("ahead") and _floor_goes_on(robot, eye, watch.ahead_m):
+        watch.clear("ahead")  # the floor goes on past it: a plank's edge, not a wall
+
+
+def _floor_goes_on(robot: Robot, eye: FloorEye, distance: float) -> bool:
+    """Whether the floor visibly goes on past a line ``distance`` m ahead: looking ahead
+    with the head up (twice as far up the second time), a wall's line beyond it, or a side
+    wall's line whose far end lies more than :data:`FLOOR_BEYOND_M` past it (a wall across
+    the way would end it there). A plank's edge or a rug's reads as a wall ahead to the
+    level view; a wall does not let the floor go on."""
+    for pitch in (FRONT_PITCH, 2 * FRONT_PITCH):
+        look(robot, 0.0, pitch)
+        for line in eye.lines():
+            c, s = math.cos(line.normal), math.sin(line.normal)
+            if c > 0.9 and line.distance > distance + FLOOR_BEYOND_M:
+                return True  # a wall ahead, beyond the line
+            if abs(s) > 0.8 and line.ends_m is not None:
+                reach = max(-s * e for e in line.ends_m)  # how far ahead the side line runs
+                if reach > distance + FLOOR_BEYOND_M:
+                    return True
+    return False
+
+
+def _nearest(lines: list[WallLine]) -> WallLine | None:
+    """The nearest of some lines (None for none)."""
+    return min(lines, key=lambda line: line.distance) if lines else None
+
+
+def _gray(image: np.ndarray) -> np.ndarray:
+    """A grey copy of a BGR picture (a grey one as it is)."""
+    import cv2
+
+    return image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+
+
+def _front_in_range(eye: FloorEye) -> WallLine | None:
+    """The front wall's line in the bottom camera's current view (the head looking ahead),
+    when within :data:`naoloc.perception.wall_gate.FRONT_RANGE_M`."""
+    line = eye.measure(0.0, 0.4)
+    return line if line is not None and in_front_range(line.distance) else None
+
+
+def _ahead(robot: Robot, eye: FloorEye) -> str:
+    """What the bottom camera sees ahead, for a failed move's message."""
+    line = measure_front(robot, eye, 0.0)
+    if line is None:
+        return "no wall line in view ahead"
+    return f"the wall ahead is {line.distance:.2f} m away"
 
 
 def far_yaws(cfg: Config, wall_yaw: float) -> list[float]:

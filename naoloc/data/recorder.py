@@ -59,15 +59,17 @@ def record_survey(
     def on_far(keyframe: Keyframe, lap: int, stop: int, odometry: Pose2D) -> None:
         holder["w"].write(keyframe, lap=lap, odometry=odometry, stop=stop)
 
+    result = SurveyResult()
     try:
-        result = survey(
+        survey(
             robot, cfg, on_frame, on_start=on_start,
-            progress=progress, on_far=on_far,
+            progress=progress, on_far=on_far, result=result,
         )  # fmt: skip
     except BaseException as err:
         writer = holder.get("w")
         if writer is not None:
             try:
+                writer.update_meta(result.meta)  # what it measured until it stopped
                 kept = writer.close(complete=False, reason=interruption_reason(err))
             except NaolocError as failed:
                 err.add_note(f"the partial dataset could not be finished: {failed}")

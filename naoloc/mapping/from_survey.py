@@ -8,14 +8,16 @@ The one place that turns a read survey (:class:`naoloc.data.dataset.Dataset`) in
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from naoloc.config import MapConfig
+from naoloc.errors import MapCheckFailed
 from naoloc.geometry import Pose2D
 from naoloc.mapping.builder import ProgressFn, carried
+from naoloc.mapping.checks import Check, check_survey, failed
 from naoloc.mapping.map import VisualMap, build_map
-from naoloc.mapping.wall_poses import SCALE_RANGE, wall_poses
+from naoloc.mapping.wall_poses import SCALE_RANGE, WallPoses, wall_poses
 from naoloc.robot.keyframe import Keyframe
 
 # Fewest frames a map is built from: one or two pictures give no place to tell apart.
@@ -75,20 +77,73 @@ def survey_keyframes(
     Returns:
         The keyframes and facts for the map's meta (``metric_scale``, ``wall_poses``).
     """
+    keyframes, facts, _ = pose_survey(data, cfg, offset)
+    return keyframes, facts
+
+
+def pose_survey(
+    data: Any, cfg: MapConfig, offset: float | None = None
+) -> tuple[list[Keyframe], dict[str, Any], WallPoses | None]:
+    """:func:`survey_keyframes`, with the :class:`WallPoses` behind them (None: the
+    odometry's poses were kept)."""
     facts: dict[str, Any] = {"metric_scale": None, "wall_poses": None}
     if cfg.wall_poses:
-        survey = data.config.get("survey") if isinstance(data.config, dict) else None
-        value = survey.get("wall_offset_m") if isinstance(survey, dict) else None
-        if isinstance(value, (int, float)) and value > 0:
-            offset = float(value)  # the survey walked at its own offset
-        walled = None if offset is None else wall_poses(data.keyframes, data.meta, offset=offset)
+        offset = survey_offset(data, offset)
+        skirting = survey_skirting(data)
+        walled = (
+            None
+            if offset is None
+            else wall_poses(data.keyframes, data.meta, offset=offset, skirting=skirting)
+        )
         if walled is not None:
             facts["wall_poses"] = walled.summary()
-            return walled.keyframes, facts
+            return walled.keyframes, facts, walled
     if cfg.apply_metric_scale:
         keyframes, facts["metric_scale"] = apply_metric_scale(data.keyframes, data.meta)
-        return keyframes, facts
-    return list(data.keyframes), facts
+        return keyframes, facts, None
+    return list(data.keyframes), facts, None
+
+
+def survey_offset(data: Any, offset: float | None = None) -> float | None:
+    """The wall offset the survey walked at: its own config's, else ``offset``."""
+    value = survey_value(data, "wall_offset_m", None)
+    return value if value is not None and value > 0 else offset
+
+
+DEFAULT_SKIRTING_M = 0.012  # a common skirting board's depth, m (MuJoCo's home and office)
+
+
+def survey_skirting(data: Any) -> float:
+    """How far the survey's skirting boards stood out of its walls, m: ``survey.skirting_m``,
+    else 0.012, or 0 in a simulated room without boards (the fake robot's, a MuJoCo room of
+    style ``posters``); datasets from before the key: 0 (their maps were built so)."""
+    config = data.config if isinstance(data.config, dict) else {}
+    survey = config.get("survey")
+    if not isinstance(survey, dict) or "skirting_m" not in survey:
+        return 0.0
+    value = survey.get("skirting_m")
+    if isinstance(value, (int, float)):
+        return float(value)
+    robot, world = config.get("robot") or {}, config.get("world") or {}
+    style = (world.get("room") or {}).get("style") if isinstance(world, dict) else None
+    backend = robot.get("backend") if isinstance(robot, dict) else None
+    bare = backend == "fake" or (backend == "mujoco" and style == "posters")
+    return 0.0 if bare else DEFAULT_SKIRTING_M
+
+
+def survey_value(data: Any, key: str, default: Any) -> Any:
+    """A number of the survey's own config section (``survey.KEY``), else ``default``
+    (datasets from before the key existed)."""
+    survey = data.config.get("survey") if isinstance(data.config, dict) else None
+    value = survey.get(key) if isinstance(survey, dict) else None
+    return float(value) if isinstance(value, (int, float)) else default
+
+
+def run_checks(data: Any, cfg: MapConfig, walled: WallPoses | None) -> list[Check]:
+    """build-map's checks of the survey's map frame (:mod:`naoloc.mapping.checks`)."""
+    survey = data.config.get("survey") if isinstance(data.config, dict) else None
+    return check_survey(data, walled, survey if isinstance(survey, dict) else {},
+                        cfg.tuning.checks)  # fmt: skip
 
 
 def far_keyframes(data: Any, keyframes: Sequence[Keyframe]) -> list[tuple[int, Keyframe]]:
@@ -116,8 +171,14 @@ def build_from_survey(
     offset: float | None = None,
     meta: dict[str, Any] | None = None,
     progress: ProgressFn | None = None,
+    keep_unchecked: bool = True,
+    on_checks: Callable[[list[Check]], None] | None = None,
 ) -> tuple[VisualMap, dict[str, Any]]:
-    """Build the map of a survey dataset with ``cfg`` (not saved).
+    """Build the map of a survey dataset with ``cfg`` (not saved), after checking it.
+
+    The checks (:mod:`naoloc.mapping.checks`) run on the posed keyframes before the map is
+    trained; their figures and verdicts go into the map's meta (``checks``) with
+    ``checked``: True when all passed.
 
     Args:
         data: The :class:`naoloc.data.dataset.Dataset`.
@@ -125,12 +186,34 @@ def build_from_survey(
         offset: ``survey.wall_offset_m`` when the dataset's own config lacks it.
         meta: Extra entries for the map's meta (e.g. the dataset's path).
         progress: Called as ``progress(stage, done, total)`` while building.
+        keep_unchecked: Build a map that failed a check anyway, marked ``checked: False``
+            (the default: the evaluation and the demo keep their maps and say so);
+            False refuses it, as ``naoloc build-map`` does without ``--keep-unchecked``.
+        on_checks: Called with the checks once they ran (before any refusal).
 
     Returns:
         The map and the facts :func:`survey_keyframes` found (``metric_scale``,
-        ``wall_poses``), which are also in the map's meta.
+        ``wall_poses``) with ``checks`` (a list of dicts) and ``checked``, which are also in
+        the map's meta.
+
+    Raises:
+        MapCheckFailed: A check failed and ``keep_unchecked`` is False; the message names
+            the first failing check and its figure.
     """
-    keyframes, facts = survey_keyframes(data, cfg, offset)
+    keyframes, facts, walled = pose_survey(data, cfg, offset)
+    checks = run_checks(data, cfg, walled)
+    if on_checks is not None:
+        on_checks(checks)
+    bad = failed(checks)
+    if bad and not keep_unchecked:
+        first = bad[0]
+        more = f" (and {', '.join(c.name for c in bad[1:])})" if len(bad) > 1 else ""
+        raise MapCheckFailed(
+            f"the map failed its {first.name} check{more}: {first.line()}; "
+            "--keep-unchecked keeps it, marked unchecked"
+        )
+    facts["checks"] = [c.to_dict() for c in checks]
+    facts["checked"] = not bad
     map_meta = dict(data.meta)
     map_meta.pop("vision", None)  # per-frame survey measurements stay in the dataset
     map_meta.update({**(meta or {}), **facts})

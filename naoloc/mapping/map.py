@@ -3,7 +3,7 @@
 :class:`~naoloc.mapping.data.MapData` is the plain data; building
 (naoloc.mapping.builder), localizing (naoloc.localization) and the file format
 (naoloc.mapping.mapfile) are functions of it that import nothing of each other. This
-module sits above them all and adds them as methods, so ``vmap.localize(...)`` and
+module sits above them all and adds them as methods, so ``vmap.extract(...)`` and
 ``vmap.save(...)`` work without any of those modules importing this one (no import
 circles).
 

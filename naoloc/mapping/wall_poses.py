@@ -38,12 +38,14 @@ from typing import Any, Final
 import numpy as np
 
 from naoloc.geometry import Pose2D, modulo2PI
-from naoloc.perception.wall_gate import in_front_range, side_line_angle
+from naoloc.perception.wall_gate import SIDE_ANGLE_ERROR_RAD, in_front_range, side_line_angle
 from naoloc.robot.keyframe import Keyframe
 
 SCALE_RANGE: Final = (0.7, 1.4)  # a side's metres per odometry metre outside this: not used
 TURN_SCALE_RANGE: Final = (0.8, 1.25)  # odometry turn per true turn outside this: not used
 MIN_CORNER_FRACTION: Final = 0.5  # sides whose corner a front line must have placed
+FRONT_AGREE_M: Final = 0.12  # a front line within this of the corners' walk also anchors, m
+FRONT_HEADING_M: Final = 4.0  # a far wall's line gives the start's heading (angle, not distance)
 LINE_STD_M: Final = 0.03  # a floor line's distance, one sigma (NAO's lens reads 2-4 cm long)
 LINE_STD_RAD: Final = 0.01  # and its angle
 MIN_ANGLE_GATE_RAD: Final = 0.12  # an angle this close to the prediction is always used
@@ -60,12 +62,18 @@ EDGE_M: Final = 0.15
 # (6 % of the survey's first steering), so the start's own line is preferred.
 START_HEADING_M: Final = 1.0
 START_GATE_RAD: Final = 0.06
+CLEAN_RMS_M: Final = 0.006  # the start's views: lines scattered more are not its heading's
+CLEAN_FRACTION: Final = 0.6  # nor those with less of their boundary on them
 # A survey start beside furniture: its distance from the wall is carried back by the
 # odometry's walk inward from side 0's frames that see the wall within this many frames
 # (their median), not taken from its stretch's depth (room 1327980321: two chests 0.36 and
 # 0.45 m deep, 0.09 m apart, read as one stretch put the start, and every map pose, 9.7 cm
 # off; the walk back errs 1-5 cm).
 START_FROM_WALL_FRAMES: Final = 8
+# The start's own line places it unless those frames, carried back, disagree by more than
+# this (m): in a corner the one view that sees the wall at 0.5 m can read the wall behind.
+START_AGREE_M: Final = 0.04
+END_FRAMES: Final = 3  # a side's last frames whose wall lines place where it ended
 WALL_LEVEL_M: Final = 0.1  # stretches whose levels are this close see the same thing
 MIN_WALL_FRAMES: Final = 3  # frames that must see a side's wall
 WALL_SUPPORT: Final = 0.2  # and the share of the side's lines that must
@@ -86,6 +94,19 @@ class WallPoses:
         walls: The room's walls in W, ``(x_min, x_max, y_min, y_max)`` (m): the circuit
             widened by the wall offset; the floor-line sensor model
             (:mod:`naoloc.localization.walls`) uses them.
+        sides_of: Each keyframe's side (0, 1, 2, ... over all laps).
+        lines_seen: Whether each keyframe had a usable side line (near the offset, at the
+            expected angle).
+        wall_seen: Whether that line saw its side's wall (not furniture before it).
+        residuals: For consecutive keyframes of a side whose lines both saw the wall, the
+            lines' change less the odometry's walk away from the wall between them, m (a
+            straight wall and a true odometry give zero; the map checks use them).
+        skirting: How far the skirting boards stand out of the walls (m): ``walls`` are the
+            wall surfaces; a floor line sees the boards' face this much nearer.
+        start_own: The survey start's heading to side 0's wall from its own lines (rad;
+            None: it saw none).
+        start_frames: The same from side 0's first frames' lines, less the odometry's turn
+            since the start (rad; None: none).
     """
 
     keyframes: list[Keyframe]
@@ -94,11 +115,19 @@ class WallPoses:
     turn_scale: float | None = None
     wall_frame: Pose2D | None = None
     walls: tuple[float, float, float, float] | None = None
+    sides_of: list[int] = dataclasses.field(default_factory=list)
+    lines_seen: list[bool] = dataclasses.field(default_factory=list)
+    wall_seen: list[bool] = dataclasses.field(default_factory=list)
+    residuals: list[float] = dataclasses.field(default_factory=list)
+    skirting: float = 0.0
+    start_own: float | None = None
+    start_frames: float | None = None
 
     def summary(self) -> dict[str, Any]:
         """JSON-able facts for the map's meta."""
         known = [s for s in self.side_scales if s is not None]
         return {
+            "skirting_m": self.skirting,
             "sides": len(self.side_scales),
             "sides_with_corner": len(known),
             "median_scale": None if not known else round(float(np.median(known)), 4),
@@ -139,6 +168,7 @@ def wall_poses(
     meta: dict[str, Any],
     *,
     offset: float,
+    skirting: float = 0.0,
 ) -> WallPoses | None:
     """Keyframe poses from the survey's rectangle, its floor lines and the odometry.
 
@@ -147,12 +177,16 @@ def wall_poses(
         meta: The survey meta: ``sides_m``, ``vision`` (per-frame side_index, side and front lines),
             ``wall_follow.side_normal`` and optionally ``start_side``.
         offset: ``survey.wall_offset_m``, m.
+        skirting: ``survey.skirting_m``: how far the skirting boards stand out of the walls,
+            m. The floor lines see the boards' face; the room (and so the circuit) is
+            measured wall to wall, so every line's distance is taken this much longer.
 
     Returns:
         The poses, or None when the meta lacks what this needs (no vision, a survey that
         did not follow walls) or when fewer than half of the corners were placed (by the
         next side's wall or a front line): the odometry poses are then kept.
     """
+    meta = _to_walls(meta, skirting)
     vision = meta.get("vision")
     sides_m = meta.get("sides_m")
     follow = meta.get("wall_follow")
@@ -219,6 +253,8 @@ def wall_poses(
     # Pass 2, per side: what each line saw, the wall or furniture standing in front of it
     # (:func:`side_distances`), and so every frame's distance from the side's wall.
     dist: list[float | None] = [None] * len(keyframes)
+    wall_seen = [False] * len(keyframes)  # the frame's line saw its side's wall
+    residuals: list[float] = []  # consecutive lines on the wall against the odometry
     start_dist: float | None = None
     used = 0
     for k in range(n_sides):
@@ -233,11 +269,18 @@ def wall_poses(
             continue
         dists, on_wall = found
         if k == 0:
-            start_dist = dists[0] if on_wall[0] else _start_from_wall(dists, on_wall, dy)
+            back = _start_from_wall(dists, on_wall, dy)
+            agrees = on_wall[0] and abs(dists[0] - back) <= START_AGREE_M
+            start_dist = dists[0] if agrees else back
             dists, on_wall = dists[1:], on_wall[1:]
         used += sum(on_wall)
-        for i, v in zip(idx, dists, strict=True):
-            dist[i] = v
+        for i, v, w in zip(idx, dists, on_wall, strict=True):
+            dist[i], wall_seen[i] = v, w
+        for j, i in itertools.pairwise(idx):
+            if wall_seen[i] and wall_seen[j]:
+                li, lj = lines[i], lines[j]
+                assert li is not None and lj is not None  # a line that saw the wall
+                residuals.append(li[0] - lj[0] - (inward_m[i] - inward_m[j]))
 
     # A side starts where the previous one ended: as far along it as that side's last
     # frame stood inward of its circuit.
@@ -248,7 +291,7 @@ def wall_poses(
         if not frames_of[k]:
             continue  # a side the survey found itself at the end of: no step, no picture
         last = frames_of[k][-1]
-        starts[k + 1] = laterals[last]
+        starts[k + 1] = _end_lateral(frames_of[k], laterals, wall_seen, inward_m)
         nxt = dist[last + 1] if side_of[last + 1] == k + 1 else None
         if nxt is None:
             continue
@@ -273,7 +316,8 @@ def wall_poses(
         poses.append(Pose2D(float(position[0]), float(position[1]), modulo2PI(d + deltas[i])))
 
     # The survey start (the map frame's origin) in the wall frame.
-    heading = _start_heading(start_line, keyframes, lines, frames_of[0], along)
+    own = _own_heading(meta, offset, side_normal)
+    heading, frames_heading = _start_heading(own, keyframes, lines, frames_of[0], along)
     start = Pose2D(0.0, 0.0, heading or 0.0)
     if start_dist is not None:  # the origin's distance from side 0's wall, not what it saw
         start = Pose2D(0.0, (start_dist - offset) * turn, start.theta)
@@ -289,8 +333,63 @@ def wall_poses(
         -offset, float(sides_m[0]) + offset, min(-turn * offset, far_y), max(-turn * offset, far_y)
     )  # fmt: skip
     return WallPoses(
-        out, scales, used, _turn_scale(keyframes, side_of, lines, turn), start.inverse(), walls
+        out,
+        scales,
+        used,
+        _turn_scale(keyframes, side_of, lines, turn),
+        start.inverse(),
+        walls,
+        sides_of=list(side_of),
+        lines_seen=[line is not None for line in lines],
+        wall_seen=wall_seen,
+        residuals=residuals,
+        skirting=skirting,
+        start_own=own,
+        start_frames=frames_heading,
     )
+
+
+def _end_lateral(
+    idx: Sequence[int],
+    laterals: Sequence[float],
+    wall_seen: Sequence[bool],
+    inward_m: Sequence[float],
+) -> float:
+    """Where a side's last frame stood inward of its circuit (m): the median of its last
+    :data:`END_FRAMES` frames whose lines saw the wall, each carried to the
+    last frame by the odometry's walk inward (a corner's plant or sideboard is often all
+    the last frame's line sees); the last frame's own lateral without such frames."""
+    last = idx[-1]
+    votes = [
+        laterals[i] + (inward_m[last] - inward_m[i]) for i in idx[-END_FRAMES:] if wall_seen[i]
+    ]
+    return float(np.median(votes)) if votes else laterals[last]
+
+
+def _to_walls(meta: dict[str, Any], skirting: float) -> dict[str, Any]:
+    """The survey meta with every floor line's distance ``skirting`` m longer (from the
+    boards' face to the wall behind them)."""
+    if skirting == 0.0:
+        return meta
+
+    def moved(entry: Any) -> Any:
+        if not isinstance(entry, dict) or not isinstance(entry.get("distance_m"), (int, float)):
+            return entry
+        return {**entry, "distance_m": float(entry["distance_m"]) + skirting}
+
+    out = dict(meta)
+    for key in ("start_side", "start_front", "start_across"):
+        if key in out:
+            out[key] = moved(out[key])
+    vision = out.get("vision")
+    if isinstance(vision, list):
+        out["vision"] = [
+            {**v, "side": moved(v.get("side")), "front": moved(v.get("front"))}
+            if isinstance(v, dict)
+            else v
+            for v in vision
+        ]
+    return out
 
 
 def _turn_scale(
@@ -389,10 +488,11 @@ def _along_sides(
     """Each frame's distance from its side's corner (m), from the odometry's distance walked
     mapped through anchors (``frames_of``: each side's frame indices, in walking order):
     the corner (0 at 0) and, where the next side's wall says where this side ended
-    (``ends``: side -> (odometry along, true along) of its last frame), that alone; else
-    every front-wall line, which puts the frame it was measured at ``length - (distance -
-    offset)`` along the side. A side's start (odometry 0) is at ``starts[side]`` (m;
-    default 0): where the previous side's last frame stood.
+    (``ends``: side -> (odometry along, true along) of its last frame), that and the
+    front-wall lines that agree with it; else every front-wall line. A front line puts the
+    frame it was measured at ``length - (distance - offset)`` along the side. A side's start
+    (odometry 0) is at ``starts[side]`` (m; default 0): where the previous side's last frame
+    stood.
 
     Returns:
         The distances and each side's overall metres per odometry metre (None: no anchor).
@@ -401,12 +501,8 @@ def _along_sides(
     scales: list[float | None] = []
     for k, (idx, length) in enumerate(zip(frames_of, lengths, strict=True)):
         anchors = [(0.0, (starts or {}).get(k, 0.0))]
-        if ends is not None and k in ends and ends[k][0] > 0:
-            anchors.append(ends[k])
-            idx_lines: Sequence[int] = []
-        else:
-            idx_lines = idx
-        for j, i in enumerate(idx_lines):
+        fronts = []
+        for j, i in enumerate(idx):
             front = vision[i].get("front")
             if j == 0 or not isinstance(front, dict):
                 continue
@@ -417,7 +513,19 @@ def _along_sides(
                 and in_front_range(distance)
             ):
                 where = length - (float(distance) - offset)
-                anchors.append((float(along[idx[j - 1]]), where))  # measured before the step
+                fronts.append((float(along[idx[j - 1]]), where))  # measured before the step
+        if ends is not None and k in ends and ends[k][0] > 0:
+            # The next wall placed the side's end; front lines that agree with the walk
+            # between the corners (within FRONT_AGREE_M) place the frames near the end too
+            # (a front line that sees furniture before the wall does not agree).
+            (o0, t0), (o1, t1) = anchors[0], ends[k]
+            anchors.append(ends[k])
+            anchors += [
+                (o, t) for o, t in fronts
+                if o < o1 and abs(t - (t0 + (o - o0) * (t1 - t0) / (o1 - o0))) <= FRONT_AGREE_M
+            ]  # fmt: skip
+        else:
+            anchors += fronts
         anchors.sort()
         kept = [anchors[0]]
         for o, t in anchors[1:]:
@@ -425,7 +533,9 @@ def _along_sides(
                 s = (t - kept[-1][1]) / (o - kept[-1][0])
                 if SCALE_RANGE[0] <= s <= SCALE_RANGE[1] or len(kept) > 1:
                     kept.append((o, t))
-        scale = kept[-1][1] / kept[-1][0] if len(kept) > 1 else None
+        # metres per odometry metre between the side's first and last anchors (its start
+        # may stand off the corner: where the previous side's last frame stood)
+        scale = (kept[-1][1] - kept[0][1]) / (kept[-1][0] - kept[0][0]) if len(kept) > 1 else None
         scales.append(scale if scale is None or SCALE_RANGE[0] <= scale <= SCALE_RANGE[1] else None)
         if len(kept) > 1:  # sides without an anchor stay NaN: scaled below
             xs, ys = np.array([a[0] for a in kept]), np.array([a[1] for a in kept])
@@ -520,7 +630,8 @@ def side_distances(
 def _start_from_wall(
     dists: Sequence[float], on_wall: Sequence[bool], inward: Sequence[float]
 ) -> float:
-    """The survey start's distance from side 0's wall when its own line saw furniture (m).
+    """The survey start's distance from side 0's wall from its first frames (m): when its
+    own line saw furniture, or disagrees with them by more than :data:`START_AGREE_M`.
 
     Each of the first :data:`START_FROM_WALL_FRAMES` frames whose line sees the wall gives
     its distance less the odometry's walk inward since the start; their median. Without
@@ -540,19 +651,72 @@ def _start_from_wall(
     return float(np.median(back)) if back else float(dists[0])
 
 
+def _own_heading(meta: dict[str, Any], offset: float, side_normal: float) -> float | None:
+    """The survey start's heading to side 0's direction (rad) from the lines the start
+    itself saw: the median of its side wall's (``start_side`` and every view's,
+    ``start_views``: one view's line can mix in a corner's other wall), else of the
+    farther walls' (:func:`_far_headings`: the walls ahead and across are square and
+    parallel to side 0, their lines err more). None without any."""
+    votes = []
+    views = meta.get("start_views")
+    entries = views if isinstance(views, list) and views else [meta.get("start_side")]
+    clean = [e for e in entries if isinstance(e, dict) and _clean(e)]
+    for entry in clean or entries:
+        line = _line(entry, offset, side_normal)
+        if line is not None:
+            votes.append(line[1])
+    if not votes:  # the far walls' lines err more: only without the side wall's
+        votes = _far_headings(meta, side_normal)
+    return float(np.median(votes)) if votes else None
+
+
+def _clean(entry: dict[str, Any]) -> bool:
+    """Whether a line's fit is clean: most of its boundary on it, little scatter about it
+    (a line mixing in a corner's other wall or furniture is neither)."""
+    rms, fraction = entry.get("rms_m"), entry.get("fraction")
+    return (
+        isinstance(rms, (int, float))
+        and isinstance(fraction, (int, float))
+        and rms <= CLEAN_RMS_M
+        and fraction >= CLEAN_FRACTION
+    )
+
+
+def _far_headings(meta: dict[str, Any], side_normal: float) -> list[float]:
+    """The survey start's heading to side 0's direction (rad) from each farther wall it
+    saw, within :data:`FRONT_HEADING_M`: the wall ahead (``start_front``, square to side
+    0) and the wall across (``start_across``, parallel to it)."""
+    found: list[float] = []
+    for key, expected in (("start_front", 0.0), ("start_across", -side_normal)):
+        entry = meta.get(key)
+        if not isinstance(entry, dict):
+            continue
+        distance, normal = entry.get("distance_m"), entry.get("normal_rad")
+        if not isinstance(distance, (int, float)) or not isinstance(normal, (int, float)):
+            continue
+        if not (math.isfinite(distance) and math.isfinite(normal)):
+            continue
+        delta = modulo2PI(expected - float(normal))
+        if distance <= FRONT_HEADING_M and abs(delta) <= SIDE_ANGLE_ERROR_RAD:
+            found.append(delta)
+    return found
+
+
 def _start_heading(
-    start_line: tuple[float, float] | None,
+    own: float | None,
     keyframes: Sequence[Keyframe],
     lines: Sequence[tuple[float, float] | None],
     side0: Sequence[int],
     along: np.ndarray,
-) -> float | None:
-    """The survey start's heading to side 0's wall (rad), or None without any line.
+) -> tuple[float | None, float | None]:
+    """The survey start's heading to side 0's wall (rad), or None without any line, and
+    what side 0's first frames say of it (None: nothing).
 
-    The start's own line, unless side 0's frames' lines within :data:`START_HEADING_M` of
-    walk, each less the odometry's turn from the start to its frame (the map frame is the
-    start's odometry frame), have a median more than :data:`START_GATE_RAD` away from it:
-    then that median.
+    ``own`` is what the start itself saw: its side line's angle, or (a side wall too near
+    to be seen) a farther wall's (:func:`_far_headings`). That, unless side 0's frames'
+    lines within :data:`START_HEADING_M` of walk, each less the odometry's turn from the
+    start to its frame (the map frame is the start's odometry frame), have a median more
+    than :data:`START_GATE_RAD` away from it: then that median.
     """
     votes = []
     for i in side0:
@@ -561,6 +725,6 @@ def _start_heading(
         if (line := lines[i]) is not None:
             votes.append(modulo2PI(line[1] - keyframes[i].pose.theta))
     frames = float(np.median(votes)) if votes else None
-    if start_line is None or frames is None:
-        return frames if start_line is None else start_line[1]
-    return start_line[1] if abs(modulo2PI(frames - start_line[1])) <= START_GATE_RAD else frames
+    if own is None or frames is None:
+        return (frames if own is None else own), frames
+    return (own if abs(modulo2PI(frames - own)) <= START_GATE_RAD else frames), frames

@@ -58,6 +58,10 @@ class WallLine:
         fraction: ``inliers`` over the boundary pixels found.
         rms_m: RMS distance of the inliers to the line, m.
         span_m: Length of the line covered by inliers, m.
+        ends_m: Where the inliers begin and end along the line, m: coordinates from the
+            line's nearest point to FRAME_ROBOT's origin, along the normal turned a
+            quarter turn counter-clockwise (for a wall ahead: to the left); None when not
+            known.
     """
 
     distance: float
@@ -66,6 +70,7 @@ class WallLine:
     fraction: float
     rms_m: float
     span_m: float
+    ends_m: tuple[float, float] | None = None
 
     def to_dict(self) -> dict[str, float]:
         """JSON-able form (distance m, normal rad, rms and span m)."""
@@ -461,7 +466,11 @@ def _one_line(pts: np.ndarray, seed: int) -> tuple[WallLine | None, np.ndarray]:
     if span < MIN_SPAN_M or fraction < MIN_INLIER_FRACTION / 2:
         return None, pts
     rms = float(np.sqrt(np.mean(((p - point) @ normal) ** 2)))
-    line = WallLine(offset, math.atan2(normal[1], normal[0]), int(inl.sum()), fraction, rms, span)
+    side = p @ np.array([-normal[1], normal[0]])  # along the line, from the nearest point
+    ends = (float(side.min()), float(side.max()))
+    line = WallLine(
+        offset, math.atan2(normal[1], normal[0]), int(inl.sum()), fraction, rms, span, ends
+    )
     return line, pts[~inl]
 
 

@@ -26,6 +26,9 @@ FRONT_RANGE_M: Final = 2.2
 SIDE_OFFSET_ERROR_M: Final = 0.5
 # Nor does a side line at a larger angle to the wall the survey walks along, rad.
 SIDE_ANGLE_ERROR_RAD: Final = 0.35
+# Nor one nearer than this, m: no view of the bottom camera sees a wall's foot that near
+# beside the robot; what it shows there is the robot's own arm (tools/floorline_views.py).
+SIDE_MIN_M: Final = 0.35
 
 
 def in_front_range(distance: float) -> bool:
@@ -47,9 +50,9 @@ def side_line_angle(
     Returns:
         ``side_normal - normal`` wrapped to (-pi, pi] (rad) when the line is within
         :data:`SIDE_OFFSET_ERROR_M` of ``offset`` and :data:`SIDE_ANGLE_ERROR_RAD` of
-        ``side_normal``, else None.
+        ``side_normal``, and not nearer than :data:`SIDE_MIN_M`, else None.
     """
     delta = modulo2PI(side_normal - normal)
     if abs(distance - offset) > SIDE_OFFSET_ERROR_M or abs(delta) > SIDE_ANGLE_ERROR_RAD:
         return None
-    return delta
+    return None if distance < SIDE_MIN_M else delta

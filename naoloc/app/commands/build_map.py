@@ -1,9 +1,13 @@
 """``naoloc build-map -c CFG -d DATASET.mcap -o MAP.npz``: Algorithm 4, plus a PNG of the map.
 
-The map, its PNG and the config copy (``MAP.config.yaml``) are written under temporary
-names and moved into place together once all three exist: a run that fails or is
-interrupted leaves an older map, PNG and config copy as they were. A partial dataset (an
-interrupted survey's ``DATASET.partial.mcap``) is read only when named, and said so.
+Before anything is trained the survey's map frame is checked (:mod:`naoloc.mapping.checks`):
+each check's line is printed, and a map that fails one is refused in one line naming the
+check (exit 1, nothing written) unless ``--keep-unchecked`` keeps it, marked unchecked
+(``checked: false`` in its meta and the JSON). The map, its PNG and the config copy
+(``MAP.config.yaml``) are written under temporary names and moved into place together once
+all three exist: a run that fails or is interrupted leaves an older map, PNG and config
+copy as they were. A partial dataset (an interrupted survey's ``DATASET.partial.mcap``) is
+read only when named, and said so.
 """
 
 from __future__ import annotations
@@ -27,6 +31,8 @@ def build_from_dataset(
     *,
     show_progress: bool | None = None,
     config_copy: Path | None = None,
+    keep_unchecked: bool = True,
+    on_checks: Any = None,
 ) -> tuple[Any, dict[str, Any]]:
     """Read a dataset, build the map with ``cfg.map``, save it and its PNG.
 
@@ -36,12 +42,17 @@ def build_from_dataset(
         output: The map file (``.npz``); the PNG goes beside it (``MAP.png``).
         show_progress: Force progress bars on or off; default: on a terminal.
         config_copy: Also write the resolved config (no secrets) here, with the map.
+        keep_unchecked: Keep a map that failed a check, marked unchecked (the default,
+            for the demo); ``naoloc build-map`` refuses it unless ``--keep-unchecked``.
+        on_checks: Called with the checks (:class:`naoloc.mapping.checks.Check`) once run.
 
     Returns:
         The :class:`naoloc.mapping.VisualMap` and the JSON summary.
 
     Raises:
         DatasetError: The dataset is unreadable, corrupt or has too few frames.
+        MapCheckFailed: The map failed a check (nothing is written) and ``keep_unchecked``
+            is False.
     """
     data = read_dataset(dataset)  # before importing the map code: a bad file fails fast
     if len(data.keyframes) < MIN_MAP_FRAMES:
@@ -74,6 +85,8 @@ def build_from_dataset(
                 "frames": len(data.keyframes),
             },
             progress=progress,
+            keep_unchecked=keep_unchecked,
+            on_checks=on_checks,
         )
     finally:
         for bar in bars.values():
@@ -100,6 +113,8 @@ def build_from_dataset(
         "dataset_complete": data.complete,
         "metric_scale": facts["metric_scale"],
         "wall_poses": facts["wall_poses"],
+        "checked": facts["checked"],
+        "checks": facts["checks"],
     }
     if not data.complete:
         summary["dataset_reason"] = data.meta.get("reason")
@@ -111,12 +126,26 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     from naoloc.data.outputs import config_path_for
 
     output: Path = args.output
-    _, summary = build_from_dataset(args.dataset, cfg, output, config_copy=config_path_for(output))
+
+    def show(checks: list[Any]) -> None:
+        for check in checks:
+            print(f"build-map check: {check.line()}")
+
+    _, summary = build_from_dataset(
+        args.dataset,
+        cfg,
+        output,
+        config_copy=config_path_for(output),
+        keep_unchecked=bool(getattr(args, "keep_unchecked", False)),
+        on_checks=show,
+    )
     partial = ""
     if not summary["dataset_complete"]:
         partial = f" (partial dataset: {summary.get('dataset_reason') or 'incomplete'})"
+    unchecked = "" if summary["checked"] else " UNCHECKED (a check failed; kept as asked)"
     print(
-        f"build-map: {summary['images']} images{partial} -> {summary['neurons']} neurons, "
+        f"build-map: {summary['images']} images{partial}{unchecked} -> "
+        f"{summary['neurons']} neurons, "
         f"{summary['distinct_poses']} distinct poses in {summary['total_s']:.1f} s "
         f"-> {output}, {summary['png']}"
     )

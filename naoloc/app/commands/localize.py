@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -31,6 +32,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     from naoloc.behaviours.localize import localize
     from naoloc.data.outputs import config_path_for, staged
     from naoloc.mapping import load_map
+    from naoloc.mapping.checks import map_checked
     from naoloc.robot.registry import connect
     from naoloc.viz.live import live_from_args, show_estimate, show_map, watch
     from naoloc.viz.plots import plot_localization
@@ -45,6 +47,10 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
             loc = localize(watch(robot, live), vmap, cfg, on_step=lambda n: bar.update(1, n))
         show_estimate(live, loc.estimate)
     summary = loc.summary()
+    summary["map_checked"] = map_checked(vmap)
+    if not summary["map_checked"]:
+        print("localize: this map failed build-map's checks (kept with --keep-unchecked): "
+              "its poses may be off", file=sys.stderr)  # fmt: skip
     est = loc.estimate
     if est.found:
         line = (

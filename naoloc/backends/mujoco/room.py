@@ -265,10 +265,23 @@ def _shelf(name: str, cx: float, cy: float, along_x: bool, rng: np.random.Genera
 
 
 def survey_circuit(cfg: Config) -> list[tuple[float, float]]:
-    """Corners of the survey rectangle in the room frame, starting at the start pose."""
+    """Corners of the survey rectangle in the room frame, starting at the start pose.
+
+    The circuit turns away from the nearer side wall (the survey keeps that wall beside
+    it): left (counter-clockwise) with the nearer wall on the robot's right, else right.
+    """
     x0, y0, th = cfg.start_pose()
     a, b = cfg.survey_sides()
     c, s = math.cos(th), math.sin(th)
+    sx, sy = cfg.world.room.size_m
+
+    def reach(dx: float, dy: float) -> float:  # distance to the wall along (dx, dy)
+        hits = [(sx - x0) / dx if dx > 1e-9 else -x0 / dx if dx < -1e-9 else math.inf,
+                (sy - y0) / dy if dy > 1e-9 else -y0 / dy if dy < -1e-9 else math.inf]  # fmt: skip
+        return min(hits)
+
+    if reach(-s, c) < reach(s, -c):  # the nearer wall is on the left: a clockwise circuit
+        b = -b
     local = [(0.0, 0.0), (a, 0.0), (a, b), (0.0, b)]
     return [(x0 + c * u - s * v, y0 + s * u + c * v) for u, v in local]
 
