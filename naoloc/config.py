@@ -576,6 +576,86 @@ class FilterTuning(_Model):
     """
 
     candidates: int = Field(5, ge=1, le=50, description="keyframes retrieved per picture")
+    window: int = Field(
+        40, ge=2, le=1000, description="observations a new hypothesis is replayed through"
+    )
+    near_m: float = Field(
+        0.05,
+        ge=0,
+        description="an earlier observation taken this near (m, by the odometry) also corrects a "
+        "new hypothesis; farther ones only score it",
+    )
+    near_rad: float = Field(0.05, ge=0, description="the same in heading (rad)")
+    pool_m: float = Field(
+        0.3,
+        ge=0,
+        description="pictures taken within this of here (m) pool their matches for a planar "
+        "RANSAC proposal",
+    )
+    pool_bearing_rad: float = Field(
+        0.015, gt=0, description="the pooled RANSAC's bearing tolerance (rad)"
+    )
+    pool_samples: int = Field(
+        1500, ge=0, le=100000, description="match pairs the pooled RANSAC draws"
+    )
+    pool_keep: int = Field(3, ge=0, le=50, description="poses the pooled RANSAC proposes at most")
+    shift_from: int = Field(
+        3,
+        ge=0,
+        le=50,
+        description="hypotheses that get siblings moved to explain an unexplained floor line",
+    )
+    shift_min_m: float = Field(0.05, ge=0, description="smallest move of such a sibling (m)")
+    shift_max_m: float = Field(1.0, ge=0, description="largest move of such a sibling (m)")
+    shift_explained_nats: float = Field(
+        2.0,
+        ge=0,
+        description="a line giving a hypothesis more evidence than this is explained (nats)",
+    )
+    line_proposals: int = Field(
+        8, ge=0, le=100, description="poses the floor lines propose at most (the pictures' best)"
+    )
+    near_proposal_m: float = Field(
+        1.0, ge=0, description="line poses beside a picture's proposal come from within this (m)"
+    )
+    near_proposal_rad: float = Field(0.3, ge=0, description="... and this (rad)")
+    explore_from: int = Field(
+        1, ge=0, le=50, description="hypotheses whose neighbours along the walls' axes are tried"
+    )
+    explore_margin_nats: float = Field(
+        3.0, ge=0, description="a neighbour must gain this much of the pictures' evidence (nats)"
+    )
+    quick_pictures: int = Field(
+        8, ge=1, le=1000, description="latest pictures a proposal's quick score looks at"
+    )
+    informative_features: int = Field(
+        40,
+        ge=0,
+        description="a picture with fewer features says too little to judge the leading "
+        "hypothesis by",
+    )
+    line_evidence_cap_nats: float = Field(
+        4.0,
+        gt=0,
+        description="most evidence one floor picture's lines give (nats): they share the walls' "
+        "errors",
+    )
+    picture_evidence_cap_nats: float = Field(
+        40.0,
+        gt=0,
+        description="most evidence one picture gives (nats): its features share the map's errors",
+    )
+    explore_steps_m: tuple[float, ...] = Field(
+        (-0.6, -0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45, 0.6),
+        description="steps along the walls' axes an explored neighbour is moved by (m)",
+    )
+    proposal_sigma: tuple[float, float] = Field(
+        (0.3, 0.2),
+        description="a new hypothesis' uncertainty before its picture corrects it (m, rad)",
+    )
+    line_proposal_sigma: tuple[float, float] = Field(
+        (0.06, 0.04), description="a line pose's uncertainty (m, rad)"
+    )
     neighbours: int = Field(
         3, ge=1, le=10, description="nearest landmark descriptors a feature may be (any of)"
     )

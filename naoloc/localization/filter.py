@@ -40,42 +40,6 @@ from naoloc.perception.floorline import WallLine
 
 __all__ = ["Belief", "Evidence", "MultiHypothesisFilter"]
 
-# Observations kept to replay a new hypothesis through.
-WINDOW = 40
-# An earlier observation taken this near (m, rad by the odometry) also corrects a new
-# hypothesis; farther ones only score it.
-NEAR_M = 0.05
-NEAR_RAD = 0.05
-# The pooled proposal: pictures taken within POOL_M (m) of here, the planar RANSAC's
-# bearing tolerance (rad), pairs drawn and poses kept.
-POOL_M = 0.3
-POOL_BEARING_RAD = 0.015
-POOL_SAMPLES = 1500
-POOL_KEEP = 3
-# Siblings from unexplained lines: from the SHIFT_FROM best hypotheses, moved between
-# SHIFT_MIN_M and SHIFT_MAX_M; a line with more evidence than SHIFT_EXPLAINED_NATS is
-# explained already.
-SHIFT_FROM = 3
-SHIFT_MIN_M = 0.05
-SHIFT_MAX_M = 1.0
-SHIFT_EXPLAINED_NATS = 2.0
-# Line proposals kept (the best the pictures support), and their covariance (m, m, rad);
-# those beside a picture's proposal come from within NEAR_PROPOSAL_M / _RAD of it.
-LINE_PROPOSALS = 8
-NEAR_PROPOSAL_M = 1.0
-NEAR_PROPOSAL_RAD = 0.3
-LINE_PROPOSAL_COV = np.diag([0.06**2, 0.06**2, 0.04**2])
-# Exploration along the walls' axes: from the EXPLORE_FROM best hypotheses, by these
-# steps (m); a step must gain EXPLORE_MARGIN_NATS of the pictures' evidence.
-EXPLORE_FROM = 1
-EXPLORE_STEPS_M = (-0.6, -0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45, 0.6)
-EXPLORE_MARGIN_NATS = 3.0
-# Pictures a quick score looks at (the latest ones of the window).
-QUICK_PICTURES = 8
-# A picture with fewer features says too little to judge the leading hypothesis by.
-INFORMATIVE_FEATURES = 40
-# Covariance a new hypothesis starts with before its picture corrects it (m, m, rad).
-PROPOSAL_COV = np.diag([0.3**2, 0.3**2, 0.2**2])
 
 Evidence = PictureMatches | tuple[WallLine, ...] | None
 """What one observation gives the filter: a picture's matches, a scan's lines, or nothing."""
@@ -125,11 +89,15 @@ class MultiHypothesisFilter:
         self.tun = tun
         self.turn_scale = turn_scale if turn_scale > 0 else 1.0
         self.hypotheses: list[Hypothesis] = []
-        self.window: deque[tuple[Evidence, Pose2D]] = deque(maxlen=WINDOW)
+        self.window: deque[tuple[Evidence, Pose2D]] = deque(maxlen=tun.window)
         self.odometry: Pose2D | None = None
         self.pictures = 0
         self.contradicted = False
         self._behind = 0  # pictures in a row the leader explained far worse than another
+        m, r = tun.proposal_sigma
+        self._proposal_cov = np.diag([m**2, m**2, r**2])
+        m, r = tun.line_proposal_sigma
+        self._line_cov = np.diag([m**2, m**2, r**2])
 
     def step_of(self, a: Pose2D, b: Pose2D) -> np.ndarray:
         """The odometry step from ``a`` to ``b`` in FRAME_ROBOT at ``a``, turn de-scaled."""
@@ -159,19 +127,19 @@ class MultiHypothesisFilter:
             if evidence.features > 0:
                 self.pictures += 1
             self._propose(evidence)
-            if leader is not None and evidence.features >= INFORMATIVE_FEATURES:
+            if leader is not None and evidence.features >= self.tun.informative_features:
                 self._watch(leader, evidence, gains)
         elif evidence and self.walls is not None:
             self._shift_to_lines(evidence)
             for z in self._line_poses():
-                self._add(z, None, LINE_PROPOSAL_COV)
+                self._add(z, None, self._line_cov)
             self._explore()
         self._prune()
 
     def _add(self, z: np.ndarray, anchor: PictureMatches | None, cov: np.ndarray | None) -> bool:
         """Spawn a hypothesis at ``z`` unless one explains it already; whether it was."""
         if any(
-            h.mahalanobis(z, PROPOSAL_COV * 0.1) < self.tun.gate_mahalanobis
+            h.mahalanobis(z, self._proposal_cov * 0.1) < self.tun.gate_mahalanobis
             for h in self.hypotheses
         ):
             return False
@@ -194,7 +162,7 @@ class MultiHypothesisFilter:
             if not isinstance(evidence, tuple) or not evidence:
                 continue
             step = self.step_of(self.odometry, odo)  # that frame's pose in the frame now
-            if math.hypot(step[0], step[1]) > POOL_M:
+            if math.hypot(step[0], step[1]) > self.tun.pool_m:
                 continue
             for line in evidence:
                 normal = line.normal + step[2]
@@ -207,7 +175,7 @@ class MultiHypothesisFilter:
 
     def _line_poses(self, near: np.ndarray | None = None) -> list[np.ndarray]:
         """The poses the pooled floor lines allow (every wall and furniture coordinate),
-        the :data:`LINE_PROPOSALS` the pictures support best.
+        the ``line_proposals`` the pictures support best.
 
         Args:
             near: Only poses at this pose's quarter turn within :data:`NEAR_PROPOSAL_M` and
@@ -223,14 +191,14 @@ class MultiHypothesisFilter:
         if near is not None:
             poses = [
                 z for z in poses
-                if math.hypot(*(z[:2] - near[:2])) < NEAR_PROPOSAL_M
-                and abs(math.remainder(z[2] - near[2], 2 * math.pi)) < NEAR_PROPOSAL_RAD
+                if math.hypot(*(z[:2] - near[:2])) < self.tun.near_proposal_m
+                and abs(math.remainder(z[2] - near[2], 2 * math.pi)) < self.tun.near_proposal_rad
             ]  # fmt: skip
         if not poses:
             return []
         scored = [(self._quick_score(z), i, z) for i, z in enumerate(poses)]
         scored.sort(key=lambda t: (-t[0], t[1]))
-        return [z for _s, _i, z in scored[:LINE_PROPOSALS]]
+        return [z for _s, _i, z in scored[: self.tun.line_proposals]]
 
     def _quick_score(self, z: np.ndarray) -> float:
         """The latest pictures' evidence for pose ``z`` now, without correcting it."""
@@ -239,7 +207,7 @@ class MultiHypothesisFilter:
         pictures = [
             (e, o) for e, o in self.window if isinstance(e, PictureMatches) and e.points.shape[0]
         ]
-        for evidence, odo in pictures[-QUICK_PICTURES:]:
+        for evidence, odo in pictures[-self.tun.quick_pictures :]:
             step = self.step_of(self.odometry, odo)
             pose, _ = motion_step(z, np.zeros((3, 3)), step, self.tun)
             total += picture_log_ratio(evidence, pose, self.tun)
@@ -280,22 +248,22 @@ class MultiHypothesisFilter:
         is a wall's foot (B-Human resets a hypothesis where percepts agree on another pose).
 
         Only lines whose direction agrees with a wall's (within ``gate_mahalanobis`` of the
-        line's and the hypothesis' heading noise) and shifts up to :data:`SHIFT_MAX_M`.
+        line's and the hypothesis' heading noise) and shifts up to ``shift_max_m``.
         """
         assert self.walls is not None
-        leaders = sorted(self.hypotheses, key=lambda h: -h.score)[:SHIFT_FROM]
+        leaders = sorted(self.hypotheses, key=lambda h: -h.score)[: self.tun.shift_from]
         fresh: list[Hypothesis] = []
         for h in leaders:
             for line in lines:
                 fit = fit_line(self.walls, line, h.pose, self.tun, h.cov)
-                if fit.wall >= 0 and fit.log_ratio > SHIFT_EXPLAINED_NATS:
+                if fit.wall >= 0 and fit.log_ratio > self.tun.shift_explained_nats:
                     continue  # this hypothesis explains the line already
                 dist, direction = self.walls.expected(h.pose)
                 turn = np.angle(np.exp(1j * (line.normal - direction)))
                 sig_a = math.hypot(self.tun.line_sigma_rad, math.sqrt(h.cov[2, 2]))
                 for k in np.flatnonzero(np.abs(turn) < self.tun.gate_mahalanobis * sig_a):
                     shift = dist[k] - line.distance
-                    if abs(shift) > SHIFT_MAX_M or abs(shift) < SHIFT_MIN_M:
+                    if abs(shift) > self.tun.shift_max_m or abs(shift) < self.tun.shift_min_m:
                         continue
                     n = np.array([math.cos(self.walls.normals[k]), math.sin(self.walls.normals[k])])
                     z = np.array([*(h.pose[:2] + shift * n), h.pose[2] - turn[k]])
@@ -344,33 +312,33 @@ class MultiHypothesisFilter:
             # The walls place the robot better than the landmarks: the poses the lines
             # allow near this one, at its heading, stand beside it.
             for w in self._line_poses(near=z):
-                self._add(w, None, LINE_PROPOSAL_COV)
+                self._add(w, None, self._line_cov)
 
     def _explore(self) -> None:
         """Neighbours of the leading hypotheses along the walls' axes, where the pictures
         agree better (a line of furniture in front of a wall, taken for the wall, puts a
         hypothesis a bench's depth off; its landmarks then fit better a step away).
 
-        Each leader's pose is shifted by :data:`EXPLORE_STEPS_M` along the wall frame's x
+        Each leader's pose is shifted by :data:`self.tun.explore_steps_m` along the wall frame's x
         and y; a shift whose pictures' evidence beats the leader's own by
-        :data:`EXPLORE_MARGIN_NATS` becomes a hypothesis.
+        ``explore_margin_nats`` becomes a hypothesis.
         """
         if self.walls is None:
             return
         ux = np.array([math.cos(self.walls.frame.theta), math.sin(self.walls.frame.theta)])
         axes = (ux, np.array([-ux[1], ux[0]]))
-        for h in sorted(self.hypotheses, key=lambda h: -h.score)[:EXPLORE_FROM]:
+        for h in sorted(self.hypotheses, key=lambda h: -h.score)[: self.tun.explore_from]:
             own = self._quick_score(h.pose)
-            best, best_z = own + EXPLORE_MARGIN_NATS, None
+            best, best_z = own + self.tun.explore_margin_nats, None
             for axis in axes:
-                for step in EXPLORE_STEPS_M:
+                for step in self.tun.explore_steps_m:
                     z = h.pose.copy()
                     z[:2] += step * axis
                     score = self._quick_score(z)
                     if score > best:
                         best, best_z = score, z
             if best_z is not None:
-                self._add(best_z, None, LINE_PROPOSAL_COV)
+                self._add(best_z, None, self._line_cov)
 
     def _probable(self) -> bool:
         """Whether the best hypothesis outweighs the others and the other room."""
@@ -385,7 +353,7 @@ class MultiHypothesisFilter:
             if not isinstance(evidence, PictureMatches) or evidence.matched.shape[0] == 0:
                 continue
             step = self.step_of(self.odometry, odo)
-            if math.hypot(step[0], step[1]) > POOL_M:
+            if math.hypot(step[0], step[1]) > self.tun.pool_m:
                 continue
             to_pic = np.linalg.inv(robot_matrix(*step))  # now-frame point -> picture's frame
             mat = evidence.projection @ to_pic
@@ -396,7 +364,8 @@ class MultiHypothesisFilter:
             return []
         found = planar_hypotheses(
             np.concatenate(mats), np.concatenate(pts), np.concatenate(px),
-            bearing_tol_rad=POOL_BEARING_RAD, samples=POOL_SAMPLES, keep=POOL_KEEP,
+            bearing_tol_rad=self.tun.pool_bearing_rad, samples=self.tun.pool_samples,
+            keep=self.tun.pool_keep,
             seed=len(self.window),
         )  # fmt: skip
         return [pose for count, pose in found if count >= self.tun.min_pnp_inliers]
@@ -413,7 +382,7 @@ class MultiHypothesisFilter:
         when no observation supports it.
         """
         assert self.odometry is not None
-        h = Hypothesis(z, PROPOSAL_COV if cov is None else cov, self.tun)
+        h = Hypothesis(z, self._proposal_cov if cov is None else cov, self.tun)
         keep = 1.0 - self.tun.forget_per_observation
         kept = 1.0 - self.tun.identity_forget_per_picture
         events = list(self.window)
@@ -426,7 +395,9 @@ class MultiHypothesisFilter:
             events = events[:-1]
         for age, (evidence, odo) in enumerate(reversed(events), start=1 if anchor else 0):
             step = self.step_of(self.odometry, odo)
-            near = math.hypot(step[0], step[1]) < NEAR_M and abs(step[2]) < NEAR_RAD
+            near = (
+                math.hypot(step[0], step[1]) < self.tun.near_m and abs(step[2]) < self.tun.near_rad
+            )
             probe = h if near else Hypothesis(*motion_step(h.pose, h.cov, step, self.tun), self.tun)
             score += keep**age * self._update(probe, evidence)
             if isinstance(evidence, PictureMatches):

@@ -32,7 +32,6 @@ import numpy as np
 
 from naoloc.config import FilterTuning
 from naoloc.localization.pictures import (
-    EVIDENCE_CAP,
     PictureMatches,
     mixture,
     reprojection,
@@ -41,9 +40,6 @@ from naoloc.localization.walls import WallMap, fit_line
 from naoloc.perception.floorline import WallLine
 
 __all__ = ["Hypothesis", "PictureFit", "motion_step", "predictive_evidence", "wrap"]
-
-# Evidence one line scan can give at most, nats: its lines share the map's wall errors.
-LINE_EVIDENCE_CAP = 4.0
 
 
 def wrap(angle: float) -> float:
@@ -106,7 +102,7 @@ def predictive_evidence(
     assert jac is not None
     s = jac @ cov @ jac.transpose(0, 2, 1) + tun.pixel_sigma_px**2 * np.eye(2)
     _, ratios = mixture(m, res, front, s, tun)
-    return min(EVIDENCE_CAP, tun.match_weight * float(ratios.sum()))
+    return min(tun.picture_evidence_cap_nats, tun.match_weight * float(ratios.sum()))
 
 
 @dataclass
@@ -219,7 +215,7 @@ class Hypothesis:
             ikh = np.eye(6) - k @ jac
             self.full = ikh @ self.full @ ikh.T + k @ r @ k.T  # Joseph form
             self.line_support += 1
-        return min(LINE_EVIDENCE_CAP, evidence)
+        return min(tun.line_evidence_cap_nats, evidence)
 
     def update_picture(self, m: PictureMatches, tun: FilterTuning) -> PictureFit:
         """Correct the pose (and the landmarks' error) with a picture's landmark candidates.
@@ -248,7 +244,9 @@ class Hypothesis:
             s = jac @ cur @ jac.transpose(0, 2, 1) + sig2 * np.eye(2)
             resp, ratios = mixture(m, res, front, s, tun)
             if predictive is None:  # the evidence before the picture moves the pose
-                predictive = min(EVIDENCE_CAP, tun.match_weight * float(ratios.sum()))
+                predictive = min(
+                    tun.picture_evidence_cap_nats, tun.match_weight * float(ratios.sum())
+                )
             wk = tun.match_weight * resp / sig2
             h = np.einsum("n,nij,nik->jk", wk, jac, jac)
             g = np.einsum("n,nij,ni->j", wk, jac, res)

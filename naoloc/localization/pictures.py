@@ -31,7 +31,6 @@ from naoloc.perception.features import Features
 from naoloc.robot.keyframe import Keyframe
 
 __all__ = [
-    "EVIDENCE_CAP",
     "LandmarkIndex",
     "PictureMatches",
     "distinct_only",
@@ -40,10 +39,6 @@ __all__ = [
     "picture_log_ratio",
     "reprojection",
 ]
-
-# Evidence one picture can give at most, nats: its features' landmarks share the map's
-# errors in one place, so many of them say little more than a few.
-EVIDENCE_CAP = 40.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -324,9 +319,9 @@ def distinct_only(m: PictureMatches) -> PictureMatches:
 
 def picture_log_ratio(m: PictureMatches, pose: np.ndarray, tun: FilterTuning) -> float:
     """Evidence the picture gives for ``pose`` over 'its features are all wrong' (nats),
-    each feature's log ratio times ``match_weight``, at most :data:`EVIDENCE_CAP`."""
+    each feature's log ratio times ``match_weight``, at most ``picture_evidence_cap_nats``."""
     if m.points.shape[0] == 0:
         return 0.0
     res, front, _ = reprojection(m, pose)
     _, ratios = mixture(m, res, front, tun.pixel_sigma_px**2 * np.eye(2), tun)
-    return min(EVIDENCE_CAP, float(tun.match_weight * ratios.sum()))
+    return min(tun.picture_evidence_cap_nats, float(tun.match_weight * ratios.sum()))
