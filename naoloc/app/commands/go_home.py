@@ -11,26 +11,19 @@ from naoloc.config import Config
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """A short look, then a walk home on the live pose; report where it ended."""
-    from naoloc.app.commands.localize import teleport_if_asked
-    from naoloc.app.interrupt import interruptible
+    from naoloc.app.commands.localize import in_the_map
     from naoloc.behaviours.go_home import go_home
     from naoloc.data.outputs import config_path_for, staged
-    from naoloc.mapping import load_map
-    from naoloc.robot.registry import connect
-    from naoloc.viz.live import follow_track, live_from_args, show_map, watch
+    from naoloc.viz.live import follow_track
     from naoloc.viz.plots import plot_go_home
     from naoloc.viz.progress import Progress
 
-    vmap = load_map(args.map)
     png: Path | None = args.png
-    with interruptible(), live_from_args(args) as live, connect(cfg) as robot:
-        teleport_if_asked(robot, args.at)
-        show_map(live, vmap)
-        with Progress(None, "go-home") as bar:
-            result = go_home(
-                watch(robot, live), vmap, cfg, on_point=follow_track(live),
-                on_step=lambda note: bar.update(1, note),
-            )  # fmt: skip
+    with in_the_map(args, cfg) as (robot, live, vmap), Progress(None, "go-home") as bar:
+        result = go_home(
+            robot, vmap, cfg, on_point=follow_track(live),
+            on_step=lambda note: bar.update(1, note),
+        )  # fmt: skip
     summary = result.summary()
     verdict = "reached home" if result.reached else "gave up"
     line = (

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -26,25 +28,39 @@ def teleport_if_asked(robot: Robot, at: list[float] | None) -> None:
     robot.sim.teleport(x, y, theta)
 
 
-def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
-    """Localize once (head scan, or the paper's 1-2 pictures in mode paper) and report."""
+@contextmanager
+def in_the_map(args: argparse.Namespace, cfg: Config) -> Iterator[tuple[Robot, Any, Any]]:
+    """What the verbs on a map share: the map (``-m``), an interruptible run, the live view
+    (``--live``) and the connected robot (moved to ``--at`` on a simulator), the map shown.
+
+    Yields:
+        The robot (watched by the live view), the live view and the map.
+    """
     from naoloc.app.interrupt import interruptible
-    from naoloc.behaviours.localize import localize
-    from naoloc.data.outputs import config_path_for, staged
     from naoloc.mapping import load_map
-    from naoloc.mapping.checks import map_checked
     from naoloc.robot.registry import connect
-    from naoloc.viz.live import live_from_args, show_estimate, show_map, watch
-    from naoloc.viz.plots import plot_localization
-    from naoloc.viz.progress import Progress
+    from naoloc.viz.live import live_from_args, show_map, watch
 
     vmap = load_map(args.map)
-    png: Path | None = args.png
     with interruptible(), live_from_args(args) as live, connect(cfg) as robot:
         teleport_if_asked(robot, args.at)
         show_map(live, vmap)
+        yield watch(robot, live), live, vmap
+
+
+def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
+    """Localize once (head scan, or the paper's 1-2 pictures in mode paper) and report."""
+    from naoloc.behaviours.localize import localize
+    from naoloc.data.outputs import config_path_for, staged
+    from naoloc.mapping.checks import map_checked
+    from naoloc.viz.live import show_estimate
+    from naoloc.viz.plots import plot_localization
+    from naoloc.viz.progress import Progress
+
+    png: Path | None = args.png
+    with in_the_map(args, cfg) as (robot, live, vmap):
         with Progress(None, "localize") as bar:
-            loc = localize(watch(robot, live), vmap, cfg, on_step=lambda n: bar.update(1, n))
+            loc = localize(robot, vmap, cfg, on_step=lambda n: bar.update(1, n))
         show_estimate(live, loc.estimate)
     summary = loc.summary()
     summary["map_checked"] = map_checked(vmap)

@@ -13,30 +13,21 @@ from naoloc.config import Config
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """A short look, then a pose per frame while walking to ``--to`` (map frame)."""
-    from naoloc.app.commands.localize import teleport_if_asked
-    from naoloc.app.interrupt import interruptible
+    from naoloc.app.commands.localize import in_the_map
     from naoloc.behaviours.track import TrackPoint, track
     from naoloc.errors import NoEstimate
     from naoloc.geometry import Pose2D
-    from naoloc.mapping import load_map
-    from naoloc.robot.registry import connect
-    from naoloc.viz.live import follow_track, live_from_args, show_map, watch
+    from naoloc.viz.live import follow_track
 
-    vmap = load_map(args.map)
     route = [Pose2D(float(args.to[0]), float(args.to[1]))] if args.to is not None else []
-
-    with interruptible(), live_from_args(args) as live, connect(cfg) as robot:
-        teleport_if_asked(robot, args.at)
-        show_map(live, vmap)
+    with in_the_map(args, cfg) as (robot, live, vmap):
         shown = follow_track(live)
 
         def emit(point: TrackPoint) -> None:
             shown(point)
             print(json.dumps(point.to_json()), flush=True)
 
-        result = track(
-            watch(robot, live), vmap, cfg, route=route, duration_s=args.duration, on_point=emit
-        )
+        result = track(robot, vmap, cfg, route=route, duration_s=args.duration, on_point=emit)
     points = result.points
     found = [p for p in points if p.estimate.found]
     span = points[-1].t - points[0].t if len(points) > 1 else 0.0

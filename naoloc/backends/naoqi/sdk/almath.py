@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any, Final
 
+from naoloc.geometry import Pose2D as _Pose
 from naoloc.geometry import modulo2PI
 
 __all__ = ["PI", "PI_2", "TO_DEG", "TO_RAD", "Pose2D", "modulo2PI", "pose2DInverse"]
@@ -25,12 +26,7 @@ class Pose2D:
         self.x, self.y, self.theta = values[:3]
 
     def __mul__(self, other: Pose2D) -> Pose2D:
-        c, s = math.cos(self.theta), math.sin(self.theta)
-        return Pose2D(
-            self.x + c * other.x - s * other.y,
-            self.y + s * other.x + c * other.y,
-            self.theta + other.theta,
-        )
+        return Pose2D(*(_Pose(*self.toVector()) * _Pose(*other.toVector())))
 
     def inverse(self) -> Pose2D:
         """The pose that undoes this one."""
