@@ -115,8 +115,9 @@ DEFAULT_SKIRTING_M = 0.012  # a common skirting board's depth, m (MuJoCo's home 
 
 def survey_skirting(data: Any) -> float:
     """How far the survey's skirting boards stood out of its walls, m: ``survey.skirting_m``,
-    else 0.012, or 0 in a simulated room without boards (the fake robot's, a MuJoCo room of
-    style ``posters``); datasets from before the key: 0 (their maps were built so)."""
+    else 0.012, or 0 in a simulated room without boards (the fake robot's, a room of style
+    ``posters`` on any backend, served ones included); datasets from before the key: 0 (their
+    maps were built so)."""
     config = data.config if isinstance(data.config, dict) else {}
     survey = config.get("survey")
     if not isinstance(survey, dict) or "skirting_m" not in survey:
@@ -127,7 +128,7 @@ def survey_skirting(data: Any) -> float:
     robot, world = config.get("robot") or {}, config.get("world") or {}
     style = (world.get("room") or {}).get("style") if isinstance(world, dict) else None
     backend = robot.get("backend") if isinstance(robot, dict) else None
-    bare = backend == "fake" or (backend == "mujoco" and style == "posters")
+    bare = backend == "fake" or style == "posters"
     return 0.0 if bare else DEFAULT_SKIRTING_M
 
 

@@ -204,9 +204,14 @@ def test_build_map_reads_a_partial_dataset_only_by_name(
     assert code == 1 and err.count("\n") == 1
     assert "p.partial.mcap: name that file" in err
     partial = tmp_path / "p.partial.mcap"
-    assert (
-        main(["build-map", "-c", str(cfg), "-d", str(partial), "-o", str(tmp_path / "m.npz")]) == 0
-    )
+    args = ["build-map", "-c", str(cfg), "-d", str(partial), "-o", str(tmp_path / "m.npz")]
+    # Named, it is read; a survey that stopped fails the map's survey_complete check...
+    assert main(args) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "survey_complete" in err
+    assert not (tmp_path / "m.npz").exists()
+    # ...and --keep-unchecked keeps it, marked unchecked.
+    assert main([*args, "--keep-unchecked"]) == 0
     out = capsys.readouterr().out
     assert "(partial dataset: interrupted (SIGINT))" in out
     line = json.loads(out.strip().splitlines()[-1])
