@@ -36,7 +36,14 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from naoloc.errors import ConfigError, DependencyNotInstalled, MotionError, NaolocError, RobotError
+from naoloc.errors import (
+    ConfigError,
+    DependencyNotInstalled,
+    MotionError,
+    NaolocError,
+    RobotError,
+    SurveyError,
+)
 from naoloc.evaluation.protocols import EvalPose, room_to_map
 from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.viz.progress import Progress
@@ -344,7 +351,7 @@ def survey_task(task: SurveyTask) -> dict[str, Any]:
         _require_sim(robot)
         try:
             result, frames = record_survey(robot, _config(task.config), path)
-        except MotionError as err:  # e.g. a drifting robot walked into furniture
+        except (MotionError, SurveyError) as err:  # walked into furniture; no wall to follow
             return {"name": task.name, "dataset": str(path), "frames": 0, "laps": 0,
                     "path_m": 0.0, "wall_s": time.monotonic() - t0, "meta": {},
                     "failed": str(err)}  # fmt: skip
