@@ -150,80 +150,128 @@ def main() -> int:
         "light 0.3 to 1.5 (drawn from each seed)",
     )  # fmt: skip
     add_set_option(parser, "config override for every room, e.g. world.sim.light=0.3")
+    parser.add_argument(
+        "--pool", type=Path, nargs="+", default=None, metavar="OUT",
+        help="pool earlier outputs' rooms (every room_* folder) instead of running",
+    )  # fmt: skip
     args = parser.parse_args()
     overrides = parse_sets(args.set)
-    seeds = args.seeds or [int.from_bytes(os.urandom(4), "little") >> 1 for _ in range(3)]
-    out = args.out or Path(tempfile.mkdtemp(prefix="naoloc_unseen_"))
-    errors: list[float] = []
-    compute: list[float] = []  # CPU ms of each localization's map work
-    every: list[dict[str, Any]] = []  # all main-variant records, for the integrity figures
-    robot_s: list[float] = []
+    t0 = time.monotonic()
     rooms: list[dict[str, Any]] = []
     failed: list[dict[str, Any]] = []  # rooms without a map (survey or map failed)
-    t0 = time.monotonic()
-    for seed in seeds:
-        cfg = room_config(
-            seed, args.backend, small=args.small, mixed=args.mixed, overrides=overrides
-        )
-        try:
-            line = evaluate(
-                cfg, args.protocol, args.n, seed, out / f"room_{seed}", workers=args.workers
+    protocol = args.protocol
+    if args.pool:
+        for folder in args.pool:
+            saved = json.loads((folder / "unseen_rooms.json").read_text(encoding="utf-8"))
+            rooms += [_filled(room, folder) for room in saved["rooms"]]
+            protocol = saved["pooled"].get("protocol", protocol)
+            failed += saved["pooled"].get("rooms_without_map", [])
+        out = args.pool[0]
+    else:
+        seeds = args.seeds or [int.from_bytes(os.urandom(4), "little") >> 1 for _ in range(3)]
+        out = args.out or Path(tempfile.mkdtemp(prefix="naoloc_unseen_"))
+        for seed in seeds:
+            cfg = room_config(
+                seed, args.backend, small=args.small, mixed=args.mixed, overrides=overrides
             )
-        except NaolocError as err:  # the survey or the map failed: no localization there
-            print(f"room seed {seed}: no map: {err}", flush=True)
-            failed.append({"seed": seed, "error": str(err)})
-            continue
-        recs = json.loads((out / f"room_{seed}" / "estimates.json").read_text(encoding="utf-8"))
-        errors += [r["error_m"] if r["error_m"] is not None else float("nan")
-                   for r in recs if r["variant"] == "main"]  # fmt: skip
-        compute += [r["compute_ms"] for r in recs if r["variant"] == "main"]
-        main = [r for r in recs if r["variant"] == "main"]
-        every += main
-        robot_s += [r["robot_s"] for r in main if r.get("robot_s") is not None]
-        full = json.loads(Path(line["summary"]).read_text(encoding="utf-8"))
-        line.update({k: full[k] for k in ("compute_ms_median", "compute_ms_max")})
-        room = {"seed": seed, "size_m": list(cfg.world.room.size_m),
-                "style": cfg.world.room.style, "light": cfg.world.sim.light,
-                "integrity": integrity(main), **line}  # fmt: skip
-        rooms.append(room)
-        print(
-            f"room seed {seed} {cfg.world.room.size_m[0]:g} x {cfg.world.room.size_m[1]:g} m "
-            f"{cfg.world.room.style} light {cfg.world.sim.light:g}: "
-            f"n {line['n']} median {line['median_error_m']} m p90 {line['p90_error_m']} m "
-            f"max {line['max_error_m']} m heading {line['median_heading_error_deg']} deg "
-            f"no estimate {line['no_estimate']} "
-            f"map {line['map_build_s']} s localize {line['localize_ms_median']} ms "
-            f"(compute median {line['compute_ms_median']} max {line['compute_ms_max']} ms) "
-            f"wall {line['wall_s']} s",
-            flush=True,
-        )
-    s = summarize(errors)
+            try:
+                room = _room(cfg, seed, args.protocol, args.n, out, args.workers)
+            except NaolocError as err:  # the survey or the map failed: no localization there
+                print(f"room seed {seed}: no map: {err}", flush=True)
+                failed.append({"seed": seed, "error": str(err)})
+                continue
+            rooms.append(room)
     pooled = {
         "rooms": len(rooms),
         "rooms_without_map": failed,
-        "n": s.n,
-        "median_error_m": round(s.median_m, 4),
-        "p90_error_m": round(s.p90_m, 4),
-        "max_error_m": round(s.max_m, 4),
-        "within_0_3m": round(s.within_0_3m, 4),
-        "no_estimate": int(sum(1 for e in errors if not np.isfinite(e))),
-        "compute_ms": {
-            name: round(float(np.percentile(compute, q)), 1) if compute else None
-            for name, q in (("median", 50), ("p90", 90), ("max", 100))
+        **_pool(rooms),
+        # What a user gets: build-map refuses a map that fails its checks (no localization
+        # there at all), so these figures count only the rooms whose map passed them.
+        "checked_maps": {
+            "rooms": sum(1 for r in rooms if r["map_checked"]),
+            **_pool([r for r in rooms if r["map_checked"]]),
         },
-        "integrity": integrity(every),
-        "robot_s": {
-            name: round(float(np.percentile(robot_s, q)), 2) if robot_s else None
-            for name, q in (("median", 50), ("p90", 90))
-        },
-        "protocol": args.protocol,
+        "protocol": protocol,
         "overrides": overrides,
         "wall_s": round(time.monotonic() - t0, 1),
         "out": str(out),
     }
     print(f"pooled over {len(rooms)} rooms: {json.dumps(pooled)}")
-    (out / "unseen_rooms.json").write_text(json.dumps({"rooms": rooms, "pooled": pooled}, indent=1))
+    target = out / "unseen_rooms.json" if not args.pool else Path(tempfile.mkdtemp()) / "pool.json"
+    target.write_text(json.dumps({"rooms": rooms, "pooled": pooled}, indent=1))
     return 0
+
+
+def _room(cfg: Config, seed: int, protocol: str, n: int, out: Path, workers: int) -> dict[str, Any]:
+    """One room: survey, map, localize; its records and figures (printed on one line)."""
+    from naoloc.mapping import load_map
+    from naoloc.mapping.checks import map_checked
+
+    folder = out / f"room_{seed}"
+    line = evaluate(cfg, protocol, n, seed, folder, workers=workers)
+    recs = json.loads((folder / "estimates.json").read_text(encoding="utf-8"))
+    main = [r for r in recs if r["variant"] == "main"]
+    full = json.loads(Path(line["summary"]).read_text(encoding="utf-8"))
+    line.update({k: full[k] for k in ("compute_ms_median", "compute_ms_max")})
+    maps = sorted((folder / "maps").glob("*.npz"))
+    checked = bool(maps) and map_checked(load_map(maps[0])) is True
+    room = {"seed": seed, "size_m": list(cfg.world.room.size_m),
+            "style": cfg.world.room.style, "light": cfg.world.sim.light,
+            "map_checked": checked, "records": main,
+            "integrity": integrity(main), **line}  # fmt: skip
+    print(
+        f"room seed {seed} {cfg.world.room.size_m[0]:g} x {cfg.world.room.size_m[1]:g} m "
+        f"{cfg.world.room.style} light {cfg.world.sim.light:g}"
+        f"{'' if checked else ' (map fails its checks: build-map would refuse it)'}: "
+        f"n {line['n']} median {line['median_error_m']} m p90 {line['p90_error_m']} m "
+        f"max {line['max_error_m']} m heading {line['median_heading_error_deg']} deg "
+        f"no estimate {line['no_estimate']} "
+        f"map {line['map_build_s']} s localize {line['localize_ms_median']} ms "
+        f"(compute median {line['compute_ms_median']} max {line['compute_ms_max']} ms) "
+        f"wall {line['wall_s']} s",
+        flush=True,
+    )
+    return room
+
+
+def _filled(room: dict[str, Any], out: Path) -> dict[str, Any]:
+    """A room of an earlier output with its records and map check (older outputs lack them)."""
+    from naoloc.mapping import load_map
+    from naoloc.mapping.checks import map_checked
+
+    folder = out / f"room_{room['seed']}"
+    if "records" not in room:
+        recs = json.loads((folder / "estimates.json").read_text(encoding="utf-8"))
+        room["records"] = [r for r in recs if r["variant"] == "main"]
+    if "map_checked" not in room:
+        maps = sorted((folder / "maps").glob("*.npz"))
+        room["map_checked"] = bool(maps) and map_checked(load_map(maps[0])) is True
+    return room
+
+
+def _pool(rooms: list[dict[str, Any]]) -> dict[str, Any]:
+    """The rooms' localizations pooled: accuracy, integrity, compute and robot time."""
+    every = [r for room in rooms for r in room["records"]]
+    errors = [r["error_m"] if r["error_m"] is not None else float("nan") for r in every]
+    compute = [r["compute_ms"] for r in every]
+    robot_s = [r["robot_s"] for r in every if r.get("robot_s") is not None]
+    if not every:
+        return {"n": 0}
+    s = summarize(errors)
+
+    def pct(values: list[float], qs: tuple[tuple[str, int], ...]) -> dict[str, Any]:
+        return {k: round(float(np.percentile(values, q)), 2) if values else None for k, q in qs}
+
+    return {
+        "n": s.n,
+        "median_error_m": round(s.median_m, 4),
+        "p90_error_m": round(s.p90_m, 4),
+        "within_0_3m": round(s.within_0_3m, 4),
+        "no_estimate": int(sum(1 for e in errors if not np.isfinite(e))),
+        "compute_ms": pct(compute, (("median", 50), ("p90", 90), ("max", 100))),
+        "integrity": integrity(every),
+        "robot_s": pct(robot_s, (("median", 50), ("p90", 90))),
+    }
 
 
 if __name__ == "__main__":
