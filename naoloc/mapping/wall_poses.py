@@ -316,8 +316,8 @@ def wall_poses(
         poses.append(Pose2D(float(position[0]), float(position[1]), modulo2PI(d + deltas[i])))
 
     # The survey start (the map frame's origin) in the wall frame.
-    own = _own_heading(meta, offset, side_normal)
-    heading, frames_heading = _start_heading(own, keyframes, lines, frames_of[0], along)
+    own, clean = _own_heading(meta, offset, side_normal)
+    heading, frames_heading = _start_heading(own, keyframes, lines, frames_of[0], along, clean)
     start = Pose2D(0.0, 0.0, heading or 0.0)
     if start_dist is not None:  # the origin's distance from side 0's wall, not what it saw
         start = Pose2D(0.0, (start_dist - offset) * turn, start.theta)
@@ -651,12 +651,15 @@ def _start_from_wall(
     return float(np.median(back)) if back else float(dists[0])
 
 
-def _own_heading(meta: dict[str, Any], offset: float, side_normal: float) -> float | None:
+def _own_heading(
+    meta: dict[str, Any], offset: float, side_normal: float
+) -> tuple[float | None, bool]:
     """The survey start's heading to side 0's direction (rad) from the lines the start
     itself saw: the median of its side wall's (``start_side`` and every view's,
     ``start_views``: one view's line can mix in a corner's other wall), else of the
     farther walls' (:func:`_far_headings`: the walls ahead and across are square and
-    parallel to side 0, their lines err more). None without any."""
+    parallel to side 0, their lines err more). None without any; and whether it comes
+    from clean views of the side wall."""
     votes = []
     views = meta.get("start_views")
     entries = views if isinstance(views, list) and views else [meta.get("start_side")]
@@ -665,9 +668,10 @@ def _own_heading(meta: dict[str, Any], offset: float, side_normal: float) -> flo
         line = _line(entry, offset, side_normal)
         if line is not None:
             votes.append(line[1])
+    from_clean = bool(votes) and bool(clean)
     if not votes:  # the far walls' lines err more: only without the side wall's
         votes = _far_headings(meta, side_normal)
-    return float(np.median(votes)) if votes else None
+    return (float(np.median(votes)) if votes else None), from_clean
 
 
 def _clean(entry: dict[str, Any]) -> bool:
@@ -708,6 +712,7 @@ def _start_heading(
     lines: Sequence[tuple[float, float] | None],
     side0: Sequence[int],
     along: np.ndarray,
+    clean: bool = False,
 ) -> tuple[float | None, float | None]:
     """The survey start's heading to side 0's wall (rad), or None without any line, and
     what side 0's first frames say of it (None: nothing).
@@ -716,7 +721,10 @@ def _start_heading(
     to be seen) a farther wall's (:func:`_far_headings`). That, unless side 0's frames'
     lines within :data:`START_HEADING_M` of walk, each less the odometry's turn from the
     start to its frame (the map frame is the start's odometry frame), have a median more
-    than :data:`START_GATE_RAD` away from it: then that median.
+    than :data:`START_GATE_RAD` away from it: then that median. A ``clean`` own line (the
+    side wall's, seen whole and straight from the start: :func:`_clean`) is kept: the
+    frames' lines are less the odometry's turn, and a NAO's odometry can turn 0.1 rad in
+    the first metre.
     """
     votes = []
     for i in side0:
@@ -727,4 +735,6 @@ def _start_heading(
     frames = float(np.median(votes)) if votes else None
     if own is None or frames is None:
         return (frames if own is None else own), frames
+    if clean:
+        return own, frames
     return (own if abs(modulo2PI(frames - own)) <= START_GATE_RAD else frames), frames
