@@ -50,6 +50,7 @@ from naoloc.behaviours.localize import localize, robot_clock  # noqa: E402
 from naoloc.behaviours.track import Tracker, TrackPoint, walk_route  # noqa: E402
 from naoloc.data.dataset import read_dataset  # noqa: E402
 from naoloc.data.recorder import record_survey  # noqa: E402
+from naoloc.errors import NaolocError  # noqa: E402
 from naoloc.geometry import Pose2D  # noqa: E402
 from naoloc.localization import Localizer  # noqa: E402
 from naoloc.mapping.from_survey import build_from_survey  # noqa: E402
@@ -190,9 +191,15 @@ def main() -> int:
     for seed in seeds:
         cfg = room_config(seed, mixed=args.mixed)
         dataset = out / f"room_{seed}.mcap"
-        with connect(cfg) as robot:
-            record_survey(robot, cfg, dataset)
-        vmap, _ = build_from_survey(read_dataset(dataset), cfg.map, offset=cfg.survey.wall_offset_m)
+        try:
+            with connect(cfg) as robot:
+                record_survey(robot, cfg, dataset)
+            vmap, _ = build_from_survey(
+                read_dataset(dataset), cfg.map, offset=cfg.survey.wall_offset_m
+            )
+        except NaolocError as err:  # the survey or the map failed: nothing to track in
+            print(f"room {seed}: no map: {err}", flush=True)
+            continue
         grid = grid_of_map(vmap)
         rng = np.random.default_rng(seed)
         room_points: list[dict[str, Any]] = []
