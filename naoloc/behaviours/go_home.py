@@ -29,6 +29,7 @@ from naoloc.config import Config
 from naoloc.constants import WALK_SPEED
 from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.localization.localizer import Localizer, PoseEstimate
+from naoloc.localization.observations import Relocalize
 from naoloc.mapping.map import VisualMap
 from naoloc.navigation.grid import NoPath, grid_of_map, path_length
 from naoloc.navigation.route import pursuit, remaining
@@ -154,6 +155,8 @@ def go_home(
                     break
                 if on_step is not None:
                     on_step("lost: stopping to look")
+                # Lost: the belief is worth nothing; look from standstill, globally.
+                loc.update(Relocalize(robot_clock(robot)))
                 localize(robot, vmap, cfg, localizer=loc)
                 looks += 1
                 route, lost = [], 0

@@ -24,7 +24,13 @@
 from __future__ import annotations
 
 from naoloc.localization.localizer import Localizer, PoseEstimate, Status, replay
-from naoloc.localization.observations import LineScan, Observation, Odometry, Picture
+from naoloc.localization.observations import (
+    LineScan,
+    Observation,
+    Odometry,
+    Picture,
+    Relocalize,
+)
 
 __all__ = [
     "LineScan",
@@ -33,6 +39,7 @@ __all__ = [
     "Odometry",
     "Picture",
     "PoseEstimate",
+    "Relocalize",
     "Status",
     "replay",
 ]

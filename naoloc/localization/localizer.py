@@ -29,7 +29,7 @@ import numpy as np
 from naoloc.config import FilterTuning
 from naoloc.geometry import Pose2D
 from naoloc.localization.filter import Belief, MultiHypothesisFilter
-from naoloc.localization.observations import LineScan, Observation, Odometry, Picture
+from naoloc.localization.observations import LineScan, Observation, Odometry, Picture, Relocalize
 from naoloc.localization.pictures import LandmarkIndex, match_picture
 from naoloc.localization.walls import wall_map
 from naoloc.mapping.map import VisualMap
@@ -134,13 +134,16 @@ class Localizer:
         self.vmap = vmap
         self.tuning = tuning if tuning is not None else FilterTuning()
         self.seed = seed
-        self.filter = MultiHypothesisFilter(
-            wall_map(vmap.meta), self.tuning, turn_scale_of(vmap.meta)
-        )
+        self.filter = self._new_filter()
         self.landmarks = LandmarkIndex(vmap)
         self.log: list[Observation] = []
         self.cpu_s = 0.0
         self._pictures = 0
+
+    def _new_filter(self) -> MultiHypothesisFilter:
+        return MultiHypothesisFilter(
+            wall_map(self.vmap.meta), self.tuning, turn_scale_of(self.vmap.meta)
+        )
 
     def update(self, obs: Observation) -> None:
         """Take one observation (in the order they were made)."""
@@ -159,6 +162,8 @@ class Localizer:
                 self.filter.observe(tuple(obs.lines), obs.odometry)
             elif isinstance(obs, Odometry):
                 self.filter.observe(None, obs.odometry)
+            elif isinstance(obs, Relocalize):
+                self.filter = self._new_filter()
             else:
                 raise TypeError(f"not an observation: {type(obs).__name__}")
             self.log.append(obs)

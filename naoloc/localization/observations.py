@@ -75,4 +75,17 @@ class Odometry:
     stamp: float
 
 
-Observation = Picture | LineScan | Odometry
+@dataclass(frozen=True, eq=False)
+class Relocalize:
+    """The behaviour's word that the belief is worth nothing now (the robot was lost and
+    stops to look): the filter forgets it and localizes globally from here. Recorded like
+    any observation, so a replay forgets at the same place.
+
+    Attributes:
+        stamp: Time, s.
+    """
+
+    stamp: float
+
+
+Observation = Picture | LineScan | Odometry | Relocalize

@@ -12,7 +12,7 @@ import pytest
 import naoloc
 from naoloc.config import CameraConfig, Config, MapConfig, load_config
 from naoloc.geometry import Pose2D, relative_pose
-from naoloc.localization import Localizer, Picture, Status, replay
+from naoloc.localization import Localizer, Picture, Relocalize, Status, replay
 from naoloc.localization.paper import localize_paper
 from naoloc.mapping import VisualMap, build_map
 from naoloc.robot.camera import Camera, look
@@ -119,6 +119,24 @@ def test_replaying_the_observations_gives_the_same_estimate(
     # Features extracted again (another map's extractor) give the same answer too.
     fresh = replay(room_map, first.log, same_features=False).pose()
     assert (fresh.x, fresh.y) == (est.x, est.y)
+
+
+def test_relocalize_forgets_the_belief_and_replays_so(
+    world: tuple[Config, list[Keyframe], list], room_map: VisualMap
+) -> None:
+    _cfg, _survey, trials = world
+    (queries, _), (others, truth) = trials[0], trials[1]
+    loc = _filter(room_map, queries)
+    assert loc.pose().found
+    loc.update(Relocalize(0.0))
+    gone = loc.pose()
+    assert not gone.found and gone.evidence["pictures"] == 0
+    for q in others:  # somewhere else: found again from scratch
+        loc.update(Picture(q))
+    est = loc.pose()
+    assert est.found and math.hypot(est.x - truth.x, est.y - truth.y) < 0.3
+    again = replay(room_map, loc.log).pose()
+    assert (again.x, again.y, again.theta) == (est.x, est.y, est.theta)
 
 
 def test_paper_mode_ignores_neurons_of_featureless_keyframes(room_map: VisualMap) -> None:
