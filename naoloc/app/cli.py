@@ -3,7 +3,8 @@
 Each verb lives in ``naoloc.app.commands.<verb>`` and returns a JSON-able dict that is
 printed as the single last line of stdout. Errors are one line on stderr and a
 non-zero exit: 1 for a naoloc error, 2 for bad usage, 3 when ``localize`` recognised
-nothing (its JSON line is still printed, with null pose fields), 70 for a bug (an
+nothing (its JSON line is still printed, with null pose fields), 4 when ``check`` found
+something missing (its JSON line is still printed, ``missing`` says what), 70 for a bug (an
 unexpected exception: one line naming it; set ``NAOLOC_DEBUG=1`` for the traceback), 130
 for SIGINT (Ctrl-C) and 143 for SIGTERM. Both signals are honoured also where the shell
 ignores SIGINT (background jobs): :func:`naoloc.app.interrupt.interruptible` installs the
@@ -27,7 +28,7 @@ from typing import Any
 from naoloc import __version__
 from naoloc.app.interrupt import exit_code, interruptible
 from naoloc.config import Config, load_config
-from naoloc.errors import NaolocError, NoEstimate, NotBuiltError
+from naoloc.errors import NaolocError, NotBuiltError
 
 EXIT_INTERNAL = 70  # sysexits.h EX_SOFTWARE: an unexpected exception (a bug)
 _MAX_MESSAGE = 500  # characters of an unexpected exception's message printed on stderr
@@ -42,6 +43,7 @@ VERBS: dict[str, str] = {
     "evaluate": "measure localization error with the paper or random protocol",
     "serve": "serve a simulated robot as a virtual NAOqi",
     "demo": "survey -> build map -> localize in the default simulated room",
+    "check": "connect and read camera, odometry, joints and battery; nothing walks",
 }
 
 
@@ -197,12 +199,21 @@ def build_parser() -> argparse.ArgumentParser:
         help="stop a velocity walk whose client is silent this long (default 0.4 s; 0 = never, "
         "as NAOqi)",
     )  # fmt: skip
+    p.add_argument(
+        "--trace", type=Path, default=None, metavar="FILE",
+        help="append one line per call a client makes ('<caller> <Service>.<method>')",
+    )  # fmt: skip
     _add_live(p)
     p = add("demo", config=False)
     p.add_argument("-c", "--config", default="paper_room", metavar="CFG", help=CONFIG_HELP)
     p.add_argument(
         "-o", "--output", type=Path, default=Path("runs/demo"), metavar="OUTDIR",
         help="folder for the dataset, the map and the pictures",
+    )  # fmt: skip
+    p = add("check")
+    p.add_argument(
+        "--nod", action="store_true",
+        help="also nod the head (HeadPitch 0.15 rad down and back); nothing else moves",
     )  # fmt: skip
     return parser
 
@@ -268,15 +279,18 @@ def _main(verb: str, args: argparse.Namespace) -> int:
     except KeyboardInterrupt as err:
         print(_with_notes(f"naoloc {verb}: interrupted", err), file=sys.stderr)
         return exit_code(err)
-    except NoEstimate as err:  # the result line still ends stdout, with no pose in it
-        sys.stdout.write(json.dumps(err.result, separators=(", ", ": ")) + "\n")
+    except NaolocError as err:
+        carried = getattr(err, "result", None)
+        if not isinstance(carried, dict):
+            text = _with_notes(f"naoloc {verb}: error: {err}", err)
+            print(one_line(text, _MAX_LINE), file=sys.stderr)
+            return 1
+        # localize with no estimate, check with something missing: the result line still
+        # ends stdout (no pose in it; what is missing), and the verb's own exit code
+        sys.stdout.write(json.dumps(carried, separators=(", ", ": ")) + "\n")
         sys.stdout.flush()
         print(f"naoloc {verb}: {err}", file=sys.stderr)
-        return err.exit_code
-    except NaolocError as err:
-        text = _with_notes(f"naoloc {verb}: error: {err}", err)
-        print(one_line(text, _MAX_LINE), file=sys.stderr)
-        return 1
+        return int(getattr(err, "exit_code", 1))
     except OSError as err:  # a path that cannot be read or written
         where = f": {err.filename}" if err.filename else ""
         text = f"naoloc {verb}: error: {err.strerror or err}{where}"

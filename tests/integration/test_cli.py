@@ -20,6 +20,7 @@ ARGS = {
     "evaluate": ["-o", "out"],
     "serve": [],
     "demo": [],
+    "check": [],
 }
 
 

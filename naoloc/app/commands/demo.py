@@ -32,6 +32,24 @@ MIN_LANDMARKS = 30
 TABLE3_FRACTIONS: tuple[tuple[float, float], ...] = ((0.875, 0.125), (0, 0), (0.125, 0.875), (1, 1))
 
 
+NEEDS_A_SIMULATOR = (
+    "the demo needs a simulated robot (backend {backend} has no simulator: it teleports the "
+    "robot between poses); on a real NAO run `naoloc check`, then survey, build-map and "
+    "localize (docs/real-nao.md)"
+)
+
+
+def refuse_a_real_robot(cfg: Config) -> None:
+    """Refuse, before connecting, a config whose robot cannot be a simulator.
+
+    Raises:
+        BackendError: ``robot.backend: naoqi`` without ``robot.sim_service`` (a real NAO,
+            or a served one whose simulator the demo may not use).
+    """
+    if cfg.robot.backend == "naoqi" and not cfg.robot.sim_service:
+        raise BackendError(NEEDS_A_SIMULATOR.format(backend="naoqi"))
+
+
 def demo_poses(robot: Robot, meta: dict[str, Any], sides: tuple[float, float], seed: int = 0,
                extra: int = 2) -> list[Pose2D]:  # fmt: skip
     """Demo test poses in the room frame: Table 3's (scaled) plus ``extra`` random ones.
@@ -80,12 +98,15 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     from naoloc.viz.plots import furniture_footprints, plot_estimates
 
     t0 = time.monotonic()
+    refuse_a_real_robot(cfg)  # before connecting: a real NAO never hears from the demo
     out: Path = args.output
     out.mkdir(parents=True, exist_ok=True)
     dataset, map_path = out / "survey.mcap", out / "map.npz"
     rows: list[dict[str, Any]] = []
     pairs: list[tuple[Pose2D, Pose2D | None]] = []
     with interruptible(), connect(cfg) as robot:
+        if robot.sim is None:  # before the first motion call
+            raise BackendError(NEEDS_A_SIMULATOR.format(backend=robot.backend))
         room = cfg.world.room
         print(
             f"demo: backend {robot.backend}, room {room.size_m[0]:g} x {room.size_m[1]:g} m "
