@@ -1,4 +1,5 @@
-"""The ``naoloc`` command line: survey, build-map, localize, go-home, evaluate, serve, demo.
+"""The ``naoloc`` command line: survey, build-map, localize, track, go-home, evaluate, serve,
+demo, check.
 
 Each verb lives in ``naoloc.app.commands.<verb>`` and returns a JSON-able dict that is
 printed as the single last line of stdout. Errors are one line on stderr and a
