@@ -85,6 +85,8 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "absent without a pose",
         "png": "the picture written with --png",
         "map_checked": "false for a map kept with --keep-unchecked after failing a check",
+        "at": "with --at: the start asked for, {room: [x, y, theta] as given (room frame), "
+        "map: the same in the map frame (null when the map lacks origin_room_pose)}",
     },
     "go-home": {
         "x": "the belief's final pose, map frame (m); null without one",
@@ -106,6 +108,8 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "error_m": "true distance from the map origin at the end (m); simulator only",
         "truth": "true final pose [x, y, theta], map frame; simulator only",
         "png": "the picture written with --png",
+        "at": "with --at: the start asked for, {room: [x, y, theta] as given (room frame), "
+        "map: the same in the map frame (null when the map lacks origin_room_pose)}",
     },
     "track": {
         "poses": "poses streamed (one JSON line each before this one)",
@@ -115,6 +119,8 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "walked_m": "distance walked by odometry (m)",
         "median_error_m": "median error of the poses (m); simulator only",
         "reason": "why it stopped early",
+        "at": "with --at: the start asked for, {room: [x, y, theta] as given (room frame), "
+        "map: the same in the map frame (null when the map lacks origin_room_pose)}",
     },
     "evaluate": {
         "protocol": "`paper`, `random`, `anywhere` or `changed`",

@@ -16,6 +16,7 @@ kept) join its line.
 from __future__ import annotations
 
 import argparse
+import difflib
 import importlib
 import json
 import math
@@ -129,7 +130,9 @@ def build_parser() -> argparse.ArgumentParser:
         )  # fmt: skip
         p.add_argument(
             "--at", nargs=3, type=_pose, metavar=("X", "Y", "THETA"),
-            help="teleport there first (room frame, m and rad; simulator only)",
+            help="teleport there first (simulator only), in the ROOM frame (m, rad: from the "
+            "simulated room's corner, not the map's origin; results are in the map frame and "
+            "the JSON's `at` echoes it in both)",
         )  # fmt: skip
         p.add_argument("--png", type=Path, default=None, help="write a picture of the result")
         _add_live(p)
@@ -245,7 +248,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     traceback only when the environment sets ``NAOLOC_DEBUG=1``.
     """
     parser = build_parser()
-    args = parser.parse_args(argv)
+    words = list(sys.argv[1:] if argv is None else argv)
+    if words and not words[0].startswith("-") and words[0] not in VERBS:
+        close = difflib.get_close_matches(words[0], list(VERBS), n=1, cutoff=0.6)
+        if close:  # exit 2, as argparse's own "invalid choice"
+            parser.error(f"unknown verb {words[0]!r}; did you mean {close[0]!r}?")
+    args = parser.parse_args(words)
     verb: str = args.verb
     with interruptible():
         return _guarded(verb, args)

@@ -173,13 +173,14 @@ def _survey(robot: Robot, cfg: Config, dataset: Path) -> tuple[SurveyResult, int
         The survey summary, the frames written, the dataset to build from (the partial file
         when the survey stopped) and why it stopped (None when it completed).
     """
-    from naoloc.behaviours.survey import SurveyResult
+    from naoloc.behaviours.survey import SurveyResult, frames_per_lap
     from naoloc.data.dataset import partial_path_for
     from naoloc.data.recorder import record_survey
     from naoloc.viz.progress import Progress
 
     try:
-        with Progress(None, "survey") as bar:
+        expected = frames_per_lap(cfg.survey_sides(), cfg.survey.step_m) * cfg.survey.laps
+        with Progress(expected, "survey") as bar:
             surveyed, frames = record_survey(robot, cfg, dataset, bar.update)
     except MotionError as err:  # the robot is stopped; the frames so far are on disk
         partial = partial_path_for(dataset)

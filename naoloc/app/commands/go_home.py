@@ -11,7 +11,7 @@ from naoloc.config import Config
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """A short look, then a walk home on the live pose; report where it ended."""
-    from naoloc.app.commands.localize import in_the_map
+    from naoloc.app.commands.localize import at_in_both_frames, in_the_map
     from naoloc.behaviours.go_home import go_home
     from naoloc.data.outputs import config_path_for, staged
     from naoloc.viz.live import follow_track
@@ -19,12 +19,17 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     from naoloc.viz.progress import Progress
 
     png: Path | None = args.png
-    with in_the_map(args, cfg) as (robot, live, vmap), Progress(None, "go-home") as bar:
-        result = go_home(
-            robot, vmap, cfg, on_point=follow_track(live),
-            on_step=lambda note: bar.update(1, note),
-        )  # fmt: skip
+    with in_the_map(args, cfg) as (robot, live, vmap), Progress(None, "go-home poses") as bar:
+        shown = follow_track(live)
+
+        def on_point(point: Any) -> None:
+            shown(point)
+            bar.update(1)
+
+        result = go_home(robot, vmap, cfg, on_point=on_point, on_step=bar.note)
     summary = result.summary()
+    if args.at is not None:
+        summary["at"] = at_in_both_frames(args.at, vmap.meta)
     verdict = "reached home" if result.reached else "gave up"
     line = (
         f"go-home: {verdict} in {result.robot_s:.1f} s ({result.looks} looks, "

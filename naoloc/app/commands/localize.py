@@ -28,6 +28,28 @@ def teleport_if_asked(robot: Robot, at: list[float] | None) -> None:
     robot.sim.teleport(x, y, theta)
 
 
+def at_in_both_frames(at: list[float] | None, meta: dict[str, Any]) -> dict[str, Any] | None:
+    """``--at`` echoed in the room frame (as given) and in the map frame (through the map's
+    ``origin_room_pose``: null when the map does not know where its origin stood).
+
+    Returns:
+        ``{"room": [x, y, theta], "map": [x, y, theta] | None}``, or None without ``--at``.
+    """
+    if at is None:
+        return None
+    from naoloc.geometry import Pose2D, relative_pose
+
+    room = Pose2D(*(float(v) for v in at))
+    origin = meta.get("origin_room_pose")
+    in_map = None
+    if origin is not None:
+        in_map = relative_pose(Pose2D.from_list(origin), room).normalized()
+    return {
+        "room": [round(v, 4) for v in room],
+        "map": None if in_map is None else [round(v, 4) for v in in_map],
+    }
+
+
 @contextmanager
 def in_the_map(args: argparse.Namespace, cfg: Config) -> Iterator[tuple[Robot, Any, Any]]:
     """What the verbs on a map share: the map (``-m``), an interruptible run, the live view
@@ -60,9 +82,11 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     png: Path | None = args.png
     with in_the_map(args, cfg) as (robot, live, vmap):
         with Progress(None, "localize") as bar:
-            loc = localize(robot, vmap, cfg, on_step=lambda n: bar.update(1, n))
+            loc = localize(robot, vmap, cfg, on_step=bar.note)
         show_estimate(live, loc.estimate)
     summary = loc.summary()
+    if args.at is not None:
+        summary["at"] = at_in_both_frames(args.at, vmap.meta)
     summary["map_checked"] = map_checked(vmap)
     if not summary["map_checked"]:
         print("localize: this map failed build-map's checks (kept with --keep-unchecked): "

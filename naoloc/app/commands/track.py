@@ -13,7 +13,7 @@ from naoloc.config import Config
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """A short look, then a pose per frame while walking to ``--to`` (map frame)."""
-    from naoloc.app.commands.localize import in_the_map
+    from naoloc.app.commands.localize import at_in_both_frames, in_the_map
     from naoloc.behaviours.track import TrackPoint, track
     from naoloc.errors import NoEstimate
     from naoloc.geometry import Pose2D
@@ -40,6 +40,8 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         else None,
         "walked_m": round(result.walked_m, 3),
     }
+    if args.at is not None:
+        summary["at"] = at_in_both_frames(args.at, vmap.meta)
     errors = [e for p in found if (e := p.error_m) is not None]
     if errors:
         summary["median_error_m"] = round(sorted(errors)[len(errors) // 2], 4)
