@@ -85,6 +85,7 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "absent without a pose",
         "png": "the picture written with --png",
         "map_checked": "false for a map kept with --keep-unchecked after failing a check",
+        "record": "with --record: the recording written (`naoloc replay` re-runs it)",
         "at": "with --at: the start asked for, {room: [x, y, theta] as given (room frame), "
         "map: the same in the map frame (null when the map lacks origin_room_pose)}",
     },
@@ -108,6 +109,7 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "error_m": "true distance from the map origin at the end (m); simulator only",
         "truth": "true final pose [x, y, theta], map frame; simulator only",
         "png": "the picture written with --png",
+        "record": "with --record: the recording written (`naoloc replay` re-runs it)",
         "at": "with --at: the start asked for, {room: [x, y, theta] as given (room frame), "
         "map: the same in the map frame (null when the map lacks origin_room_pose)}",
     },
@@ -119,6 +121,7 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "walked_m": "distance walked by odometry (m)",
         "median_error_m": "median error of the poses (m); simulator only",
         "reason": "why it stopped early",
+        "record": "with --record: the recording written (`naoloc replay` re-runs it)",
         "at": "with --at: the start asked for, {room: [x, y, theta] as given (room frame), "
         "map: the same in the map frame (null when the map lacks origin_room_pose)}",
     },
@@ -170,6 +173,23 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "positions": "per pose: truth, estimate [x, y, theta] (map frame), error_m, "
         "heading_error_deg, confidence, localize_s",
     },
+    "replay": {
+        "recording": "the recording replayed",
+        "verb": "what was recorded: `localize`, `track` or `go-home`",
+        "complete": "false for a partial recording (the run was interrupted)",
+        "observations": "observations given to the filter, in the recorded order",
+        "pictures": "of those, pictures (the others: floor-line scans and odometry)",
+        "x": "the replay's pose, map frame (m); null without one",
+        "y": "the replay's pose, map frame (m); null without one",
+        "theta": "the replay's heading, map frame (rad); null without one",
+        "confidence": "as localize's, 0..1",
+        "status": "`tracking`, `lost` or `not the mapped room` (exit 3 without a pose)",
+        "covariance": "3 x 3 covariance of x, y, theta (m^2, rad^2); null without a pose",
+        "recorded": "the estimate the run itself ended with (status, confidence, x, y, theta, "
+        "covariance)",
+        "same": "true when the replay's estimate equals the recorded one (1e-9)",
+        "compute_s": "CPU time of the replay's filter (s)",
+    },
     "check": {
         "ok": "true when nothing is missing (exit 0; otherwise exit 4)",
         "missing": "one line per problem found: what and how to fix it",
@@ -206,7 +226,7 @@ EXIT_CODES: dict[int, str] = {
     0: "success",
     1: "a naoloc error (bad config, file, robot or network): one line on stderr",
     2: "a usage error (unknown verb or flag, bad value): argparse's message",
-    3: "`localize` (and `track`) recognised nothing: the JSON line is still printed",
+    3: "`localize`, `track` or `replay` has no pose: the JSON line is still printed",
     4: "`check` found something missing: the JSON line is still printed, `missing` says what",
     70: "an unexpected exception, a bug: one line naming it (`NAOLOC_DEBUG=1` for the traceback)",
     130: "interrupted by SIGINT (Ctrl-C); the robot is stopped",
@@ -337,6 +357,11 @@ def render() -> str:
         "`survey`, `localize`, `go-home` and `serve` take `--live [PORT]`: a Foxglove WebSocket",
         "server on 127.0.0.1:PORT (default 8765; 0 picks a free port, printed on stderr). Open",
         "it in Foxglove with *Open connection -> Foxglove WebSocket*, `ws://127.0.0.1:PORT`.",
+        "The map topics are latched (sent again every second) for a viewer that joins late;",
+        "`/tf` carries REP-105's `map -> odom -> base_link`. `--record FILE.mcap` (`localize`,",
+        "`track`, `go-home`) writes the same topics to a file, with every observation the",
+        "filter took (`naoloc/data/recording.py`); `naoloc replay FILE.mcap -m MAP.npz` re-runs",
+        "the localization from it without a robot.",
         "Topics (see `naoloc/viz/live.py`):",
         "",
     ]

@@ -46,6 +46,7 @@ VERBS: dict[str, str] = {
     "serve": "serve a simulated robot as a virtual NAOqi",
     "demo": "survey -> build map -> localize in the default simulated room",
     "check": "connect and read camera, odometry, joints and battery; nothing walks",
+    "replay": "re-run a recorded localization (--record) without a robot; the same estimate",
 }
 
 
@@ -135,6 +136,11 @@ def build_parser() -> argparse.ArgumentParser:
             "the JSON's `at` echoes it in both)",
         )  # fmt: skip
         p.add_argument("--png", type=Path, default=None, help="write a picture of the result")
+        p.add_argument(
+            "--record", type=Path, default=None, metavar="FILE.mcap",
+            help="record every observation (pictures, floor lines, odometry) and estimate as "
+            "they are made; `naoloc replay` re-runs the localization from it",
+        )  # fmt: skip
         _add_live(p)
         if verb == "track":
             p.add_argument(
@@ -213,6 +219,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "-o", "--output", type=Path, default=Path("runs/demo"), metavar="OUTDIR",
         help="folder for the dataset, the map and the pictures",
+    )  # fmt: skip
+    p = add("replay", config=False)
+    p.add_argument("recording", type=Path, metavar="FILE.mcap", help="a --record recording")
+    p.add_argument(
+        "-m", "--map", required=True, metavar="MAP.npz", type=Path, help="the map to replay in"
+    )  # fmt: skip
+    p.add_argument(
+        "-c", "--config", default=None, metavar="CFG",
+        help="the filter's tuning (localize.filter); default: the recording's own config",
     )  # fmt: skip
     p = add("check")
     p.add_argument(

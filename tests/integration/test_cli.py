@@ -21,6 +21,7 @@ ARGS = {
     "serve": [],
     "demo": [],
     "check": [],
+    "replay": ["x.mcap", "-m", "x.npz"],
 }
 
 

@@ -11,7 +11,7 @@ from naoloc.config import Config
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """A short look, then a walk home on the live pose; report where it ended."""
-    from naoloc.app.commands.localize import at_in_both_frames, in_the_map
+    from naoloc.app.commands.localize import at_in_both_frames, in_the_map, recorder
     from naoloc.behaviours.go_home import go_home
     from naoloc.data.outputs import config_path_for, staged
     from naoloc.viz.live import follow_track
@@ -19,15 +19,23 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     from naoloc.viz.progress import Progress
 
     png: Path | None = args.png
-    with in_the_map(args, cfg) as (robot, live, vmap), Progress(None, "go-home poses") as bar:
+    with (
+        in_the_map(args, cfg) as (robot, live, vmap),
+        recorder(args, cfg, vmap, "go-home") as rec,
+        Progress(None, "go-home poses") as bar,
+    ):
         shown = follow_track(live)
 
         def on_point(point: Any) -> None:
             shown(point)
             bar.update(1)
 
-        result = go_home(robot, vmap, cfg, on_point=on_point, on_step=bar.note)
+        result = go_home(
+            robot, vmap, cfg, on_point=on_point, on_step=bar.note, localizer=rec
+        )  # fmt: skip
     summary = result.summary()
+    if args.record is not None:
+        summary["record"] = str(args.record)
     if args.at is not None:
         summary["at"] = at_in_both_frames(args.at, vmap.meta)
     verdict = "reached home" if result.reached else "gave up"

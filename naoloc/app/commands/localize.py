@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from naoloc.config import Config
-from naoloc.errors import BackendError, NoEstimate
+from naoloc.errors import BackendError, ConfigError, NoEstimate
 from naoloc.robot import Robot
 
 
@@ -51,6 +51,40 @@ def at_in_both_frames(at: list[float] | None, meta: dict[str, Any]) -> dict[str,
 
 
 @contextmanager
+def recorder(args: argparse.Namespace, cfg: Config, vmap: Any, verb: str) -> Iterator[Any]:
+    """``--record FILE.mcap``: a filter whose every observation is written there as it is
+    made (None without ``--record``). A run that fails keeps ``FILE.partial.mcap``.
+
+    Yields:
+        A :class:`naoloc.data.recording.RecordedLocalizer`, or None.
+
+    Raises:
+        ConfigError: ``--record`` with ``localize.mode: paper`` (it does not use the filter).
+    """
+    path: Path | None = getattr(args, "record", None)
+    if path is None:
+        yield None
+        return
+    if cfg.localize.mode == "paper":
+        raise ConfigError("--record records the filter's observations; localize.mode paper "
+                          "does not use the filter")  # fmt: skip
+    from naoloc.data.dataset import interruption_reason
+    from naoloc.data.recording import RecordedLocalizer, RecordingWriter
+
+    writer = RecordingWriter(path, cfg, verb, args.map, vmap.meta)
+    loc = RecordedLocalizer(vmap, cfg, writer)
+    try:
+        yield loc
+    except BaseException as err:
+        last = loc.pose() if loc.log else None
+        kept = writer.finish(last, complete=False, reason=interruption_reason(err))
+        if kept is not None:
+            err.add_note(f"partial recording kept in {kept}")
+        raise
+    writer.finish(loc.pose())
+
+
+@contextmanager
 def in_the_map(args: argparse.Namespace, cfg: Config) -> Iterator[tuple[Robot, Any, Any]]:
     """What the verbs on a map share: the map (``-m``), an interruptible run, the live view
     (``--live``) and the connected robot (moved to ``--at`` on a simulator), the map shown.
@@ -80,11 +114,13 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     from naoloc.viz.progress import Progress
 
     png: Path | None = args.png
-    with in_the_map(args, cfg) as (robot, live, vmap):
+    with in_the_map(args, cfg) as (robot, live, vmap), recorder(args, cfg, vmap, "localize") as rec:
         with Progress(None, "localize") as bar:
-            loc = localize(robot, vmap, cfg, on_step=bar.note)
+            loc = localize(robot, vmap, cfg, on_step=bar.note, localizer=rec)
         show_estimate(live, loc.estimate)
     summary = loc.summary()
+    if args.record is not None:
+        summary["record"] = str(args.record)
     if args.at is not None:
         summary["at"] = at_in_both_frames(args.at, vmap.meta)
     summary["map_checked"] = map_checked(vmap)

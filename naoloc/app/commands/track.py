@@ -13,21 +13,24 @@ from naoloc.config import Config
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """A short look, then a pose per frame while walking to ``--to`` (map frame)."""
-    from naoloc.app.commands.localize import at_in_both_frames, in_the_map
+    from naoloc.app.commands.localize import at_in_both_frames, in_the_map, recorder
     from naoloc.behaviours.track import TrackPoint, track
     from naoloc.errors import NoEstimate
     from naoloc.geometry import Pose2D
     from naoloc.viz.live import follow_track
 
     route = [Pose2D(float(args.to[0]), float(args.to[1]))] if args.to is not None else []
-    with in_the_map(args, cfg) as (robot, live, vmap):
+    with in_the_map(args, cfg) as (robot, live, vmap), recorder(args, cfg, vmap, "track") as rec:
         shown = follow_track(live)
 
         def emit(point: TrackPoint) -> None:
             shown(point)
             print(json.dumps(point.to_json()), flush=True)
 
-        result = track(robot, vmap, cfg, route=route, duration_s=args.duration, on_point=emit)
+        result = track(
+            robot, vmap, cfg, route=route, duration_s=args.duration, on_point=emit,
+            localizer=rec,
+        )  # fmt: skip
     points = result.points
     found = [p for p in points if p.estimate.found]
     span = points[-1].t - points[0].t if len(points) > 1 else 0.0
@@ -40,6 +43,8 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         else None,
         "walked_m": round(result.walked_m, 3),
     }
+    if args.record is not None:
+        summary["record"] = str(args.record)
     if args.at is not None:
         summary["at"] = at_in_both_frames(args.at, vmap.meta)
     errors = [e for p in found if (e := p.error_m) is not None]
