@@ -39,6 +39,7 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "and right), `parallax`, `config` (`survey.head_yaw_rad`) or `caller` (Python only)",
         "metric_scale": "metres per odometry metre measured from the floor-wall line (null: none)",
         "wall_follow": "how the floor-wall line steered the survey (corrections, lines seen)",
+        "ros2": "with --format ros2: the ROS 2 MCAP written beside (NAME.ros2.mcap)",
     },
     "build-map": {
         "images": "keyframes the map was built from (wall and far pictures)",
@@ -86,6 +87,7 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "png": "the picture written with --png",
         "map_checked": "false for a map kept with --keep-unchecked after failing a check",
         "record": "with --record: the recording written (`naoloc replay` re-runs it)",
+        "ros2": "with --format ros2: the ROS 2 MCAP written beside (NAME.ros2.mcap)",
         "at": "with --at: the start asked for, {room: [x, y, theta] as given (room frame), "
         "map: the same in the map frame (null when the map lacks origin_room_pose)}",
     },
@@ -110,6 +112,7 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "truth": "true final pose [x, y, theta], map frame; simulator only",
         "png": "the picture written with --png",
         "record": "with --record: the recording written (`naoloc replay` re-runs it)",
+        "ros2": "with --format ros2: the ROS 2 MCAP written beside (NAME.ros2.mcap)",
         "at": "with --at: the start asked for, {room: [x, y, theta] as given (room frame), "
         "map: the same in the map frame (null when the map lacks origin_room_pose)}",
     },
@@ -122,6 +125,7 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "median_error_m": "median error of the poses (m); simulator only",
         "reason": "why it stopped early",
         "record": "with --record: the recording written (`naoloc replay` re-runs it)",
+        "ros2": "with --format ros2: the ROS 2 MCAP written beside (NAME.ros2.mcap)",
         "at": "with --at: the start asked for, {room: [x, y, theta] as given (room frame), "
         "map: the same in the map frame (null when the map lacks origin_room_pose)}",
     },

@@ -83,6 +83,15 @@ CONFIG_HELP = "a YAML file, or a shipped config: paper_room, lab_room, nao"
 LIVE_PORT = 8765
 
 
+def _add_format(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--format", choices=("naoloc", "ros2"), default="naoloc",
+        help="ros2: also write NAME.ros2.mcap beside the file, as ROS 2 messages (CDR: "
+        "sensor_msgs/Image and CameraInfo, nav_msgs/Odometry, tf2_msgs/TFMessage, "
+        "geometry_msgs/PoseWithCovarianceStamped) that ros2 bag and Foxglove read",
+    )  # fmt: skip
+
+
 def _add_live(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--live", nargs="?", type=int, const=LIVE_PORT, default=None, metavar="PORT",
@@ -110,6 +119,7 @@ def build_parser() -> argparse.ArgumentParser:
         "-o", "--output", required=True, metavar="DATASET.mcap", type=Path,
         help="the dataset to write (its resolved config goes beside it)",
     )  # fmt: skip
+    _add_format(p)
     _add_live(p)
     p = add("build-map")
     p.add_argument(
@@ -141,6 +151,7 @@ def build_parser() -> argparse.ArgumentParser:
             help="record every observation (pictures, floor lines, odometry) and estimate as "
             "they are made; `naoloc replay` re-runs the localization from it",
         )  # fmt: skip
+        _add_format(p)
         _add_live(p)
         if verb == "track":
             p.add_argument(

@@ -609,6 +609,11 @@ def read_dataset(path: str | Path) -> Dataset:
             f"{path}: no such dataset; an interrupted survey left "
             f"{partial_path_for(path)}: name that file to use its frames"
         )
+    from naoloc.data.ros2 import is_ros2, read_ros2_survey
+
+    if is_ros2(path):  # a ROS 2 bag (naoqi_driver2's, or --format ros2): camera, odom, tf
+        dataset: Dataset = read_ros2_survey(path)
+        return dataset
     header: dict[str, str] | None = None
     status: dict[str, str] | None = None
     topics: dict[int, str] = {}

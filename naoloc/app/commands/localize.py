@@ -63,6 +63,8 @@ def recorder(args: argparse.Namespace, cfg: Config, vmap: Any, verb: str) -> Ite
     """
     path: Path | None = getattr(args, "record", None)
     if path is None:
+        if getattr(args, "format", "naoloc") != "naoloc":
+            raise ConfigError("--format ros2 converts a recording: give --record FILE.mcap")
         yield None
         return
     if cfg.localize.mode == "paper":
@@ -106,6 +108,7 @@ def in_the_map(args: argparse.Namespace, cfg: Config) -> Iterator[tuple[Robot, A
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """Localize once (head scan, or the paper's 1-2 pictures in mode paper) and report."""
+    from naoloc.app.commands.survey import ros2_copy
     from naoloc.behaviours.localize import localize
     from naoloc.data.outputs import config_path_for, staged
     from naoloc.mapping.checks import map_checked
@@ -121,6 +124,9 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     summary = loc.summary()
     if args.record is not None:
         summary["record"] = str(args.record)
+        ros2 = ros2_copy(args, args.record)
+        if ros2 is not None:
+            summary["ros2"] = str(ros2)
     if args.at is not None:
         summary["at"] = at_in_both_frames(args.at, vmap.meta)
     summary["map_checked"] = map_checked(vmap)

@@ -29,6 +29,17 @@ from naoloc.viz.progress import Progress
 __all__ = ["check_before_walking", "run"]
 
 
+def ros2_copy(args: argparse.Namespace, written: Path) -> Path | None:
+    """``--format ros2``: ``NAME.ros2.mcap`` beside ``written``, as ROS 2 messages."""
+    if getattr(args, "format", "naoloc") != "ros2":
+        return None
+    from naoloc.data.ros2 import write_ros2
+
+    target = written.with_suffix(".ros2.mcap")
+    write_ros2(written, target)
+    return target
+
+
 def check_before_walking(cfg: Config) -> None:
     """What the config alone tells, before connecting: an offset the survey keeps, and a
     real robot's rectangle measured rather than taken from the simulated room's size.
@@ -62,6 +73,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         result, frames = record_survey(watch(robot, live), cfg, output, bar.update, on_keyframe)
     if frames > 0:  # the config copy goes with the dataset it describes
         write_resolved_config(cfg, config_path_for(output))
+    ros2 = ros2_copy(args, output)
     wall, par = result.wall, result.parallax
     detected = ""
     if wall is not None:
@@ -93,4 +105,5 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         "head_yaw_source": result.yaw_source,
         "metric_scale": result.meta.get("metric_scale"),
         "wall_follow": result.meta.get("wall_follow"),
+        **({"ros2": str(ros2)} if ros2 is not None else {}),
     }
