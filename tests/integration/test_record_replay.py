@@ -134,3 +134,27 @@ def test_the_calibration_is_the_lens_the_images_have() -> None:
     assert d == [-0.055, 0.0, 0.0, 0.0, 0.0]
     k0, d0 = calibration(cam, None)  # no lens: the ideal pinhole of the field of view
     assert d0 == [0.0] * 5 and k0[2] == 160.0
+
+
+@pytest.mark.slow
+def test_the_map_picture_counts_what_it_draws(
+    mapped: tuple[Path, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import numpy as np
+
+    from naoloc.mapping import load_map
+    from naoloc.viz import plots
+
+    figures: list[Any] = []
+    monkeypatch.setattr(plots, "save_figure", lambda fig, path: figures.append(fig) or path)
+    vmap = load_map(mapped[1])
+    plots.plot_map(vmap, tmp_path / "m.png")
+    ax = figures[0].axes[0]
+    neurons = next(line for line in ax.lines if str(line.get_label()).startswith("neurons"))
+    drawn = len(neurons.get_xdata())
+    title = ax.get_title()
+    assert f"{drawn} neurons with images at {vmap.distinct_poses} distinct poses" in title
+    assert drawn == int(np.all(np.isfinite(vmap.neuron_poses), axis=1).sum())
+    labels = [str(line.get_label()) for line in ax.lines]
+    assert any(label.startswith("landmarks (") for label in labels)
+    assert any(label.startswith("survey path (") for label in labels)

@@ -64,7 +64,7 @@ def build_from_dataset(
         )
 
     from naoloc.mapping.from_survey import build_from_survey
-    from naoloc.viz.plots import plot_map
+    from naoloc.viz.plots import furniture_footprints, plot_map
 
     # One bar for the whole build: a step per image's features, then one per later stage
     # (each of those reports 1/1 alone), the stage named after the bar.
@@ -98,7 +98,9 @@ def build_from_dataset(
     finals = [output, png] if config_copy is None else [output, png, config_copy]
     with staged(*finals) as temps:
         vmap.save(temps[0])
-        plot_map(vmap, temps[1])
+        plot_map(
+            vmap, temps[1], furniture=furniture_footprints(cfg, vmap.meta.get("origin_room_pose"))
+        )
         if config_copy is not None:
             temps[2].write_text(cfg.to_yaml(), encoding="utf-8")
     timings = vmap.timings

@@ -104,6 +104,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     dataset, map_path = out / "survey.mcap", out / "map.npz"
     rows: list[dict[str, Any]] = []
     pairs: list[tuple[Pose2D, Pose2D | None]] = []
+    covariances: list[Any] = []
     with interruptible(), connect(cfg) as robot:
         if robot.sim is None:  # before the first motion call
             raise BackendError(NEEDS_A_SIMULATOR.format(backend=robot.backend))
@@ -143,6 +144,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
             est = loc.estimate
             if est.found:
                 pairs.append((Pose2D(est.x, est.y, est.theta), loc.truth))
+                covariances.append(est.covariance)
             truth = loc.truth
             rows.append(
                 {
@@ -160,7 +162,9 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
             note = "" if est.found else " (no estimate)"
             print(f"demo: pose {i + 1}/{len(poses)}: error {err_m:.2f} m{note}", flush=True)
     furniture = furniture_footprints(cfg, surveyed.meta.get("origin_room_pose"))
-    png = plot_estimates(vmap, pairs, out / "localize.png", furniture=furniture)
+    png = plot_estimates(
+        vmap, pairs, out / "localize.png", furniture=furniture, covariances=covariances
+    )  # fmt: skip
     write_resolved_config(cfg, out / "config.yaml")  # with the outputs it describes
     _print_table(rows)
     return _summary(cfg, t0, frames, built, rows, dataset, map_path, png, stopped)

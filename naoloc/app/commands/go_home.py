@@ -16,7 +16,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     from naoloc.behaviours.go_home import go_home
     from naoloc.data.outputs import config_path_for, staged
     from naoloc.viz.live import follow_track
-    from naoloc.viz.plots import plot_go_home
+    from naoloc.viz.plots import furniture_footprints, plot_go_home
     from naoloc.viz.progress import Progress
 
     png: Path | None = args.png
@@ -57,8 +57,9 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         believed = [p.estimate.pose() for p in result.trail if p.estimate.found]
         with staged(png, config_path_for(png)) as (tmp_png, tmp_cfg):
             plot_go_home(
-                vmap, believed, [result.first.estimate], tmp_png,
-                truth=result.truth, reached=result.reached,
+                vmap, believed, result.stops, tmp_png, truth=result.truth,
+                reached=result.reached,
+                furniture=furniture_footprints(cfg, vmap.meta.get("origin_room_pose")),
             )  # fmt: skip
             tmp_cfg.write_text(cfg.to_yaml(), encoding="utf-8")
         summary["png"] = str(png)

@@ -113,7 +113,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     from naoloc.data.outputs import config_path_for, staged
     from naoloc.mapping.checks import map_checked
     from naoloc.viz.live import show_estimate
-    from naoloc.viz.plots import plot_localization
+    from naoloc.viz.plots import furniture_footprints, plot_localization
     from naoloc.viz.progress import Progress
 
     png: Path | None = args.png
@@ -146,7 +146,10 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     print(line)
     if png is not None:  # the picture and its config copy appear together, or not at all
         with staged(png, config_path_for(png)) as (tmp_png, tmp_cfg):
-            plot_localization(vmap, est, tmp_png, truth=loc.truth, queries=loc.queries)
+            furniture = furniture_footprints(cfg, vmap.meta.get("origin_room_pose"))
+            plot_localization(
+                vmap, est, tmp_png, truth=loc.truth, queries=loc.queries, furniture=furniture
+            )  # fmt: skip
             tmp_cfg.write_text(cfg.to_yaml(), encoding="utf-8")
         summary["png"] = str(png)
         print(f"localize: picture -> {png}")
