@@ -12,6 +12,9 @@ given as a lossless PNG on ``/camera/image`` with ``/camera/calibration`` (naolo
   each with the estimate after it (``estimate``: x, y, theta, covariance, status);
 - ``/pose/estimate`` (``foxglove.PoseInFrame``, frame ``map``): the estimate after each
   observation that has one;
+- ``/map/keyframes`` (``foxglove.PosesInFrame``) and ``/map/landmarks``
+  (``foxglove.PointCloud``), frame ``map``: the map, once, with the first observation (the
+  live view's map topics);
 - metadata ``naoloc.recording``: the verb, the map file, the filter's seed and the final
   estimate (JSON).
 
@@ -29,6 +32,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from naoloc.config import Config
 from naoloc.data import checks
@@ -70,15 +75,15 @@ class RecordingWriter(DatasetWriter):
         cfg: The resolved config (stored without secrets; replay reads its filter tuning).
         verb: ``localize``, ``track`` or ``go-home``.
         map_path: The map the run localized in.
-        map_meta: The map's meta (``origin_room_pose`` puts the room frame in ``/tf``).
+        vmap: The map (its survey poses and landmarks are recorded; its meta's
+            ``origin_room_pose`` puts the room frame in ``/tf``).
 
     Raises:
         DatasetError: The file cannot be created.
     """
 
-    def __init__(
-        self, path: Path, cfg: Config, verb: str, map_path: Path, map_meta: dict[str, Any]
-    ) -> None:
+    def __init__(self, path: Path, cfg: Config, verb: str, map_path: Path, vmap: Any) -> None:
+        map_meta: dict[str, Any] = vmap.meta
         meta = {
             "recording": verb,
             "map": str(map_path),
@@ -101,9 +106,48 @@ class RecordingWriter(DatasetWriter):
         self._channels[ESTIMATE_TOPIC] = self._mcap.register_channel(
             topic=ESTIMATE_TOPIC, message_encoding="protobuf", schema_id=pose_schema
         )
+        for topic, cls in (("/map/keyframes", fm.PosesInFrame), ("/map/landmarks", fm.PointCloud)):
+            sch = cls.get_schema()
+            sid = self._mcap.register_schema(
+                name=sch.name, encoding=sch.encoding, data=bytes(sch.data)
+            )
+            self._channels[topic] = self._mcap.register_channel(
+                topic=topic, message_encoding="protobuf", schema_id=sid
+            )
         self.verb = verb
         self.observations = 0
         self._map_odom: Pose2D | None = None
+        self._vmap = vmap
+
+    def _write_map(self, stamp: float) -> None:
+        """The map's survey poses and landmarks (as the live view shows them), once."""
+        from foxglove import messages as fm
+
+        from naoloc.data.dataset import _timestamp
+
+        def pose(x: float, y: float, theta: float) -> Any:
+            q = fm.Quaternion(x=0.0, y=0.0, z=math.sin(theta / 2), w=math.cos(theta / 2))
+            return fm.Pose(position=fm.Vector3(x=x, y=y, z=0.0), orientation=q)
+
+        ts = _timestamp(stamp)
+        vmap = self._vmap
+        poses = np.asarray(vmap.keyframe_poses, dtype=float).reshape(-1, 3)
+        poses = poses[: int(getattr(vmap, "wall_images", len(poses)))]
+        frames = fm.PosesInFrame(
+            timestamp=ts, frame_id="map", poses=[pose(*(float(v) for v in p)) for p in poses]
+        )
+        self._add("/map/keyframes", stamp, bytes(frames.encode()))
+        points = np.asarray(getattr(vmap, "kp_points", np.zeros((0, 3))), np.float32)
+        points = points.reshape(-1, 3)[np.all(np.isfinite(points.reshape(-1, 3)), axis=1)]
+        f32 = fm.PackedElementFieldNumericType.Float32
+        fields = [
+            fm.PackedElementField(name=n, offset=4 * i, type=f32) for i, n in enumerate("xyz")
+        ]
+        cloud = fm.PointCloud(
+            timestamp=ts, frame_id="map", pose=pose(0.0, 0.0, 0.0), point_stride=12,
+            fields=fields, data=points.tobytes(),
+        )  # fmt: skip
+        self._add("/map/landmarks", stamp, bytes(cloud.encode()))
 
     def map_to_odom(self, keyframe: Keyframe, odometry: Pose2D) -> Pose2D | None:
         """REP-105's map -> odom from the latest estimate (None before the first)."""
@@ -136,6 +180,8 @@ class RecordingWriter(DatasetWriter):
         record["estimate"] = estimate_json(estimate)
         stamp = obs.stamp
         try:
+            if self.observations == 0:
+                self._write_map(stamp)
             self._add(OBSERVATION_TOPIC, stamp, json.dumps(record).encode())
             if estimate.found:
                 self._add(ESTIMATE_TOPIC, stamp, _pose_msg(estimate.pose(), "map", stamp))

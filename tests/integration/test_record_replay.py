@@ -109,6 +109,10 @@ def test_a_recording_is_a_rep105_dataset_with_the_lens_calibration(
             _protobuf_fields(m.data) for _, _, m in reader.iter_messages(topics=["/pose/odometry"])
         ]
         est = list(reader.iter_messages(topics=["/pose/estimate"]))
+        maps = {
+            c.topic for _, c, _ in reader.iter_messages(topics=["/map/keyframes", "/map/landmarks"])
+        }
+    assert maps == {"/map/keyframes", "/map/landmarks"}  # the map, as the live view shows it
     assert {(b"map", b"odom"), (b"odom", b"base_link"), (b"base_link", b"camera")} <= tfs
     assert (b"room", b"map") in tfs and (b"map", b"base_link") not in tfs
     assert all(o[2] == [b"odom"] for o in odom) and est

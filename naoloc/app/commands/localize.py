@@ -73,7 +73,7 @@ def recorder(args: argparse.Namespace, cfg: Config, vmap: Any, verb: str) -> Ite
     from naoloc.data.dataset import interruption_reason
     from naoloc.data.recording import RecordedLocalizer, RecordingWriter
 
-    writer = RecordingWriter(path, cfg, verb, args.map, vmap.meta)
+    writer = RecordingWriter(path, cfg, verb, args.map, vmap)
     loc = RecordedLocalizer(vmap, cfg, writer)
     try:
         yield loc
