@@ -118,6 +118,7 @@ def test_a_recording_is_a_rep105_dataset_with_the_lens_calibration(
     assert all(o[2] == [b"odom"] for o in odom) and est
 
 
+@pytest.mark.slow
 def test_replay_refuses_a_survey(
     mapped: tuple[Path, Path], capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -162,3 +163,16 @@ def test_the_map_picture_counts_what_it_draws(
     labels = [str(line.get_label()) for line in ax.lines]
     assert any(label.startswith("landmarks (") for label in labels)
     assert any(label.startswith("survey path (") for label in labels)
+
+
+@pytest.mark.slow
+def test_track_refuses_a_goal_off_the_map_before_connecting(
+    mapped: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    _, vmap = mapped
+    nao = tmp_path / "nao.yaml"  # a closed port: connecting would fail with "cannot connect"
+    nao.write_text(yaml.safe_dump({"robot": {"backend": "naoqi", "url": "tcp://127.0.0.1:9"}}))
+    capsys.readouterr()
+    code = main(["track", "-c", str(nao), "-m", str(vmap), "--to", "90", "90"])
+    err = capsys.readouterr().err
+    assert code == 1 and "is not on the map's free floor" in err and "connect" not in err

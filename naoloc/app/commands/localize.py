@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -87,9 +87,17 @@ def recorder(args: argparse.Namespace, cfg: Config, vmap: Any, verb: str) -> Ite
 
 
 @contextmanager
-def in_the_map(args: argparse.Namespace, cfg: Config) -> Iterator[tuple[Robot, Any, Any]]:
+def in_the_map(
+    args: argparse.Namespace, cfg: Config, check: Callable[[Any], None] | None = None
+) -> Iterator[tuple[Robot, Any, Any]]:
     """What the verbs on a map share: the map (``-m``), an interruptible run, the live view
     (``--live``) and the connected robot (moved to ``--at`` on a simulator), the map shown.
+
+    Args:
+        args: The verb's arguments.
+        cfg: The config.
+        check: Called with the map before connecting (a verb's own checks: nothing has
+            moved yet when it raises).
 
     Yields:
         The robot (watched by the live view), the live view and the map.
@@ -100,6 +108,8 @@ def in_the_map(args: argparse.Namespace, cfg: Config) -> Iterator[tuple[Robot, A
     from naoloc.viz.live import live_from_args, show_map, watch
 
     vmap = load_map(args.map)
+    if check is not None:
+        check(vmap)
     with interruptible(), live_from_args(args) as live, connect(cfg) as robot:
         teleport_if_asked(robot, args.at)
         show_map(live, vmap)

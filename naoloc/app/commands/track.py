@@ -8,6 +8,8 @@ import json
 import sys
 from typing import Any
 
+import numpy as np
+
 from naoloc.config import Config
 
 
@@ -21,7 +23,24 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     from naoloc.viz.live import follow_track
 
     route = [Pose2D(float(args.to[0]), float(args.to[1]))] if args.to is not None else []
-    with in_the_map(args, cfg) as (robot, live, vmap), recorder(args, cfg, vmap, "track") as rec:
+
+    def check(vmap: Any) -> None:
+        """Refuse, before connecting, a --to the map does not know as free floor."""
+        from naoloc.errors import ConfigError
+        from naoloc.navigation.grid import grid_of_map
+
+        for goal in route:
+            free = grid_of_map(vmap).free_test(clearance=False)
+            if not free(np.array([goal.x]), np.array([goal.y]))[0]:
+                raise ConfigError(
+                    f"--to ({goal.x:g}, {goal.y:g}) is not on the map's free floor (map frame, "
+                    "m: from the survey's start); the robot did not move"
+                )
+
+    with (
+        in_the_map(args, cfg, check) as (robot, live, vmap),
+        recorder(args, cfg, vmap, "track") as rec,
+    ):
         shown = follow_track(live)
 
         def emit(point: TrackPoint) -> None:
