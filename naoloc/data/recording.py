@@ -10,8 +10,9 @@ given as a lossless PNG on ``/camera/image`` with ``/camera/calibration`` (naolo
   ``{"seq", "kind": "picture", "frame"}`` (the frame's index), ``{"seq", "kind": "lines",
   "lines", "odometry", "stamp"}`` or ``{"seq", "kind": "odometry", "odometry", "stamp"}``,
   each with the estimate after it (``estimate``: x, y, theta, covariance, status);
-- ``/pose/estimate`` (``foxglove.PoseInFrame``, frame ``map``): the estimate after each
-  observation that has one;
+- ``/pose/estimate`` (``foxglove.PoseInFrame``) and ``/pose/estimate/odometry``
+  (``foxglove.Odometry`` with the 6 x 6 pose covariance), frame ``map``: the estimate after
+  each observation that has one (the live view's topics);
 - ``/map/keyframes`` (``foxglove.PosesInFrame``) and ``/map/landmarks``
   (``foxglove.PointCloud``), frame ``map``: the map, once, with the first observation (the
   live view's map topics);
@@ -106,7 +107,11 @@ class RecordingWriter(DatasetWriter):
         self._channels[ESTIMATE_TOPIC] = self._mcap.register_channel(
             topic=ESTIMATE_TOPIC, message_encoding="protobuf", schema_id=pose_schema
         )
-        for topic, cls in (("/map/keyframes", fm.PosesInFrame), ("/map/landmarks", fm.PointCloud)):
+        for topic, cls in (
+            ("/map/keyframes", fm.PosesInFrame),
+            ("/map/landmarks", fm.PointCloud),
+            (ESTIMATE_TOPIC + "/odometry", fm.Odometry),
+        ):
             sch = cls.get_schema()
             sid = self._mcap.register_schema(
                 name=sch.name, encoding=sch.encoding, data=bytes(sch.data)
@@ -185,6 +190,7 @@ class RecordingWriter(DatasetWriter):
             self._add(OBSERVATION_TOPIC, stamp, json.dumps(record).encode())
             if estimate.found:
                 self._add(ESTIMATE_TOPIC, stamp, _pose_msg(estimate.pose(), "map", stamp))
+                self._add(ESTIMATE_TOPIC + "/odometry", stamp, _odometry_msg(estimate, stamp))
             if not isinstance(obs, Picture):
                 self._mcap.flush()
         except OSError as err:
@@ -292,6 +298,25 @@ def read_recording(path: str | Path) -> Recording:
     if estimate is not None and not isinstance(estimate, dict):
         raise DatasetError(f"{path}: naoloc.recording: the estimate is not an object")
     return Recording(observations, data.config, data.meta, estimate, seed)
+
+
+def _odometry_msg(est: PoseEstimate, stamp: float) -> bytes:
+    """The estimate as ``foxglove.Odometry`` with its covariance (x, y, yaw in the 6 x 6)."""
+    from foxglove import messages as fm
+
+    from naoloc.data.dataset import _timestamp
+
+    cov6 = np.zeros((6, 6))
+    if est.covariance is not None:
+        index = (0, 1, 5)  # x, y, rotation about z
+        cov6[np.ix_(index, index)] = np.asarray(est.covariance, dtype=float).reshape(3, 3)
+    q = fm.Quaternion(x=0.0, y=0.0, z=math.sin(est.theta / 2), w=math.cos(est.theta / 2))
+    msg = fm.Odometry(
+        timestamp=_timestamp(stamp), frame_id="map", body_frame_id="base_link",
+        pose=fm.Pose(position=fm.Vector3(x=est.x, y=est.y, z=0.0), orientation=q),
+        pose_covariance=cov6.ravel().tolist(),
+    )  # fmt: skip
+    return bytes(msg.encode())
 
 
 def _observation(message: bytes, k: int, keyframes: list[Keyframe]) -> Observation:

@@ -109,6 +109,8 @@ def test_a_recording_is_a_rep105_dataset_with_the_lens_calibration(
             _protobuf_fields(m.data) for _, _, m in reader.iter_messages(topics=["/pose/odometry"])
         ]
         est = list(reader.iter_messages(topics=["/pose/estimate"]))
+        cov = list(reader.iter_messages(topics=["/pose/estimate/odometry"]))
+        assert len(cov) == len(est) > 0  # with the covariance, as live
         maps = {
             c.topic for _, c, _ in reader.iter_messages(topics=["/map/keyframes", "/map/landmarks"])
         }
