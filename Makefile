@@ -1,5 +1,5 @@
 # naoloc: two commands set everything up.
-#   make demo   install into .venv, then survey -> build map -> localize in the default simulated room
+#   make demo   install .[sim] into .venv, then survey -> build map -> localize in the default simulated room
 #   make test   install into .venv, then the whole test suite (what .ci/run calls)
 #   make test-fast  the unit and integration layers without slow tests, in under a minute
 SHELL := /bin/bash
@@ -24,11 +24,22 @@ $(STAMP): pyproject.toml setup.py constraints.txt
 
 venv: sysdeps $(STAMP)
 
+# The demo needs only the simulator: `.[sim]` into .venv, its own stamp (no test, lint or
+# cluster tools); a later `make test` adds the rest.
+DEMO_STAMP := $(VENV)/.installed-demo
+$(DEMO_STAMP): pyproject.toml setup.py constraints.txt
+	@tools/check_python.sh $(PYTHON)
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --disable-pip-version-check --upgrade pip
+	PYTHONWARNINGS="ignore:Editable installation" $(PY) -m pip install --quiet \
+		--disable-pip-version-check -c constraints.txt -e ".[sim]"
+	@touch $(DEMO_STAMP)
+
 # Headless OpenGL (EGL through Mesa) for MuJoCo rendering: installed when root, named otherwise.
 sysdeps:
 	@tools/sysdeps.sh
 
-demo: venv
+demo: sysdeps $(DEMO_STAMP)
 	$(VENV)/bin/naoloc demo -o runs/demo
 
 lint: venv

@@ -8,8 +8,10 @@ file and the key path, e.g. ``configs/x.yaml: world.room.sise_m: unknown key``.
 
 from __future__ import annotations
 
+import difflib
 import enum
 import math
+import typing
 from pathlib import Path
 from typing import Any, Literal
 
@@ -955,7 +957,7 @@ def _format_error(source: str, err: ValidationError) -> str:
     path = ".".join(str(p)[:60] for p in first.get("loc", ())) or "<root>"
     kind = first.get("type", "")
     if kind == "extra_forbidden":
-        msg = "unknown key"
+        msg = "unknown key" + _did_you_mean(tuple(first.get("loc", ())))
     else:
         msg = " ".join(str(first.get("msg", "invalid value")).split())[:160]
         if "input" in first and kind != "missing" and "password" not in path:
@@ -963,6 +965,33 @@ def _format_error(source: str, err: ValidationError) -> str:
     more = len(errors) - 1
     suffix = f" (+{more} more)" if more > 0 else ""
     return f"{source}: {path}: {msg}{suffix}"
+
+
+def _model_in(annotation: Any) -> type[BaseModel] | None:
+    """The pydantic model inside ``annotation`` (``M``, ``M | None``, ``list[M]``), if any."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in typing.get_args(annotation):
+        found = _model_in(arg)
+        if found is not None:
+            return found
+    return None
+
+
+def _did_you_mean(loc: tuple[Any, ...]) -> str:
+    """``"; did you mean 'size_m'?"`` for an unknown key at ``loc``, or ``""``."""
+    model: type[BaseModel] | None = Config
+    for part in loc[:-1]:
+        if model is None:
+            return ""
+        if isinstance(part, int):  # an item of a list: the model stays the item's
+            continue
+        field = model.model_fields.get(str(part))
+        model = None if field is None else _model_in(field.annotation)
+    if model is None or not loc:
+        return ""
+    close = difflib.get_close_matches(str(loc[-1]), list(model.model_fields), n=1, cutoff=0.6)
+    return f"; did you mean {close[0]!r}?" if close else ""
 
 
 # Ranges of keys whose Field has none (path -> inclusive [low, high]), per list item.

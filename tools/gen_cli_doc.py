@@ -4,9 +4,9 @@ the pydantic models) and every JSON field of each verb's last stdout line.
     python tools/gen_cli_doc.py           # rewrite docs/cli.md
     python tools/gen_cli_doc.py --check   # exit 1 when docs/cli.md is not up to date
 
-tests/test_cli_doc.py runs the check, so the page never drifts from the code. The JSON fields
-are described in JSON_FIELDS below; the same test runs the verbs and fails on a field that is
-printed but not described here.
+tests/integration/test_cli_doc.py runs the check, so the page never drifts from the code. The
+JSON fields are described in JSON_FIELDS below; the same test runs the verbs and fails on a
+field that is printed but not described here.
 """
 
 from __future__ import annotations
@@ -35,9 +35,11 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "dataset": "the MCAP dataset written",
         "direction": "`ccw` or `cw`: the circuit's direction",
         "head_yaw": "HeadYaw held during the laps (rad): toward the nearer side wall",
-        "head_yaw_source": "what chose the wall side: `parallax`, `keypoints` or the config",
+        "head_yaw_source": "what chose the wall side: `floorline` (the floor-wall lines left "
+        "and right), `parallax`, `config` (`survey.head_yaw_rad`) or `caller` (Python only)",
         "metric_scale": "metres per odometry metre measured from the floor-wall line (null: none)",
         "wall_follow": "how the floor-wall line steered the survey (corrections, lines seen)",
+        "ros2": "with --format ros2: the ROS 2 MCAP written beside (NAME.ros2.mcap)",
     },
     "build-map": {
         "images": "keyframes the map was built from (wall and far pictures)",
@@ -84,6 +86,10 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "absent without a pose",
         "png": "the picture written with --png",
         "map_checked": "false for a map kept with --keep-unchecked after failing a check",
+        "record": "with --record: the recording written (`naoloc replay` re-runs it)",
+        "ros2": "with --format ros2: the ROS 2 MCAP written beside (NAME.ros2.mcap)",
+        "at": "with --at: the start asked for, {room: [x, y, theta] as given (room frame), "
+        "map: the same in the map frame (null when the map lacks origin_room_pose)}",
     },
     "go-home": {
         "x": "the belief's final pose, map frame (m); null without one",
@@ -105,6 +111,10 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "error_m": "true distance from the map origin at the end (m); simulator only",
         "truth": "true final pose [x, y, theta], map frame; simulator only",
         "png": "the picture written with --png",
+        "record": "with --record: the recording written (`naoloc replay` re-runs it)",
+        "ros2": "with --format ros2: the ROS 2 MCAP written beside (NAME.ros2.mcap)",
+        "at": "with --at: the start asked for, {room: [x, y, theta] as given (room frame), "
+        "map: the same in the map frame (null when the map lacks origin_room_pose)}",
     },
     "track": {
         "poses": "poses streamed (one JSON line each before this one)",
@@ -114,6 +124,10 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "walked_m": "distance walked by odometry (m)",
         "median_error_m": "median error of the poses (m); simulator only",
         "reason": "why it stopped early",
+        "record": "with --record: the recording written (`naoloc replay` re-runs it)",
+        "ros2": "with --format ros2: the ROS 2 MCAP written beside (NAME.ros2.mcap)",
+        "at": "with --at: the start asked for, {room: [x, y, theta] as given (room frame), "
+        "map: the same in the map frame (null when the map lacks origin_room_pose)}",
     },
     "evaluate": {
         "protocol": "`paper`, `random`, `anywhere` or `changed`",
@@ -138,15 +152,20 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "backend": "the simulated robot's backend",
         "calls": "service calls answered",
         "deadman_stops": "times a silent client got the robot stopped",
+        "speed": "simulated seconds per wall second (`--speed`)",
+        "errors": "calls answered with an error",
     },
     "demo": {
         "backend": "the robot's backend",
         "frames": "survey wall pictures",
+        "survey_stopped": "why the survey stopped early (null: it completed; the demo goes on "
+        "with the frames taken)",
         "images": "map keyframes (wall and far pictures)",
         "neurons": "GCS neurons",
         "distinct_poses": "distinct neuron poses",
         "map_build_s": "map build time (s)",
         "n": "poses localized",
+        "no_estimate": "of those, poses where nothing was recognised",
         "median_error_m": "median position error (m)",
         "max_error_m": "largest position error (m)",
         "median_heading_error_deg": "median heading error (deg)",
@@ -158,6 +177,64 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "positions": "per pose: truth, estimate [x, y, theta] (map frame), error_m, "
         "heading_error_deg, confidence, localize_s",
     },
+    "replay": {
+        "recording": "the recording replayed",
+        "verb": "what was recorded: `localize`, `track` or `go-home`",
+        "complete": "false for a partial recording (the run was interrupted)",
+        "observations": "observations given to the filter, in the recorded order",
+        "pictures": "of those, pictures (the others: floor-line scans and odometry)",
+        "x": "the replay's pose, map frame (m); null without one",
+        "y": "the replay's pose, map frame (m); null without one",
+        "theta": "the replay's heading, map frame (rad); null without one",
+        "confidence": "as localize's, 0..1",
+        "status": "`tracking`, `lost` or `not the mapped room` (exit 3 without a pose)",
+        "covariance": "3 x 3 covariance of x, y, theta (m^2, rad^2); null without a pose",
+        "recorded": "the estimate the run itself ended with (status, confidence, x, y, theta, "
+        "covariance)",
+        "same": "true when the replay's estimate equals the recorded one (1e-9)",
+        "compute_s": "CPU time of the replay's filter (s)",
+    },
+    "check": {
+        "ok": "true when nothing is missing (exit 0; otherwise exit 4)",
+        "missing": "one line per problem found: what and how to fix it",
+        "survey": "what a survey with this config walks: side_m, wall_offset_m, laps, path_m, "
+        "stops, minutes (at a NAO's 0.1 m/s and 2 s per picture)",
+        "link": "backend and what it reports (url, transport; model and room on simulators)",
+        "camera": "one image: width, height, colorspace, index, mean_grey (0-255), lens (fx, "
+        "fy, cx, cy px at this size, k1); null when it failed",
+        "odometry": "getRobotPosition: sensors and commands [x, y, theta], odom frame",
+        "joints": "head_yaw, head_pitch (rad) and camera_z_m (the camera's height from the "
+        "robot's kinematics)",
+        "posture": "posture name and awake (robotIsWakeUp)",
+        "battery": "charge_percent (ALBattery; null on a simulator)",
+        "nod": "with --nod: moved_rad, how far HeadPitch moved",
+    },
+}
+
+# ``naoloc track`` prints one JSON line per camera frame before its summary line.
+TRACK_LINE: dict[str, str] = {
+    "t": "robot time of the frame (s; simulated time on a simulator)",
+    "status": "`tracking`, `lost` or `not the mapped room`",
+    "x": "pose, map frame (m); null without one",
+    "y": "pose, map frame (m); null without one",
+    "theta": "heading, map frame (rad); null without one",
+    "confidence": "0..1; 0 without a pose",
+    "covariance": "3 x 3 covariance of x, y, theta (m^2, rad^2); with a pose",
+    "reason": "why there is no pose; without one",
+    "truth": "true pose [x, y, theta], map frame; simulator only",
+    "error_m": "distance to the truth (m); simulator only",
+}
+
+# Exit codes of every verb (naoloc/app/cli.py).
+EXIT_CODES: dict[int, str] = {
+    0: "success",
+    1: "a naoloc error (bad config, file, robot or network): one line on stderr",
+    2: "a usage error (unknown verb or flag, bad value): argparse's message",
+    3: "`localize`, `track` or `replay` has no pose: the JSON line is still printed",
+    4: "`check` found something missing: the JSON line is still printed, `missing` says what",
+    70: "an unexpected exception, a bug: one line naming it (`NAOLOC_DEBUG=1` for the traceback)",
+    130: "interrupted by SIGINT (Ctrl-C); the robot is stopped",
+    143: "stopped by SIGTERM; the robot is stopped",
 }
 
 
@@ -248,12 +325,16 @@ def render() -> str:
         "# naoloc command line reference",
         "",
         "Generated by `tools/gen_cli_doc.py` from the parser and the config models; do not edit",
-        "by hand (`python tools/gen_cli_doc.py` rewrites it, `tests/test_cli_doc.py` checks it).",
+        "by hand (`python tools/gen_cli_doc.py` rewrites it, `tests/integration/test_cli_doc.py`",
+        "checks it).",
         "",
         "Every verb that computes a result ends stdout with ONE line of JSON (the fields below),",
-        "after any human-readable text. Errors are one line on stderr and a non-zero exit code",
-        "(1; 2 for a usage error; 3 when `localize` recognises nothing; 130 on Ctrl-C).",
+        "after any human-readable text. Errors are one line on stderr and a non-zero exit code.",
         "Progress bars go to stderr, only on a terminal.",
+        "",
+        "| exit code | meaning |",
+        "| --- | --- |",
+        *[f"| {code} | {meaning} |" for code, meaning in EXIT_CODES.items()],
         "",
         "`-c CFG` takes a YAML file or the name of a config shipped in the package: "
         + ", ".join(f"`{n}`" for n in shipped_configs())
@@ -270,6 +351,9 @@ def render() -> str:
         if fields:
             out += ["", "JSON line:", "", "| field | meaning |", "| --- | --- |"]
             out += [f"| `{k}` | {v} |" for k, v in fields.items()]
+        if verb == "track":
+            out += ["", "Before it, one JSON line per camera frame:", "", "| field | meaning |"]
+            out += ["| --- | --- |", *[f"| `{k}` | {v} |" for k, v in TRACK_LINE.items()]]
         out.append("")
     out += [
         "## Live view (`--live [PORT]`)",
@@ -277,6 +361,11 @@ def render() -> str:
         "`survey`, `localize`, `go-home` and `serve` take `--live [PORT]`: a Foxglove WebSocket",
         "server on 127.0.0.1:PORT (default 8765; 0 picks a free port, printed on stderr). Open",
         "it in Foxglove with *Open connection -> Foxglove WebSocket*, `ws://127.0.0.1:PORT`.",
+        "The map topics are latched (sent again every second) for a viewer that joins late;",
+        "`/tf` carries REP-105's `map -> odom -> base_link`. `--record FILE.mcap` (`localize`,",
+        "`track`, `go-home`) writes the same topics to a file, with every observation the",
+        "filter took (`naoloc/data/recording.py`); `naoloc replay FILE.mcap -m MAP.npz` re-runs",
+        "the localization from it without a robot.",
         "Topics (see `naoloc/viz/live.py`):",
         "",
     ]

@@ -1,9 +1,11 @@
-"""The ``naoloc`` command line: survey, build-map, localize, go-home, evaluate, serve, demo.
+"""The ``naoloc`` command line: survey, build-map, localize, track, go-home, evaluate, serve,
+demo, check.
 
 Each verb lives in ``naoloc.app.commands.<verb>`` and returns a JSON-able dict that is
 printed as the single last line of stdout. Errors are one line on stderr and a
 non-zero exit: 1 for a naoloc error, 2 for bad usage, 3 when ``localize`` recognised
-nothing (its JSON line is still printed, with null pose fields), 70 for a bug (an
+nothing (its JSON line is still printed, with null pose fields), 4 when ``check`` found
+something missing (its JSON line is still printed, ``missing`` says what), 70 for a bug (an
 unexpected exception: one line naming it; set ``NAOLOC_DEBUG=1`` for the traceback), 130
 for SIGINT (Ctrl-C) and 143 for SIGTERM. Both signals are honoured also where the shell
 ignores SIGINT (background jobs): :func:`naoloc.app.interrupt.interruptible` installs the
@@ -14,6 +16,7 @@ kept) join its line.
 from __future__ import annotations
 
 import argparse
+import difflib
 import importlib
 import json
 import math
@@ -27,7 +30,7 @@ from typing import Any
 from naoloc import __version__
 from naoloc.app.interrupt import exit_code, interruptible
 from naoloc.config import Config, load_config
-from naoloc.errors import NaolocError, NoEstimate, NotBuiltError
+from naoloc.errors import NaolocError, NotBuiltError
 
 EXIT_INTERNAL = 70  # sysexits.h EX_SOFTWARE: an unexpected exception (a bug)
 _MAX_MESSAGE = 500  # characters of an unexpected exception's message printed on stderr
@@ -42,6 +45,8 @@ VERBS: dict[str, str] = {
     "evaluate": "measure localization error with the paper or random protocol",
     "serve": "serve a simulated robot as a virtual NAOqi",
     "demo": "survey -> build map -> localize in the default simulated room",
+    "check": "connect and read camera, odometry, joints and battery; nothing walks",
+    "replay": "re-run a recorded localization (--record) without a robot; the same estimate",
 }
 
 
@@ -78,6 +83,15 @@ CONFIG_HELP = "a YAML file, or a shipped config: paper_room, lab_room, nao"
 LIVE_PORT = 8765
 
 
+def _add_format(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--format", choices=("naoloc", "ros2"), default="naoloc",
+        help="ros2: also write NAME.ros2.mcap beside the file, as ROS 2 messages (CDR: "
+        "sensor_msgs/Image and CameraInfo, nav_msgs/Odometry, tf2_msgs/TFMessage, "
+        "geometry_msgs/PoseWithCovarianceStamped) that ros2 bag and Foxglove read",
+    )  # fmt: skip
+
+
 def _add_live(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--live", nargs="?", type=int, const=LIVE_PORT, default=None, metavar="PORT",
@@ -105,6 +119,7 @@ def build_parser() -> argparse.ArgumentParser:
         "-o", "--output", required=True, metavar="DATASET.mcap", type=Path,
         help="the dataset to write (its resolved config goes beside it)",
     )  # fmt: skip
+    _add_format(p)
     _add_live(p)
     p = add("build-map")
     p.add_argument(
@@ -126,9 +141,17 @@ def build_parser() -> argparse.ArgumentParser:
         )  # fmt: skip
         p.add_argument(
             "--at", nargs=3, type=_pose, metavar=("X", "Y", "THETA"),
-            help="teleport there first (room frame, m and rad; simulator only)",
+            help="teleport there first (simulator only), in the ROOM frame (m, rad: from the "
+            "simulated room's corner, not the map's origin; results are in the map frame and "
+            "the JSON's `at` echoes it in both)",
         )  # fmt: skip
         p.add_argument("--png", type=Path, default=None, help="write a picture of the result")
+        p.add_argument(
+            "--record", type=Path, default=None, metavar="FILE.mcap",
+            help="record every observation (pictures, floor lines, odometry) and estimate as "
+            "they are made; `naoloc replay` re-runs the localization from it",
+        )  # fmt: skip
+        _add_format(p)
         _add_live(p)
         if verb == "track":
             p.add_argument(
@@ -197,12 +220,30 @@ def build_parser() -> argparse.ArgumentParser:
         help="stop a velocity walk whose client is silent this long (default 0.4 s; 0 = never, "
         "as NAOqi)",
     )  # fmt: skip
+    p.add_argument(
+        "--trace", type=Path, default=None, metavar="FILE",
+        help="append one line per call a client makes ('<caller> <Service>.<method>')",
+    )  # fmt: skip
     _add_live(p)
     p = add("demo", config=False)
     p.add_argument("-c", "--config", default="paper_room", metavar="CFG", help=CONFIG_HELP)
     p.add_argument(
         "-o", "--output", type=Path, default=Path("runs/demo"), metavar="OUTDIR",
         help="folder for the dataset, the map and the pictures",
+    )  # fmt: skip
+    p = add("replay", config=False)
+    p.add_argument("recording", type=Path, metavar="FILE.mcap", help="a --record recording")
+    p.add_argument(
+        "-m", "--map", required=True, metavar="MAP.npz", type=Path, help="the map to replay in"
+    )  # fmt: skip
+    p.add_argument(
+        "-c", "--config", default=None, metavar="CFG",
+        help="the filter's tuning (localize.filter); default: the recording's own config",
+    )  # fmt: skip
+    p = add("check")
+    p.add_argument(
+        "--nod", action="store_true",
+        help="also nod the head (HeadPitch 0.15 rad down and back); nothing else moves",
     )  # fmt: skip
     return parser
 
@@ -233,7 +274,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     traceback only when the environment sets ``NAOLOC_DEBUG=1``.
     """
     parser = build_parser()
-    args = parser.parse_args(argv)
+    words = list(sys.argv[1:] if argv is None else argv)
+    if words and not words[0].startswith("-") and words[0] not in VERBS:
+        close = difflib.get_close_matches(words[0], list(VERBS), n=1, cutoff=0.6)
+        if close:  # exit 2, as argparse's own "invalid choice"
+            parser.error(f"unknown verb {words[0]!r}; did you mean {close[0]!r}?")
+    args = parser.parse_args(words)
     verb: str = args.verb
     with interruptible():
         return _guarded(verb, args)
@@ -268,15 +314,18 @@ def _main(verb: str, args: argparse.Namespace) -> int:
     except KeyboardInterrupt as err:
         print(_with_notes(f"naoloc {verb}: interrupted", err), file=sys.stderr)
         return exit_code(err)
-    except NoEstimate as err:  # the result line still ends stdout, with no pose in it
-        sys.stdout.write(json.dumps(err.result, separators=(", ", ": ")) + "\n")
+    except NaolocError as err:
+        carried = getattr(err, "result", None)
+        if not isinstance(carried, dict):
+            text = _with_notes(f"naoloc {verb}: error: {err}", err)
+            print(one_line(text, _MAX_LINE), file=sys.stderr)
+            return 1
+        # localize with no estimate, check with something missing: the result line still
+        # ends stdout (no pose in it; what is missing), and the verb's own exit code
+        sys.stdout.write(json.dumps(carried, separators=(", ", ": ")) + "\n")
         sys.stdout.flush()
         print(f"naoloc {verb}: {err}", file=sys.stderr)
-        return err.exit_code
-    except NaolocError as err:
-        text = _with_notes(f"naoloc {verb}: error: {err}", err)
-        print(one_line(text, _MAX_LINE), file=sys.stderr)
-        return 1
+        return int(getattr(err, "exit_code", 1))
     except OSError as err:  # a path that cannot be read or written
         where = f": {err.filename}" if err.filename else ""
         text = f"naoloc {verb}: error: {err.strerror or err}{where}"

@@ -64,6 +64,7 @@ class GoHomeResult:
         robot_s: Robot time spent, s.
         trail: The track while walking.
         reason: Why it stopped short (empty when it arrived).
+        stops: The estimate of every look from standstill, in order (the first one's too).
     """
 
     final: PoseEstimate
@@ -77,6 +78,7 @@ class GoHomeResult:
     robot_s: float = 0.0
     trail: list[TrackPoint] = field(default_factory=list)
     reason: str = ""
+    stops: list[PoseEstimate] = field(default_factory=list)
 
     @property
     def walk_s(self) -> float:
@@ -134,6 +136,7 @@ def go_home(
     first = localize(robot, vmap, cfg, localizer=loc)
     looks = 1
     result = GoHomeResult(first.estimate, looks, False, first)
+    result.stops.append(first.estimate)
     grid = grid_of_map(vmap)
     odo0 = robot.motion.getRobotPosition(True)
     tracker = Tracker(robot, loc, cfg)
@@ -157,7 +160,7 @@ def go_home(
                     on_step("lost: stopping to look")
                 # Lost: the belief is worth nothing; look from standstill, globally.
                 loc.update(Relocalize(robot_clock(robot)))
-                localize(robot, vmap, cfg, localizer=loc)
+                result.stops.append(localize(robot, vmap, cfg, localizer=loc).estimate)
                 looks += 1
                 route, lost = [], 0
                 continue

@@ -219,13 +219,15 @@ def track(
     route: Sequence[Pose2D] = (),
     duration_s: float = 20.0,
     on_point: Callable[[TrackPoint], None] | None = None,
+    localizer: Localizer | None = None,
 ) -> TrackResult:
     """Localize from standstill, then track the pose while walking ``route`` (map frame).
 
     Without a route the robot stands and the head keeps swinging: the pose streams at the
-    camera's rate for ``duration_s`` of robot time.
+    camera's rate for ``duration_s`` of robot time. ``localizer``: the filter to feed (e.g.
+    one that records); a new one otherwise.
     """
-    loc = Localizer(vmap, cfg.localize.filter)
+    loc = localizer if localizer is not None else Localizer(vmap, cfg.localize.filter)
     first = localize(robot, vmap, cfg, localizer=loc)
     result = TrackResult(first)
     if not first.estimate.found:

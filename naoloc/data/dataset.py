@@ -46,6 +46,7 @@ from naoloc.data.outputs import staging_path
 from naoloc.errors import DatasetError, NaolocError
 from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.robot.keyframe import CameraInfo, Keyframe, check_camera
+from naoloc.robot.lens import Lens
 from naoloc.safe_yaml import refuse_non_regular
 
 FORMAT_NAME = "naoloc-survey"
@@ -168,6 +169,16 @@ def _planar_tf(parent: str, child: str, pose: Pose2D, stamp: float) -> Any:
     )  # fmt: skip
 
 
+def calibration(cam: CameraInfo, lens: Lens | None) -> tuple[list[float], list[float]]:
+    """The camera matrix K (row-major 3 x 3) and plumb_bob distortion D the images really
+    have: ``lens`` scaled to the image size (naoloc's model, k1 radial), or the ideal
+    pinhole of ``cam``'s field of view when there is no lens."""
+    if lens is None:
+        return cam.matrix().ravel().tolist(), [0.0] * 5
+    fx, fy, cx, cy = lens.at(cam.width, cam.height)
+    return [fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0], [lens.k1, 0.0, 0.0, 0.0, 0.0]
+
+
 def _origin_in_room(meta: dict[str, Any]) -> Pose2D | None:
     """The map frame's pose in the room frame (``meta["origin_room_pose"]``), if known."""
     value = meta.get("origin_room_pose")
@@ -223,6 +234,7 @@ class DatasetWriter:
         self._quality = int(jpeg_quality)
         self._closed = False
         self._origin = _origin_in_room(meta)
+        self._lens = Lens.from_dict(meta.get("lens"))  # the images' own lens (calibration)
         # Until the first frame the file has a hidden name, so that a run that writes no
         # frame leaves an older partial file of an earlier run as it was.
         self._tmp_path = staging_path(self.partial_path)
@@ -265,6 +277,7 @@ class DatasetWriter:
         try:
             self._add_header(meta)
             self._file.flush()
+            self._lens = Lens.from_dict(meta.get("lens")) or self._lens
         except OSError as err:
             raise DatasetError(f"{self.path}: write failed: {err.strerror}") from None
 
@@ -362,18 +375,24 @@ class DatasetWriter:
         image = fm.CompressedImage(
             timestamp=ts, frame_id="camera", data=self._encode_image(kf.image), format=fmt
         )
-        k = cam.matrix().ravel().tolist()
+        k, d = calibration(cam, self._lens)
         calib = fm.CameraCalibration(
             timestamp=ts, frame_id="camera", width=cam.width, height=cam.height,
-            distortion_model="plumb_bob", D=[0.0] * 5, K=k,
+            distortion_model="plumb_bob", D=d, K=k,
             R=[1.0, 0, 0, 0, 1.0, 0, 0, 0, 1.0],
             P=[k[0], 0, k[2], 0, 0, k[4], k[5], 0, 0, 0, 1.0, 0],
         )  # fmt: skip
         t_cam = kf.camera_matrix()
         cam_tf = _rotation_to_quaternion(t_cam[:3, :3])
         tfs = [] if self._origin is None else [_planar_tf("room", "map", self._origin, stamp)]
+        if odometry is None:  # no raw odometry: the pose is the only one (map frame)
+            tfs.append(_planar_tf("map", "base_link", kf.pose, stamp))
+        else:  # REP-105: map -> odom -> base_link, the odometry in odom
+            map_odom = self.map_to_odom(kf, odometry)
+            if map_odom is not None:
+                tfs.append(_planar_tf("map", "odom", map_odom, stamp))
+            tfs.append(_planar_tf("odom", "base_link", odometry, stamp))
         tfs += [
-            _planar_tf("map", "base_link", kf.pose, stamp),
             fm.FrameTransform(
                 timestamp=ts, parent_frame_id="base_link", child_frame_id="camera",
                 translation=fm.Vector3(x=t_cam[0, 3], y=t_cam[1, 3], z=t_cam[2, 3]),
@@ -398,7 +417,10 @@ class DatasetWriter:
         try:
             self._add(IMAGE_TOPIC, stamp, bytes(image.encode()))
             self._add("/camera/calibration", stamp, bytes(calib.encode()))
-            self._add("/pose/odometry", stamp, _pose_msg(kf.pose, "map", stamp))
+            if odometry is None:
+                self._add("/pose/odometry", stamp, _pose_msg(kf.pose, "map", stamp))
+            else:
+                self._add("/pose/odometry", stamp, _pose_msg(odometry, "odom", stamp))
             if kf.command_pose is not None:
                 self._add("/pose/command", stamp, _pose_msg(kf.command_pose, "map", stamp))
             if kf.true_pose is not None:
@@ -414,6 +436,15 @@ class DatasetWriter:
         self.frames += 1
         if stop is None:
             self.wall_frames += 1
+
+    def map_to_odom(self, keyframe: Keyframe, odometry: Pose2D) -> Pose2D | None:
+        """The odom frame's pose in the map frame at this frame (REP-105's map -> odom).
+
+        A survey's map is its odometry at the start: ``pose = map_T_odom * odometry``, so
+        ``map_T_odom = pose * odometry^-1`` (constant along the survey). A recording of a
+        localization overrides this with the estimate's.
+        """
+        return (keyframe.pose * odometry.inverse()).normalized()
 
     def close(self, complete: bool = True, reason: str = "") -> Path | None:
         """Finish the file (status, summary, footer) and close it. Safe to call twice.
@@ -578,6 +609,11 @@ def read_dataset(path: str | Path) -> Dataset:
             f"{path}: no such dataset; an interrupted survey left "
             f"{partial_path_for(path)}: name that file to use its frames"
         )
+    from naoloc.data.ros2 import is_ros2, read_ros2_survey
+
+    if is_ros2(path):  # a ROS 2 bag (naoqi_driver2's, or --format ros2): camera, odom, tf
+        dataset: Dataset = read_ros2_survey(path)
+        return dataset
     header: dict[str, str] | None = None
     status: dict[str, str] | None = None
     topics: dict[int, str] = {}

@@ -230,6 +230,9 @@ class Robot:
         sim: Ground truth and teleport on simulators; None on a real robot.
         backend: Name of the backend ("fake", "mujoco", "naoqi").
         info: Backend facts worth logging (model, room, transport, ...).
+        read: On a network robot, a read of another NAOqi service:
+            ``read(service, method, *args)`` (e.g. ``("ALBattery", "getBatteryCharge")``);
+            None on in-process backends.
     """
 
     motion: Motion
@@ -238,6 +241,7 @@ class Robot:
     sim: SimControl | None = None
     backend: str = "unknown"
     info: dict[str, Any] = field(default_factory=dict)
+    read: Callable[..., Any] | None = field(default=None, repr=False)
     _closer: Callable[[], None] | None = field(default=None, repr=False)
     _closed: bool = field(default=False, repr=False)
 

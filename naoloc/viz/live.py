@@ -15,7 +15,13 @@ on these topics:
 - ``/map/keyframes`` PosesInFrame and ``/map/landmarks`` PointCloud (x, y, z float32),
   frame ``map``;
 - ``/go_home/path`` SceneUpdate: the path walked home (line), its start and end (spheres)
-  and the goal, frame ``map``.
+  and the goal, frame ``map``;
+- ``/tf`` FrameTransform, REP-105: ``odom -> base_link`` with every odometry reading and
+  ``map -> odom`` with every estimate (the estimate composed with the odometry's inverse).
+
+The map topics are latched: they are sent again every :data:`LATCH_S` while the view is
+open, so a viewer that connects late still gets the map. The recording of ``--record``
+(:mod:`naoloc.data.recording`) carries the same topics, frames and message types.
 
 :func:`watch` wraps a robot so that every picture and odometry reading also goes to the
 view, without touching the behaviours. Timestamps are the wall clock (it is a live view).
@@ -28,6 +34,7 @@ import argparse
 import dataclasses
 import math
 import sys
+import threading
 import time
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -49,7 +56,9 @@ TOPICS = (
     "/map/keyframes",
     "/map/landmarks",
     "/go_home/path",
+    "/tf",
 )
+LATCH_S = 1.0  # the map topics are sent again this often (s), for viewers that join late
 
 
 class LiveError(NaolocError):
@@ -141,8 +150,34 @@ class FoxgloveLive(LiveView):
         self._keyframes = fc.PosesInFrameChannel("/map/keyframes", context=ctx)
         self._landmarks = fc.PointCloudChannel("/map/landmarks", context=ctx)
         self._path = fc.SceneUpdateChannel("/go_home/path", context=ctx)
+        self._tf = fc.FrameTransformChannel("/tf", context=ctx)
         self._history: list[tuple[float, float, float]] = []
+        self._odom: tuple[float, float, float] | None = None
+        self._latched: list[tuple[Any, Any]] = []  # (channel, message) sent again
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._latch = threading.Thread(target=self._relatch, name="naoloc-live-latch", daemon=True)
+        self._latch.start()
         self._closed = False
+
+    def _relatch(self) -> None:
+        while not self._stop.wait(LATCH_S):
+            with self._lock:
+                latched = list(self._latched)
+            for channel, message in latched:
+                channel.log(message)
+
+    def _transform(self, parent: str, child: str, pose: Sequence[float], ts: Any) -> None:
+        from foxglove import messages as fm
+
+        x, y, theta = (float(v) for v in pose[:3])
+        rotation = fm.Quaternion(x=0.0, y=0.0, z=math.sin(theta / 2.0), w=math.cos(theta / 2.0))
+        self._tf.log(
+            fm.FrameTransform(
+                timestamp=ts, parent_frame_id=parent, child_frame_id=child,
+                translation=fm.Vector3(x=x, y=y, z=0.0), rotation=rotation,
+            )
+        )  # fmt: skip
 
     def camera(self, image: np.ndarray, t: float | None = None) -> None:
         import cv2
@@ -160,9 +195,12 @@ class FoxgloveLive(LiveView):
         from foxglove import messages as fm
 
         x, y, theta = (float(v) for v in pose[:3])
+        ts = _stamp(fm, t)
         self._odometry.log(
-            fm.PoseInFrame(timestamp=_stamp(fm, t), frame_id="odom", pose=_pose(fm, x, y, theta))
+            fm.PoseInFrame(timestamp=ts, frame_id="odom", pose=_pose(fm, x, y, theta))
         )
+        self._odom = (x, y, theta)
+        self._transform("odom", "base_link", self._odom, ts)
 
     def estimate(
         self,
@@ -190,6 +228,11 @@ class FoxgloveLive(LiveView):
                 pose=_pose(fm, x, y, theta), pose_covariance=cov6.ravel().tolist(),
             )
         )  # fmt: skip
+        if self._odom is not None:  # REP-105: map -> odom = estimate * odometry^-1
+            from naoloc.geometry import Pose2D
+
+            map_odom = Pose2D(x, y, theta) * Pose2D(*self._odom).inverse()
+            self._transform("map", "odom", tuple(map_odom.normalized()), ts)
         self._history.append((x, y, theta))
         self._estimates.log(
             fm.PosesInFrame(
@@ -202,24 +245,26 @@ class FoxgloveLive(LiveView):
 
         ts = _stamp(fm, None)
         poses = np.asarray(keyframes, dtype=float).reshape(-1, 3)
-        self._keyframes.log(
-            fm.PosesInFrame(timestamp=ts, frame_id="map", poses=[_pose(fm, *p) for p in poses])
-        )
+        frames = fm.PosesInFrame(timestamp=ts, frame_id="map", poses=[_pose(fm, *p) for p in poses])
+        self._keyframes.log(frames)
+        with self._lock:
+            self._latched = [(self._keyframes, frames)]
         if landmarks is None:
             return
         points = np.asarray(landmarks, dtype=np.float32).reshape(-1, 3)
         points = points[np.isfinite(points).all(axis=1)]
         f32 = fm.PackedElementFieldNumericType.Float32
-        self._landmarks.log(
-            fm.PointCloud(
-                timestamp=ts, frame_id="map", pose=_pose(fm, 0.0, 0.0, 0.0), point_stride=12,
-                fields=[
-                    fm.PackedElementField(name=n, offset=4 * i, type=f32)
-                    for i, n in enumerate("xyz")
-                ],
-                data=points.tobytes(),
-            )
+        cloud = fm.PointCloud(
+            timestamp=ts, frame_id="map", pose=_pose(fm, 0.0, 0.0, 0.0), point_stride=12,
+            fields=[
+                fm.PackedElementField(name=n, offset=4 * i, type=f32)
+                for i, n in enumerate("xyz")
+            ],
+            data=points.tobytes(),
         )  # fmt: skip
+        self._landmarks.log(cloud)
+        with self._lock:
+            self._latched.append((self._landmarks, cloud))
 
     def path(self, points: Sequence[Sequence[float]], goal: Sequence[float] = (0.0, 0.0)) -> None:
         from foxglove import messages as fm
@@ -256,6 +301,8 @@ class FoxgloveLive(LiveView):
         if self._closed:
             return
         self._closed = True
+        self._stop.set()
+        self._latch.join(timeout=2.0)
         self._server.stop()
 
 

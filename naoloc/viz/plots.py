@@ -3,6 +3,12 @@
 Everything is drawn in the map frame (odometry at the survey start: x forward, y left,
 metres). When the map's meta holds ``origin_room_pose`` and ``room_size_m`` (a simulated
 survey), the room's walls are drawn too. No pyplot: no global figure state.
+
+One style in every picture (:data:`STYLE`): the truth in black and every estimate in green,
+each a dot with a heading arrow; an estimate with a covariance also gets its 95 % position
+ellipse; the room's walls dark grey, furniture light grey, the survey path blue, the map's
+landmarks small grey dots, neurons red rings, the map origin a black star; the legend sits
+right of the map and names the same things the same way.
 """
 
 from __future__ import annotations
@@ -85,6 +91,56 @@ def draw_furniture(ax: Axes, furniture: Sequence[tuple[str, np.ndarray]] | None)
         ax.fill(poly[:, 0], poly[:, 1], color="0.8", ec="0.45", lw=0.8, label=label, zorder=1)
 
 
+# role -> (colour, legend label): the one convention of every picture.
+STYLE: dict[str, tuple[str, str]] = {
+    "truth": ("black", "truth"),
+    "estimate": ("tab:green", "estimate"),
+    "start": ("tab:purple", "start"),
+    "path": ("tab:green", "path (believed)"),
+    "stop": ("tab:orange", "stops to look"),
+    "survey": ("tab:blue", "survey path"),
+    "landmark": ("0.55", "landmarks"),
+    "neuron": ("tab:red", "neurons"),
+    "miss": ("magenta", "no estimate"),
+}
+ELLIPSE_CHI2 = 5.991  # chi-square, 2 degrees of freedom, 95 %
+
+
+def pose_mark(
+    ax: Axes, pose: Pose2D, role: str, label: str | None = None, cov: Any = None,
+    length: float = 0.35,
+) -> None:  # fmt: skip
+    """A pose in :data:`STYLE`'s colour for ``role``: a dot, a heading arrow of ``length``
+    metres and, with a covariance (3 x 3, x y theta; m^2, rad^2), its 95 % position
+    ellipse."""
+    color = STYLE[role][0]
+    ax.plot([pose.x], [pose.y], "o", color=color, ms=7, label=label, zorder=5)
+    ax.annotate(
+        "", xy=(pose.x + length * math.cos(pose.theta), pose.y + length * math.sin(pose.theta)),
+        xytext=(pose.x, pose.y), zorder=5,
+        arrowprops={"arrowstyle": "-|>", "color": color, "lw": 1.8, "shrinkA": 0, "shrinkB": 0},
+    )  # fmt: skip
+    if cov is not None:
+        ellipse(ax, pose, cov, color)
+
+
+def ellipse(ax: Axes, pose: Pose2D, cov: Any, color: str) -> None:
+    """The 95 % ellipse of the position covariance ``cov[:2, :2]`` (m^2) around ``pose``."""
+    from matplotlib.patches import Ellipse
+
+    c = np.asarray(cov, dtype=float)
+    if c.shape[0] < 2 or not np.all(np.isfinite(c[:2, :2])):
+        return
+    values, vectors = np.linalg.eigh(c[:2, :2])
+    values = np.clip(values, 0.0, None)
+    angle = math.degrees(math.atan2(vectors[1, 1], vectors[0, 1]))
+    width, height = 2 * np.sqrt(ELLIPSE_CHI2 * values[::-1])
+    ax.add_patch(
+        Ellipse((pose.x, pose.y), float(width), float(height), angle=angle, fill=False,
+                ec=color, lw=1.2, ls="--", zorder=4)
+    )  # fmt: skip
+
+
 def legend_outside(ax: Axes, fontsize: int = 8) -> None:
     """The legend to the right of the axes, never over the data."""
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize=fontsize)
@@ -123,21 +179,40 @@ def _draw_map(
         ax.plot(outline[:, 0], outline[:, 1], "-", color="0.3", lw=2, label="room walls")
     draw_furniture(ax, furniture)
     path = np.asarray(vmap.keyframe_poses, dtype=float)[: vmap.wall_images]  # no far pictures
+    points = landmark_points(vmap)
+    if len(points):  # those beyond the room (or the walk) by 0.5 m stay out of the frame
+        extent = outline if outline is not None else path[:, :2]
+        if len(extent):
+            lo, hi = extent.min(axis=0) - 0.5, extent.max(axis=0) + 0.5
+            points = points[np.all((points >= lo) & (points <= hi), axis=1)]
+        ax.plot(points[:, 0], points[:, 1], ".", color=STYLE["landmark"][0], ms=1.5, zorder=2,
+                label=f"{STYLE['landmark'][1]} ({len(points)})")  # fmt: skip
     if len(path):
-        ax.plot(path[:, 0], path[:, 1], "-", color="tab:blue", lw=0.8, alpha=0.6)
-        ax.plot(path[:, 0], path[:, 1], ".", color="tab:blue", ms=3, label="survey poses")
+        blue = STYLE["survey"][0]
+        ax.plot(path[:, 0], path[:, 1], "-", color=blue, lw=0.8, alpha=0.6)
+        ax.plot(path[:, 0], path[:, 1], ".", color=blue, ms=3,
+                label=f"{STYLE['survey'][1]} ({len(path)} pictures)")  # fmt: skip
     neurons = np.asarray(vmap.neuron_poses, dtype=float)
     if neurons.size:
         ok = np.all(np.isfinite(neurons), axis=1)
         ax.plot(
-            neurons[ok, 0], neurons[ok, 1], "o", mfc="none", mec="tab:red", ms=5,
-            label=f"neurons ({int(ok.sum())} with images)",
+            neurons[ok, 0], neurons[ok, 1], "o", mfc="none", mec=STYLE["neuron"][0], ms=5,
+            label=f"{STYLE['neuron'][1]} ({int(ok.sum())} with images)",
         )  # fmt: skip
     ax.plot([0.0], [0.0], "k*", ms=12, label="map origin")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (m, map frame)")
     ax.set_ylabel("y (m, map frame)")
     ax.grid(True, alpha=0.3)
+
+
+def landmark_points(vmap: VisualMap) -> np.ndarray:
+    """The map's triangulated landmarks, ``(n, 2)`` x y in the map frame (m)."""
+    points = getattr(vmap, "kp_points", None)
+    if points is None:
+        return np.zeros((0, 2))
+    xyz = np.asarray(points, dtype=float).reshape(-1, 3)
+    return xyz[np.all(np.isfinite(xyz), axis=1), :2]
 
 
 def _map_figure(
@@ -148,14 +223,6 @@ def _map_figure(
     ax = fig.add_subplot(1, 1, 1)
     _draw_map(ax, vmap, furniture)
     return fig, ax
-
-
-def _arrow(ax: Axes, pose: Pose2D, color: str, label: str) -> None:
-    ax.plot([pose.x], [pose.y], "o", color=color, ms=8, label=label)
-    ax.arrow(
-        pose.x, pose.y, 0.35 * math.cos(pose.theta), 0.35 * math.sin(pose.theta),
-        color=color, width=0.02, length_includes_head=True,
-    )  # fmt: skip
 
 
 def plot_map(
@@ -176,10 +243,13 @@ def plot_map(
         The path written.
     """
     fig, ax = _map_figure(vmap, furniture)
+    neurons = np.asarray(vmap.neuron_poses, dtype=float).reshape(-1, 3)
+    with_images = int(np.all(np.isfinite(neurons), axis=1).sum())
+    far = int(getattr(vmap, "far_images", 0))
     ax.set_title(
         title
-        or f"{vmap.images} images, {len(vmap.neuron_poses)} neurons, "
-        f"{vmap.distinct_poses} distinct poses"
+        or f"{vmap.images} images ({vmap.images - far} on the walk, {far} far), "
+        f"{with_images} neurons with images at {vmap.distinct_poses} distinct poses"
     )
     legend_outside(ax)
     fig.tight_layout()
@@ -218,12 +288,13 @@ def plot_localization(
     _draw_map(ax, vmap, furniture)
     if estimate.found:
         est = Pose2D(estimate.x, estimate.y, estimate.theta)
-        _arrow(ax, est, "tab:green", f"estimate (confidence {estimate.confidence:.2f})")
+        label = f"estimate (confidence {estimate.confidence:.2f}; 95 % ellipse)"
+        pose_mark(ax, est, "estimate", label, cov=estimate.covariance)
         text = f"estimate ({est.x:.2f}, {est.y:.2f}) m"
     else:
         text = "no estimate: nothing recognised"
     if truth is not None:
-        _arrow(ax, truth, "black", "truth")
+        pose_mark(ax, truth, "truth", "truth")
         if estimate.found:
             text += f", error {est.distance(truth):.2f} m"
     ax.set_title(title or text)
@@ -244,6 +315,7 @@ def plot_estimates(
     path: str | Path,
     title: str | None = None,
     furniture: Sequence[tuple[str, np.ndarray]] | None = None,
+    covariances: Sequence[Any] | None = None,
 ) -> Path:
     """Draw several estimates on the map, each joined to its truth when known.
 
@@ -256,34 +328,37 @@ def plot_estimates(
         path: PNG file to write.
         title: Figure title.
         furniture: Footprints to draw (:func:`furniture_footprints`), map frame.
+        covariances: Per pair, the estimate's 3 x 3 covariance (or None): its ellipse.
 
     Returns:
         The path written.
     """
     fig, ax = _map_figure(vmap, furniture)
+    covs = list(covariances) if covariances is not None else [None] * len(pairs)
 
     def found(p: Pose2D | None) -> bool:
         return p is not None and math.isfinite(p.x) and math.isfinite(p.y)
 
     hits = [(e, t) for e, t in pairs if found(e)]
     misses = [t for e, t in pairs if not found(e)]
+    truths = 0
     for i, (est, truth) in enumerate(pairs):
-        if truth is None:
-            continue
-        ax.plot([truth.x], [truth.y], "kx", ms=9, mew=2, label="truth" if i == 0 else None)
-        ax.annotate(str(i + 1), (truth.x, truth.y), textcoords="offset points", xytext=(5, 5))
+        if truth is not None:
+            pose_mark(ax, truth, "truth", "truth" if truths == 0 else None, length=0.25)
+            truths += 1
+            ax.annotate(str(i + 1), (truth.x, truth.y), textcoords="offset points", xytext=(5, 5))
         if found(est):
             assert est is not None
-            ax.plot([truth.x, est.x], [truth.y, est.y], "-", color="tab:green", lw=1)
-    if hits:
-        xs = [e.x for e, _ in hits if e is not None]
-        ys = [e.y for e, _ in hits if e is not None]
-        ax.plot(xs, ys, "s", color="tab:green", ms=7, label=f"estimate ({len(hits)})")
+            label = f"estimate ({len(hits)}; 95 % ellipse)" if est is hits[0][0] else None
+            pose_mark(ax, est, "estimate", label, cov=covs[i] if i < len(covs) else None,
+                      length=0.25)  # fmt: skip
+            if truth is not None:
+                ax.plot([truth.x, est.x], [truth.y, est.y], "-", color=STYLE["estimate"][0], lw=1)
     shown = [t for t in misses if t is not None]
     if misses:
         ax.plot(
-            [t.x for t in shown], [t.y for t in shown], "o", mfc="none", mec="magenta",
-            mew=2, ms=14, label=f"no estimate ({len(misses)}), at the truth",
+            [t.x for t in shown], [t.y for t in shown], "o", mfc="none", mec=STYLE["miss"][0],
+            mew=2, ms=14, label=f"{STYLE['miss'][1]} ({len(misses)}), at the truth",
         )  # fmt: skip
     ax.set_title(title or f"{len(pairs)} localizations, {len(misses)} without an estimate")
     legend_outside(ax)
@@ -301,6 +376,7 @@ def plot_go_home(
     truth: Pose2D | None = None,
     reached: bool = False,
     title: str | None = None,
+    furniture: Sequence[tuple[str, np.ndarray]] | None = None,
 ) -> Path:
     """Draw a walk home: start, the path believed walked, every fix, blocked places, the end.
 
@@ -313,22 +389,25 @@ def plot_go_home(
         truth: True final pose in the map frame, when known.
         reached: Whether the robot believes it arrived.
         title: Figure title; default a summary.
+        furniture: Footprints to draw (:func:`furniture_footprints`), map frame.
 
     Returns:
         The path written.
     """
     fig = new_figure(9.5, 7.0)
     ax = fig.add_subplot(1, 1, 1)
-    _draw_map(ax, vmap)
+    _draw_map(ax, vmap, furniture)
     if trail:
         xy = np.array([[p.x, p.y] for p in trail])
-        ax.plot(xy[:, 0], xy[:, 1], "-", color="tab:green", lw=2, label="path (believed)")
-        ax.plot([xy[0, 0]], [xy[0, 1]], "s", color="tab:green", ms=10, label="start")
-        _arrow(ax, trail[-1], "darkgreen", "end (believed)")
+        ax.plot(xy[:, 0], xy[:, 1], "-", color=STYLE["path"][0], lw=2, label=STYLE["path"][1])
+        pose_mark(ax, trail[0], "start", "start (believed)")
+        pose_mark(ax, trail[-1], "estimate", "end (believed)")
     found = [e for e in estimates if e.found]
-    if found:
-        ax.plot([e.x for e in found], [e.y for e in found], "x", color="tab:orange", ms=8,
-                label=f"fixes ({len(found)})")  # fmt: skip
+    for i, e in enumerate(found):
+        label = f"{STYLE['stop'][1]} ({len(found)}; 95 % ellipse)" if i == 0 else None
+        ax.plot([e.x], [e.y], "D", color=STYLE["stop"][0], ms=6, label=label, zorder=5)
+        if e.covariance is not None:
+            ellipse(ax, Pose2D(e.x, e.y, e.theta), e.covariance, STYLE["stop"][0])
     misses = len(estimates) - len(found)
     if misses:
         ax.plot([], [], " ", label=f"no estimate: {misses} looks")
@@ -336,9 +415,9 @@ def plot_go_home(
         ax.plot([b.x for b in blocked], [b.y for b in blocked], "X", color="red", ms=10,
                 label="blocked walk")  # fmt: skip
     if truth is not None:
-        _arrow(ax, truth, "black", "end (truth)")
+        pose_mark(ax, truth, "truth", "end (truth)")
     verdict = "reached home" if reached else "did not reach home"
     ax.set_title(title or f"go-home: {verdict}")
-    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, borderaxespad=0.0)
+    legend_outside(ax)
     fig.tight_layout()
     return save_figure(fig, Path(path))

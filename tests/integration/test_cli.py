@@ -20,6 +20,8 @@ ARGS = {
     "evaluate": ["-o", "out"],
     "serve": [],
     "demo": [],
+    "check": [],
+    "replay": ["x.mcap", "-m", "x.npz"],
 }
 
 

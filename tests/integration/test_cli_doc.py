@@ -53,6 +53,28 @@ def test_every_config_key_and_verb_is_listed() -> None:
         assert f"| `{key}` |" in text
 
 
+def test_every_verb_has_its_json_fields_and_every_exit_code_is_listed() -> None:
+    import re
+
+    from naoloc.app import cli
+
+    tool = _tool()
+    assert set(tool.JSON_FIELDS) == set(cli.VERBS)
+    codes = {int(c) for c in re.findall(r"\b(\d+)\s+(?:for|when)\b", cli.__doc__ or "")}
+    assert {1, 2, 3, 4, 70, 130, 143} <= codes  # the docstring still says them all
+    assert codes <= set(tool.EXIT_CODES), codes - set(tool.EXIT_CODES)
+    assert cli.EXIT_INTERNAL in tool.EXIT_CODES
+
+
+def _json_lines(tmp: Path, *args: str, ok: tuple[int, ...] = (0,)) -> list[dict[str, object]]:
+    out = subprocess.run(
+        [sys.executable, "-m", "naoloc.app.cli", *args], capture_output=True, text=True, cwd=tmp,
+        timeout=300,
+    )  # fmt: skip
+    assert out.returncode in ok, out.stderr
+    return [json.loads(line) for line in out.stdout.splitlines() if line.startswith("{")]
+
+
 def _json_line(tmp: Path, *args: str) -> dict[str, object]:
     out = subprocess.run(
         [sys.executable, "-m", "naoloc.app.cli", *args], capture_output=True, text=True, cwd=tmp,
@@ -90,6 +112,12 @@ def test_every_printed_json_field_is_documented(tmp_path: Path) -> None:
             "g.png",
         ),
     }
+    lines["check"] = _json_line(tmp_path, "check", "-c", "f.yaml", "--nod")
+    tracked = _json_lines(tmp_path, "track", "-c", "f.yaml", "-m", "m.npz", "--duration", "2")
+    assert len(tracked) >= 2
+    lines["track"] = tracked[-1]
+    for point in tracked[:-1]:
+        assert not set(point) - set(_tool().TRACK_LINE), set(point) - set(_tool().TRACK_LINE)
     for verb, line in lines.items():
         missing = set(line) - set(documented[verb])
         assert not missing, f"{verb} prints fields docs/cli.md does not describe: {missing}"

@@ -96,7 +96,9 @@ def test_survey_is_chunked_indexed_and_has_room_to_map(surveyed: tuple[Path, Pat
         frames = {(tf[2][0], tf[3][0]) for tf in (
             _protobuf_fields(m.data) for _, _, m in reader.iter_messages(topics=["/tf"])
         )}  # fmt: skip
-    assert (b"room", b"map") in frames and (b"map", b"base_link") in frames
+    assert (b"room", b"map") in frames  # REP-105: map -> odom -> base_link (odometry in odom)
+    assert (b"map", b"odom") in frames and (b"odom", b"base_link") in frames
+    assert (b"map", b"base_link") not in frames
 
 
 @pytest.mark.slow

@@ -81,7 +81,7 @@ def test_a_folder_output_is_refused(fake: Path, tmp_path: Path) -> None:
         ("survey: {step_m: true}\n", "survey.step_m: a number is expected, got a boolean"),
         ("survey: {laps: 1}\nsurvey: {laps: 2}\n", "the key 'survey' appears twice"),
         ("world: {sim: {timestep_s: 1.0e-12}}\n", "world.sim.timestep_s"),
-        ("map: {tuning: {localizer: {pnp_iterations: 1000000000000}}}\n", "is over 1000000"),
+        ("localize: {filter: {pnp_iterations: 1000000000000}}\n", "is over 1000000"),
         ("world: {room: {size_m: [true, 4.0]}}\n", "a number is expected"),
     ],
 )

@@ -153,3 +153,26 @@ def test_serve_live_streams_what_a_client_asks_the_robot(tmp_path: Path) -> None
         except subprocess.TimeoutExpired:
             process.kill()
             process.wait()
+
+
+def test_the_map_is_latched_for_a_viewer_that_joins_late() -> None:
+    from naoloc.viz.live import LATCH_S
+
+    with FoxgloveLive(0) as live:
+        live.map(np.zeros((5, 3)), np.array([[1.0, 2.0, 1.5]]))
+        time.sleep(LATCH_S + 0.5)  # the viewer connects after the map was sent
+        got = asyncio.run(_watch(live.port, {"/map/keyframes", "/map/landmarks"}, lambda: None))
+    assert b"map" in got["/map/keyframes"] and b"map" in got["/map/landmarks"]
+
+
+def test_tf_carries_rep105_frames() -> None:
+    with FoxgloveLive(0) as live:
+
+        def act() -> None:
+            for _ in range(3):
+                live.odometry((1.0, 0.0, 0.0))
+                live.estimate((2.0, 1.0, 0.5))
+                time.sleep(0.05)
+
+        got = asyncio.run(_watch(live.port, {"/tf"}, act))
+    assert b"odom" in got["/tf"] and b"base_link" in got["/tf"]

@@ -184,8 +184,8 @@ def test_file_is_chunked_and_indexed_with_room_to_map(tmp_path: Path) -> None:
     qz, qw = (np.frombuffer(rotation[k][0], "<f8")[0] for k in (3, 4))
     assert 2 * math.atan2(qz, qw) == pytest.approx(0.5)
     assert {(tf[2][0], tf[3][0]) for tf in tfs} == {
-        (b"room", b"map"), (b"map", b"base_link"), (b"base_link", b"camera")
-    }  # fmt: skip
+        (b"room", b"map"), (b"map", b"odom"), (b"odom", b"base_link"), (b"base_link", b"camera")
+    }  # REP-105 with the raw odometry given  # fmt: skip
 
 
 def test_no_room_to_map_without_an_origin(tmp_path: Path) -> None:

@@ -23,6 +23,9 @@ from naoloc.errors import DatasetError
 from naoloc.mapping.from_survey import MIN_MAP_FRAMES
 from naoloc.viz.progress import Progress
 
+# The stages naoloc.mapping.builder reports once each after "features" (progress bar total).
+LATER_STAGES = ("vocabulary", "gcs", "poses", "landmarks")
+
 
 def build_from_dataset(
     dataset: Path,
@@ -61,18 +64,19 @@ def build_from_dataset(
         )
 
     from naoloc.mapping.from_survey import build_from_survey
-    from naoloc.viz.plots import plot_map
+    from naoloc.viz.plots import furniture_footprints, plot_map
 
-    bars: dict[str, Progress] = {}
+    # One bar for the whole build: a step per image's features, then one per later stage
+    # (each of those reports 1/1 alone), the stage named after the bar.
+    bar = Progress(None, "build-map", enabled=show_progress)
+    done_in: dict[str, int] = {}
 
     def progress(stage: str, done: int, total: int) -> None:
-        bar = bars.get(stage)
-        if bar is None:
-            for old in bars.values():
-                old.close()
-            bars.clear()
-            bar = bars[stage] = Progress(total, f"build-map {stage}", enabled=show_progress)
-        bar.update(done - bar.count)
+        if stage == "features" and not bar.total:
+            bar.total = total + len(LATER_STAGES)
+        step = done - done_in.get(stage, 0)
+        done_in[stage] = done
+        bar.update(step, stage)
 
     try:
         vmap, facts = build_from_survey(
@@ -89,13 +93,14 @@ def build_from_dataset(
             on_checks=on_checks,
         )
     finally:
-        for bar in bars.values():
-            bar.close()
+        bar.close()
     png = output.with_suffix(".png")
     finals = [output, png] if config_copy is None else [output, png, config_copy]
     with staged(*finals) as temps:
         vmap.save(temps[0])
-        plot_map(vmap, temps[1])
+        plot_map(
+            vmap, temps[1], furniture=furniture_footprints(cfg, vmap.meta.get("origin_room_pose"))
+        )
         if config_copy is not None:
             temps[2].write_text(cfg.to_yaml(), encoding="utf-8")
     timings = vmap.timings

@@ -32,6 +32,24 @@ MIN_LANDMARKS = 30
 TABLE3_FRACTIONS: tuple[tuple[float, float], ...] = ((0.875, 0.125), (0, 0), (0.125, 0.875), (1, 1))
 
 
+NEEDS_A_SIMULATOR = (
+    "the demo needs a simulated robot (backend {backend} has no simulator: it teleports the "
+    "robot between poses); on a real NAO run `naoloc check`, then survey, build-map and "
+    "localize (docs/real-nao.md)"
+)
+
+
+def refuse_a_real_robot(cfg: Config) -> None:
+    """Refuse, before connecting, a config whose robot cannot be a simulator.
+
+    Raises:
+        BackendError: ``robot.backend: naoqi`` without ``robot.sim_service`` (a real NAO,
+            or a served one whose simulator the demo may not use).
+    """
+    if cfg.robot.backend == "naoqi" and not cfg.robot.sim_service:
+        raise BackendError(NEEDS_A_SIMULATOR.format(backend="naoqi"))
+
+
 def demo_poses(robot: Robot, meta: dict[str, Any], sides: tuple[float, float], seed: int = 0,
                extra: int = 2) -> list[Pose2D]:  # fmt: skip
     """Demo test poses in the room frame: Table 3's (scaled) plus ``extra`` random ones.
@@ -80,12 +98,16 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     from naoloc.viz.plots import furniture_footprints, plot_estimates
 
     t0 = time.monotonic()
+    refuse_a_real_robot(cfg)  # before connecting: a real NAO never hears from the demo
     out: Path = args.output
     out.mkdir(parents=True, exist_ok=True)
     dataset, map_path = out / "survey.mcap", out / "map.npz"
     rows: list[dict[str, Any]] = []
     pairs: list[tuple[Pose2D, Pose2D | None]] = []
+    covariances: list[Any] = []
     with interruptible(), connect(cfg) as robot:
+        if robot.sim is None:  # before the first motion call
+            raise BackendError(NEEDS_A_SIMULATOR.format(backend=robot.backend))
         room = cfg.world.room
         print(
             f"demo: backend {robot.backend}, room {room.size_m[0]:g} x {room.size_m[1]:g} m "
@@ -122,6 +144,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
             est = loc.estimate
             if est.found:
                 pairs.append((Pose2D(est.x, est.y, est.theta), loc.truth))
+                covariances.append(est.covariance)
             truth = loc.truth
             rows.append(
                 {
@@ -139,7 +162,9 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
             note = "" if est.found else " (no estimate)"
             print(f"demo: pose {i + 1}/{len(poses)}: error {err_m:.2f} m{note}", flush=True)
     furniture = furniture_footprints(cfg, surveyed.meta.get("origin_room_pose"))
-    png = plot_estimates(vmap, pairs, out / "localize.png", furniture=furniture)
+    png = plot_estimates(
+        vmap, pairs, out / "localize.png", furniture=furniture, covariances=covariances
+    )  # fmt: skip
     write_resolved_config(cfg, out / "config.yaml")  # with the outputs it describes
     _print_table(rows)
     return _summary(cfg, t0, frames, built, rows, dataset, map_path, png, stopped)
@@ -152,13 +177,14 @@ def _survey(robot: Robot, cfg: Config, dataset: Path) -> tuple[SurveyResult, int
         The survey summary, the frames written, the dataset to build from (the partial file
         when the survey stopped) and why it stopped (None when it completed).
     """
-    from naoloc.behaviours.survey import SurveyResult
+    from naoloc.behaviours.survey import SurveyResult, frames_per_lap
     from naoloc.data.dataset import partial_path_for
     from naoloc.data.recorder import record_survey
     from naoloc.viz.progress import Progress
 
     try:
-        with Progress(None, "survey") as bar:
+        expected = frames_per_lap(cfg.survey_sides(), cfg.survey.step_m) * cfg.survey.laps
+        with Progress(expected, "survey") as bar:
             surveyed, frames = record_survey(robot, cfg, dataset, bar.update)
     except MotionError as err:  # the robot is stopped; the frames so far are on disk
         partial = partial_path_for(dataset)

@@ -11,20 +11,37 @@ from naoloc.config import Config
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """A short look, then a walk home on the live pose; report where it ended."""
-    from naoloc.app.commands.localize import in_the_map
+    from naoloc.app.commands.localize import at_in_both_frames, in_the_map, recorder
+    from naoloc.app.commands.survey import ros2_copy
     from naoloc.behaviours.go_home import go_home
     from naoloc.data.outputs import config_path_for, staged
     from naoloc.viz.live import follow_track
-    from naoloc.viz.plots import plot_go_home
+    from naoloc.viz.plots import furniture_footprints, plot_go_home
     from naoloc.viz.progress import Progress
 
     png: Path | None = args.png
-    with in_the_map(args, cfg) as (robot, live, vmap), Progress(None, "go-home") as bar:
+    with (
+        in_the_map(args, cfg) as (robot, live, vmap),
+        recorder(args, cfg, vmap, "go-home") as rec,
+        Progress(None, "go-home poses") as bar,
+    ):
+        shown = follow_track(live)
+
+        def on_point(point: Any) -> None:
+            shown(point)
+            bar.update(1)
+
         result = go_home(
-            robot, vmap, cfg, on_point=follow_track(live),
-            on_step=lambda note: bar.update(1, note),
+            robot, vmap, cfg, on_point=on_point, on_step=bar.note, localizer=rec
         )  # fmt: skip
     summary = result.summary()
+    if args.record is not None:
+        summary["record"] = str(args.record)
+        ros2 = ros2_copy(args, args.record)
+        if ros2 is not None:
+            summary["ros2"] = str(ros2)
+    if args.at is not None:
+        summary["at"] = at_in_both_frames(args.at, vmap.meta)
     verdict = "reached home" if result.reached else "gave up"
     line = (
         f"go-home: {verdict} in {result.robot_s:.1f} s ({result.looks} looks, "
@@ -40,8 +57,9 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         believed = [p.estimate.pose() for p in result.trail if p.estimate.found]
         with staged(png, config_path_for(png)) as (tmp_png, tmp_cfg):
             plot_go_home(
-                vmap, believed, [result.first.estimate], tmp_png,
-                truth=result.truth, reached=result.reached,
+                vmap, believed, result.stops, tmp_png, truth=result.truth,
+                reached=result.reached,
+                furniture=furniture_footprints(cfg, vmap.meta.get("origin_room_pose")),
             )  # fmt: skip
             tmp_cfg.write_text(cfg.to_yaml(), encoding="utf-8")
         summary["png"] = str(png)

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 from naoloc.config import Config
-from naoloc.errors import BackendError, NoEstimate
+from naoloc.errors import BackendError, ConfigError, NoEstimate
 from naoloc.robot import Robot
 
 
@@ -28,10 +28,76 @@ def teleport_if_asked(robot: Robot, at: list[float] | None) -> None:
     robot.sim.teleport(x, y, theta)
 
 
+def at_in_both_frames(at: list[float] | None, meta: dict[str, Any]) -> dict[str, Any] | None:
+    """``--at`` echoed in the room frame (as given) and in the map frame (through the map's
+    ``origin_room_pose``: null when the map does not know where its origin stood).
+
+    Returns:
+        ``{"room": [x, y, theta], "map": [x, y, theta] | None}``, or None without ``--at``.
+    """
+    if at is None:
+        return None
+    from naoloc.geometry import Pose2D, relative_pose
+
+    room = Pose2D(*(float(v) for v in at))
+    origin = meta.get("origin_room_pose")
+    in_map = None
+    if origin is not None:
+        in_map = relative_pose(Pose2D.from_list(origin), room).normalized()
+    return {
+        "room": [round(v, 4) for v in room],
+        "map": None if in_map is None else [round(v, 4) for v in in_map],
+    }
+
+
 @contextmanager
-def in_the_map(args: argparse.Namespace, cfg: Config) -> Iterator[tuple[Robot, Any, Any]]:
+def recorder(args: argparse.Namespace, cfg: Config, vmap: Any, verb: str) -> Iterator[Any]:
+    """``--record FILE.mcap``: a filter whose every observation is written there as it is
+    made (None without ``--record``). A run that fails keeps ``FILE.partial.mcap``.
+
+    Yields:
+        A :class:`naoloc.data.recording.RecordedLocalizer`, or None.
+
+    Raises:
+        ConfigError: ``--record`` with ``localize.mode: paper`` (it does not use the filter).
+    """
+    path: Path | None = getattr(args, "record", None)
+    if path is None:
+        if getattr(args, "format", "naoloc") != "naoloc":
+            raise ConfigError("--format ros2 converts a recording: give --record FILE.mcap")
+        yield None
+        return
+    if cfg.localize.mode == "paper":
+        raise ConfigError("--record records the filter's observations; localize.mode paper "
+                          "does not use the filter")  # fmt: skip
+    from naoloc.data.dataset import interruption_reason
+    from naoloc.data.recording import RecordedLocalizer, RecordingWriter
+
+    writer = RecordingWriter(path, cfg, verb, args.map, vmap)
+    loc = RecordedLocalizer(vmap, cfg, writer)
+    try:
+        yield loc
+    except BaseException as err:
+        last = loc.pose() if loc.log else None
+        kept = writer.finish(last, complete=False, reason=interruption_reason(err))
+        if kept is not None:
+            err.add_note(f"partial recording kept in {kept}")
+        raise
+    writer.finish(loc.pose())
+
+
+@contextmanager
+def in_the_map(
+    args: argparse.Namespace, cfg: Config, check: Callable[[Any], None] | None = None
+) -> Iterator[tuple[Robot, Any, Any]]:
     """What the verbs on a map share: the map (``-m``), an interruptible run, the live view
     (``--live``) and the connected robot (moved to ``--at`` on a simulator), the map shown.
+
+    Args:
+        args: The verb's arguments.
+        cfg: The config.
+        check: Called with the map before connecting (a verb's own checks: nothing has
+            moved yet when it raises).
 
     Yields:
         The robot (watched by the live view), the live view and the map.
@@ -42,6 +108,8 @@ def in_the_map(args: argparse.Namespace, cfg: Config) -> Iterator[tuple[Robot, A
     from naoloc.viz.live import live_from_args, show_map, watch
 
     vmap = load_map(args.map)
+    if check is not None:
+        check(vmap)
     with interruptible(), live_from_args(args) as live, connect(cfg) as robot:
         teleport_if_asked(robot, args.at)
         show_map(live, vmap)
@@ -50,19 +118,27 @@ def in_the_map(args: argparse.Namespace, cfg: Config) -> Iterator[tuple[Robot, A
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """Localize once (head scan, or the paper's 1-2 pictures in mode paper) and report."""
+    from naoloc.app.commands.survey import ros2_copy
     from naoloc.behaviours.localize import localize
     from naoloc.data.outputs import config_path_for, staged
     from naoloc.mapping.checks import map_checked
     from naoloc.viz.live import show_estimate
-    from naoloc.viz.plots import plot_localization
+    from naoloc.viz.plots import furniture_footprints, plot_localization
     from naoloc.viz.progress import Progress
 
     png: Path | None = args.png
-    with in_the_map(args, cfg) as (robot, live, vmap):
+    with in_the_map(args, cfg) as (robot, live, vmap), recorder(args, cfg, vmap, "localize") as rec:
         with Progress(None, "localize") as bar:
-            loc = localize(robot, vmap, cfg, on_step=lambda n: bar.update(1, n))
+            loc = localize(robot, vmap, cfg, on_step=bar.note, localizer=rec)
         show_estimate(live, loc.estimate)
     summary = loc.summary()
+    if args.record is not None:
+        summary["record"] = str(args.record)
+        ros2 = ros2_copy(args, args.record)
+        if ros2 is not None:
+            summary["ros2"] = str(ros2)
+    if args.at is not None:
+        summary["at"] = at_in_both_frames(args.at, vmap.meta)
     summary["map_checked"] = map_checked(vmap)
     if not summary["map_checked"]:
         print("localize: this map failed build-map's checks (kept with --keep-unchecked): "
@@ -80,7 +156,10 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     print(line)
     if png is not None:  # the picture and its config copy appear together, or not at all
         with staged(png, config_path_for(png)) as (tmp_png, tmp_cfg):
-            plot_localization(vmap, est, tmp_png, truth=loc.truth, queries=loc.queries)
+            furniture = furniture_footprints(cfg, vmap.meta.get("origin_room_pose"))
+            plot_localization(
+                vmap, est, tmp_png, truth=loc.truth, queries=loc.queries, furniture=furniture
+            )  # fmt: skip
             tmp_cfg.write_text(cfg.to_yaml(), encoding="utf-8")
         summary["png"] = str(png)
         print(f"localize: picture -> {png}")

@@ -33,6 +33,7 @@ import os
 import signal
 import sys
 import threading
+from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
@@ -177,6 +178,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     timeout = COMMAND_TIMEOUT_S if timeout is None else float(timeout)
     if not 0.0 <= timeout <= 60.0:
         raise BackendError(f"--command-timeout must be in [0, 60] s, got {timeout:g}")
+    trace = _open_trace(getattr(args, "trace", None))  # an unwritable path fails first
     few_malloc_arenas()  # before the server's threads exist
     live = live_from_args(args)
     stop = threading.Event()
@@ -204,6 +206,8 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
                 keyfile=str(key) if key else None,
                 cfg=cfg,
             ) as server:
+                if trace is not None:
+                    server.core.trace = trace.write_call
                 print(f"naoloc serve: listening on {server.endpoint} ({transport})", flush=True)
                 while not stop.wait(0.2):
                     pass
@@ -221,6 +225,30 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     finally:
         robot_thread.close()
         live.close()
+        if trace is not None:
+            trace.close()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
     return summary
+
+
+class _Trace:
+    """``serve --trace FILE``: one line ``<caller> <Service>.<method>`` per call, flushed
+    at once (a test or an owner reads which calls a client made, motion ones included)."""
+
+    def __init__(self, path: Path) -> None:
+        self._file = path.open("a", encoding="utf-8", buffering=1)
+        self._lock = threading.Lock()
+
+    def write_call(self, caller: str, service: str, method: str) -> None:
+        with self._lock:
+            if not self._file.closed:
+                self._file.write(f"{caller} {service}.{method}\n")
+
+    def close(self) -> None:
+        with self._lock:
+            self._file.close()
+
+
+def _open_trace(path: Path | None) -> _Trace | None:
+    return None if path is None else _Trace(path)

@@ -8,26 +8,49 @@ import json
 import sys
 from typing import Any
 
+import numpy as np
+
 from naoloc.config import Config
 
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """A short look, then a pose per frame while walking to ``--to`` (map frame)."""
-    from naoloc.app.commands.localize import in_the_map
+    from naoloc.app.commands.localize import at_in_both_frames, in_the_map, recorder
+    from naoloc.app.commands.survey import ros2_copy
     from naoloc.behaviours.track import TrackPoint, track
     from naoloc.errors import NoEstimate
     from naoloc.geometry import Pose2D
     from naoloc.viz.live import follow_track
 
     route = [Pose2D(float(args.to[0]), float(args.to[1]))] if args.to is not None else []
-    with in_the_map(args, cfg) as (robot, live, vmap):
+
+    def check(vmap: Any) -> None:
+        """Refuse, before connecting, a --to the map does not know as free floor."""
+        from naoloc.errors import ConfigError
+        from naoloc.navigation.grid import grid_of_map
+
+        for goal in route:
+            free = grid_of_map(vmap).free_test(clearance=False)
+            if not free(np.array([goal.x]), np.array([goal.y]))[0]:
+                raise ConfigError(
+                    f"--to ({goal.x:g}, {goal.y:g}) is not on the map's free floor (map frame, "
+                    "m: from the survey's start); the robot did not move"
+                )
+
+    with (
+        in_the_map(args, cfg, check) as (robot, live, vmap),
+        recorder(args, cfg, vmap, "track") as rec,
+    ):
         shown = follow_track(live)
 
         def emit(point: TrackPoint) -> None:
             shown(point)
             print(json.dumps(point.to_json()), flush=True)
 
-        result = track(robot, vmap, cfg, route=route, duration_s=args.duration, on_point=emit)
+        result = track(
+            robot, vmap, cfg, route=route, duration_s=args.duration, on_point=emit,
+            localizer=rec,
+        )  # fmt: skip
     points = result.points
     found = [p for p in points if p.estimate.found]
     span = points[-1].t - points[0].t if len(points) > 1 else 0.0
@@ -40,6 +63,13 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         else None,
         "walked_m": round(result.walked_m, 3),
     }
+    if args.record is not None:
+        summary["record"] = str(args.record)
+        ros2 = ros2_copy(args, args.record)
+        if ros2 is not None:
+            summary["ros2"] = str(ros2)
+    if args.at is not None:
+        summary["at"] = at_in_both_frames(args.at, vmap.meta)
     errors = [e for p in found if (e := p.error_m) is not None]
     if errors:
         summary["median_error_m"] = round(sorted(errors)[len(errors) // 2], 4)

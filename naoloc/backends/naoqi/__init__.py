@@ -14,6 +14,8 @@ imports, qimessaging otherwise, zmq when the server greets with ZeroMQ).
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
+from typing import Any
 
 from naoloc.config import Config
 from naoloc.errors import BackendError
@@ -65,8 +67,21 @@ def create(cfg: Config) -> Robot:
             sim=sim,
             backend="naoqi",
             info={"url": rc.url, "transport": transport},
+            read=_reader(link, rc.timeout_s),
             _closer=link.close,
         )
     except BaseException:
         link.close()
         raise
+
+
+def _reader(link: Any, timeout_s: float) -> Callable[..., Any]:
+    """``read(service, method, *args)``: a repeatable read of any served service, or
+    None when the NAOqi does not serve ``service``."""
+
+    def read(service: str, method: str, *args: Any) -> Any:
+        if not link.has_service(service):
+            return None
+        return link.call(service, method, *args, timeout_s=timeout_s, idempotent=True)
+
+    return read

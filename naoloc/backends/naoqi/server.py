@@ -216,6 +216,8 @@ class ServedRobot:
         self.calls = 0
         self.errors = 0
         self.deadman_stops = 0
+        # Called with (caller, service, method) before each call runs (``serve --trace``).
+        self.trace: Callable[[str, str, str], None] | None = None
 
     def _add_scripted_services(self, robot: Robot, cfg: Any, record_dir: Path | None) -> None:
         """The services NAO scripts open first (issue 32): sensors, navigation, media,
@@ -308,6 +310,8 @@ class ServedRobot:
             NaolocError: One line ``"<Service>.<method>: <problem>"`` (its type kept).
         """
         self.touch(caller, heartbeat=service == WATCHDOG)
+        if self.trace is not None:
+            self.trace(caller, service, method)
         with self._seen_lock:
             self._busy[caller] = self._busy.get(caller, 0) + 1
         self._stopping.now = (service, method) in URGENT
