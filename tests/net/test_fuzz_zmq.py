@@ -127,7 +127,7 @@ def test_missing_curve_keys_are_one_line_and_nothing_hangs(tmp_path: Path) -> No
     client_cfg = tmp_path / "c.yaml"
     client_cfg.write_text(
         "robot: {backend: naoqi, transport: zmq, url: 'tcp://127.0.0.1:9', "
-        "curve_keys: /nonexistent}\n"
+        "curve_keys: /nonexistent}\nsurvey: {side_m: [2.0, 2.0]}\n"
     )
     done = _run("survey", "-c", str(client_cfg), "-o", str(tmp_path / "x.mcap"))
     lines = done.stderr.strip().splitlines()
