@@ -11,8 +11,7 @@ from naoloc.config import Config
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """A short look, then a walk home on the live pose; report where it ended."""
-    from naoloc.app.commands.localize import at_in_both_frames, in_the_map, recorder
-    from naoloc.app.commands.survey import ros2_copy
+    from naoloc.app.commands.localize import in_the_map, recorder, run_outputs
     from naoloc.behaviours.go_home import go_home
     from naoloc.data.outputs import config_path_for, staged
     from naoloc.viz.live import follow_track
@@ -35,13 +34,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
             robot, vmap, cfg, on_point=on_point, on_step=bar.note, localizer=rec
         )  # fmt: skip
     summary = result.summary()
-    if args.record is not None:
-        summary["record"] = str(args.record)
-        ros2 = ros2_copy(args, args.record)
-        if ros2 is not None:
-            summary["ros2"] = str(ros2)
-    if args.at is not None:
-        summary["at"] = at_in_both_frames(args.at, vmap.meta)
+    summary.update(run_outputs(args, vmap))
     verdict = "reached home" if result.reached else "gave up"
     line = (
         f"go-home: {verdict} in {result.robot_s:.1f} s ({result.looks} looks, "

@@ -86,6 +86,22 @@ def recorder(args: argparse.Namespace, cfg: Config, vmap: Any, verb: str) -> Ite
     writer.finish(loc.pose())
 
 
+def run_outputs(args: argparse.Namespace, vmap: Any) -> dict[str, Any]:
+    """What a verb on a map adds to its JSON line: the recording (``--record``, and its ROS 2
+    copy with ``--format ros2``) and the start in both frames (``--at``)."""
+    from naoloc.app.commands.survey import ros2_copy
+
+    out: dict[str, Any] = {}
+    if args.record is not None:
+        out["record"] = str(args.record)
+        ros2 = ros2_copy(args, args.record)
+        if ros2 is not None:
+            out["ros2"] = str(ros2)
+    if args.at is not None:
+        out["at"] = at_in_both_frames(args.at, vmap.meta)
+    return out
+
+
 @contextmanager
 def in_the_map(
     args: argparse.Namespace, cfg: Config, check: Callable[[Any], None] | None = None
@@ -118,7 +134,6 @@ def in_the_map(
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """Localize once (head scan, or the paper's 1-2 pictures in mode paper) and report."""
-    from naoloc.app.commands.survey import ros2_copy
     from naoloc.behaviours.localize import localize
     from naoloc.data.outputs import config_path_for, staged
     from naoloc.mapping.checks import map_checked
@@ -132,13 +147,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
             loc = localize(robot, vmap, cfg, on_step=bar.note, localizer=rec)
         show_estimate(live, loc.estimate)
     summary = loc.summary()
-    if args.record is not None:
-        summary["record"] = str(args.record)
-        ros2 = ros2_copy(args, args.record)
-        if ros2 is not None:
-            summary["ros2"] = str(ros2)
-    if args.at is not None:
-        summary["at"] = at_in_both_frames(args.at, vmap.meta)
+    summary.update(run_outputs(args, vmap))
     summary["map_checked"] = map_checked(vmap)
     if not summary["map_checked"]:
         print("localize: this map failed build-map's checks (kept with --keep-unchecked): "

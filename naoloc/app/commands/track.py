@@ -15,8 +15,7 @@ from naoloc.config import Config
 
 def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
     """A short look, then a pose per frame while walking to ``--to`` (map frame)."""
-    from naoloc.app.commands.localize import at_in_both_frames, in_the_map, recorder
-    from naoloc.app.commands.survey import ros2_copy
+    from naoloc.app.commands.localize import in_the_map, recorder, run_outputs
     from naoloc.behaviours.track import TrackPoint, track
     from naoloc.errors import NoEstimate
     from naoloc.geometry import Pose2D
@@ -63,13 +62,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         else None,
         "walked_m": round(result.walked_m, 3),
     }
-    if args.record is not None:
-        summary["record"] = str(args.record)
-        ros2 = ros2_copy(args, args.record)
-        if ros2 is not None:
-            summary["ros2"] = str(ros2)
-    if args.at is not None:
-        summary["at"] = at_in_both_frames(args.at, vmap.meta)
+    summary.update(run_outputs(args, vmap))
     errors = [e for p in found if (e := p.error_m) is not None]
     if errors:
         summary["median_error_m"] = round(sorted(errors)[len(errors) // 2], 4)
