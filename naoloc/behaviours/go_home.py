@@ -169,6 +169,8 @@ def go_home(
             if math.hypot(here.x - home.x, here.y - home.y) <= tol:
                 robot.motion.stopMove()
                 _face(robot, here, home)
+                # The filter takes the turn, so the final pose's heading is after it.
+                result.trail.append(_point(tracker, on_point))
                 result.reached = True
                 break
             now = robot_clock(robot)
