@@ -77,10 +77,13 @@ class FuzzReport:
         bytes_received: Bytes the server answered with.
         connect_retries: Connections that needed a second try (a loaded machine: libqi's
             accept loop fell behind the listen backlog).
+        sessions: Authenticated connections opened (each one the server closes on a fuzzed
+            message is replaced by a new one).
     """
 
     sent: int = 0
     bytes_sent: int = 0
+    sessions: int = 0
     connections: int = 0
     closed_by_server: int = 0
     bytes_received: int = 0
@@ -172,6 +175,7 @@ def fuzz_libqi(
             if session is None:
                 session = _open(address, report)
                 _authenticate(session)
+                report.sessions += 1
                 in_session = 0
             alive = _send(session, _in_session(rng), report)
             in_session += 1
