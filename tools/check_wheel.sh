@@ -109,8 +109,9 @@ step "naoloc demo: $(tail -n 1 "$work/demo.out" | cut -c1-160)"
   >>"$work/install.log" 2>&1 || fail "pip install pytest"
 cp -r "$repo/tests" "$work/tests"
 "$vpy" -m pytest -q -p no:cacheprovider --rootdir "$work" -c /dev/null \
-  "$work/tests/test_packaging.py" "$work/tests/test_config.py" "$work/tests/test_cli.py" \
-  "$work/tests/test_fake_backend.py" "$work/tests/test_live.py" >"$work/pytest.log" 2>&1 \
+  "$work/tests/integration/test_packaging.py" "$work/tests/unit/test_config.py" \
+  "$work/tests/integration/test_cli.py" "$work/tests/integration/test_fake_backend.py" \
+  "$work/tests/net/test_live.py" >"$work/pytest.log" 2>&1 \
   || fail "tests against the installed package: $(tail -n 5 "$work/pytest.log")"
 step "tests against the installed package: $(tail -n 1 "$work/pytest.log")"
 rm -rf "$work"
