@@ -60,31 +60,17 @@ def room_config(
         A config with the survey 1 m from the walls, 2 laps, 0.2 m steps (small: 0.7 m, 3).
     """
     rng = np.random.default_rng(seed)
-    extra: dict[str, Any] = {}
+    room: dict[str, Any] = {}  # what a kind of room adds (drawn before the pictures a wall)
+    world: dict[str, Any] = {}
     if mixed:
         sx = round(float(rng.uniform(4.0, 10.0)), 1)
         sy = round(float(rng.uniform(3.0, min(sx, 8.0))), 1)
         small_room = min(sx, sy) < 4.5
         survey = {"laps": 3 if small_room else 2, "step_m": 0.2,
                   "wall_offset_m": 0.7 if small_room else 1.0}  # fmt: skip
-        extra = {"style": str(rng.choice(["home", "office"]))}
-        light = float(rng.choice([0.3, 1.0, 1.5]))
-        base = {
-            "robot": {"backend": backend},
-            "world": {
-                "room": {
-                    "size_m": [sx, sy],
-                    "seed": int(seed),
-                    "posters_per_wall": int(rng.integers(4, 7)),
-                    "furniture": True,
-                    **extra,
-                },
-                "sim": {"light": light},
-            },
-            "survey": survey,
-        }
-        return load_config(_wall_on_the_right(base)).with_overrides(overrides or {})
-    if small:
+        room = {"style": str(rng.choice(["home", "office"]))}
+        world = {"sim": {"light": float(rng.choice([0.3, 1.0, 1.5]))}}
+    elif small:
         sx, sy = round(float(rng.uniform(3.5, 4.5)), 1), round(float(rng.uniform(2.8, 3.5)), 1)
         survey = {"laps": 3, "step_m": 0.2, "wall_offset_m": 0.7}
     else:
@@ -98,7 +84,9 @@ def room_config(
                 "seed": int(seed),
                 "posters_per_wall": int(rng.integers(4, 7)),
                 "furniture": True,
-            }
+                **room,
+            },
+            **world,
         },
         "survey": survey,
     }
