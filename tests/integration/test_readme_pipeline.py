@@ -12,18 +12,9 @@ from pathlib import Path
 import pytest
 import yaml
 
+from tests.rooms import PIPELINE_ROOM as ROOM
+
 ROOT = Path(__file__).resolve().parents[2]
-ROOM = {
-    "robot": {"backend": "fake"},
-    "world": {
-        "room": {"size_m": [4.0, 4.0], "seed": 3, "style": "posters"},
-        "camera_realism": {"profile": "ideal"},
-        "odometry": {"profile": "ideal"},
-        "sim": {"camera_sway": False},
-    },
-    "survey": {"laps": 1, "step_m": 0.4},
-    "map": {"neurons": 30, "epochs": 10, "vocabulary_size": 32, "seed": 4},
-}
 
 
 def _pipeline_block() -> str:

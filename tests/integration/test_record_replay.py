@@ -7,7 +7,6 @@ calibration, REP-105 frames (map -> odom -> base_link -> camera), odometry in ``
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -15,27 +14,10 @@ import pytest
 import yaml
 
 from naoloc.app.cli import main
+from tests.rooms import PIPELINE_ROOM as ROOM
+from tests.rooms import run_json
 
-ROOM: dict[str, Any] = {
-    "robot": {"backend": "fake"},
-    "world": {
-        "room": {"size_m": [4.0, 4.0], "seed": 3, "style": "posters"},
-        "camera_realism": {"profile": "ideal"},
-        "odometry": {"profile": "ideal"},
-        "sim": {"camera_sway": False},
-    },
-    "survey": {"laps": 1, "step_m": 0.4},
-    "map": {"neurons": 30, "epochs": 10, "vocabulary_size": 32, "seed": 4},
-}
 AT = ["1.4", "2.2", "0.6"]  # room frame
-
-
-def _run(argv: list[str], capsys: pytest.CaptureFixture[str], ok: int = 0) -> dict[str, Any]:
-    code = main(argv)
-    out, err = capsys.readouterr()
-    assert code == ok, err
-    result: dict[str, Any] = json.loads(out.strip().splitlines()[-1])
-    return result
 
 
 @pytest.fixture(scope="module")
@@ -58,11 +40,11 @@ def test_a_recorded_localization_replays_to_the_same_estimate(
     cfg, vmap = mapped
     capsys.readouterr()
     rec = tmp_path / "loc.mcap"
-    live = _run(
+    live = run_json(
         ["localize", "-c", str(cfg), "-m", str(vmap), "--at", *AT, "--record", str(rec)], capsys
     )
     assert live["status"] == "tracking" and live["record"] == str(rec) and rec.is_file()
-    again = _run(["replay", str(rec), "-m", str(vmap)], capsys)
+    again = run_json(["replay", str(rec), "-m", str(vmap)], capsys)
     assert again["same"] is True and again["verb"] == "localize" and again["complete"]
     assert again["pictures"] == live["images"] and again["observations"] >= live["images"]
     for key in ("x", "y", "theta"):  # the live JSON rounds to 4 digits, the replay does not
@@ -80,8 +62,10 @@ def test_track_and_go_home_record_and_replay(
     capsys.readouterr()
     rec = tmp_path / f"{verb}.mcap"
     extra = ["--duration", "1.5"] if verb == "track" else []
-    _run([verb, "-c", str(cfg), "-m", str(vmap), "--at", *AT, "--record", str(rec), *extra], capsys)
-    again = _run(["replay", str(rec), "-m", str(vmap)], capsys)
+    run_json(
+        [verb, "-c", str(cfg), "-m", str(vmap), "--at", *AT, "--record", str(rec), *extra], capsys
+    )
+    again = run_json(["replay", str(rec), "-m", str(vmap)], capsys)
     assert again["same"] is True and again["verb"] == verb
 
 
@@ -96,7 +80,9 @@ def test_a_recording_is_a_rep105_dataset_with_the_lens_calibration(
     cfg, vmap = mapped
     capsys.readouterr()
     rec = tmp_path / "loc.mcap"
-    _run(["localize", "-c", str(cfg), "-m", str(vmap), "--at", *AT, "--record", str(rec)], capsys)
+    run_json(
+        ["localize", "-c", str(cfg), "-m", str(vmap), "--at", *AT, "--record", str(rec)], capsys
+    )
     data = read_dataset(rec)  # a dataset: the pictures read back, lossless
     assert data.meta["recording"] == "localize" and len(data.keyframes) >= 2
     with open(rec, "rb") as f:

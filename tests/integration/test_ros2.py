@@ -9,7 +9,6 @@ faster than the camera) becomes a survey dataset that builds a map. No ROS insta
 
 from __future__ import annotations
 
-import json
 import math
 from collections import Counter
 from pathlib import Path
@@ -20,18 +19,9 @@ import pytest
 import yaml
 
 from naoloc.app.cli import main
+from tests.rooms import PIPELINE_ROOM as ROOM
+from tests.rooms import run_json
 
-ROOM: dict[str, Any] = {
-    "robot": {"backend": "fake"},
-    "world": {
-        "room": {"size_m": [4.0, 4.0], "seed": 3, "style": "posters"},
-        "camera_realism": {"profile": "ideal"},
-        "odometry": {"profile": "ideal"},
-        "sim": {"camera_sway": False},
-    },
-    "survey": {"laps": 1, "step_m": 0.4},
-    "map": {"neurons": 30, "epochs": 10, "vocabulary_size": 32, "seed": 4},
-}
 AT = ["1.4", "2.2", "0.6"]
 
 
@@ -46,14 +36,6 @@ def _decoded(path: Path | str, topics: list[str] | None = None) -> list[Any]:
             (channel.topic, schema.name, msg)
             for schema, channel, _, msg in reader.iter_decoded_messages(topics=topics)
         ]
-
-
-def _run(argv: list[str], capsys: pytest.CaptureFixture[str], ok: int = 0) -> dict[str, Any]:
-    code = main(argv)
-    out, err = capsys.readouterr()
-    assert code == ok, err
-    result: dict[str, Any] = json.loads(out.strip().splitlines()[-1])
-    return result
 
 
 @pytest.fixture(scope="module")
@@ -112,7 +94,7 @@ def test_format_ros2_decodes_with_the_mcap_ros2_reader(
     assert main(["build-map", "-c", str(cfg), "-d", str(survey), "-o", str(vmap)]) == 0
     capsys.readouterr()
     rec = tmp_path / "r.mcap"
-    got = _run(["localize", "-c", str(cfg), "-m", str(vmap), "--at", *AT, "--record", str(rec),
+    got = run_json(["localize", "-c", str(cfg), "-m", str(vmap), "--at", *AT, "--record", str(rec),
                 "--format", "ros2"], capsys)  # fmt: skip
     estimates = [msg for _, _, msg in _decoded(got["ros2"], topics=["/pose/estimate"])]
     assert estimates and estimates[-1].header.frame_id == "map"
@@ -138,12 +120,12 @@ def test_our_ros2_survey_reads_back_exactly_and_builds_a_map(
         assert np.allclose(kf.camera_pose, other.camera_pose, atol=1e-12)
         assert (kf.head_yaw, kf.head_pitch) == (other.head_yaw, other.head_pitch)
     vmap = tmp_path / "m.npz"
-    built = _run(["build-map", "-c", str(cfg), "-d", str(ros2), "-o", str(vmap),
+    built = run_json(["build-map", "-c", str(cfg), "-d", str(ros2), "-o", str(vmap),
                   "--keep-unchecked"], capsys)  # fmt: skip
     assert built["images"] == len(back.keyframes) and built["checked"] is False
     from naoloc.geometry import Pose2D, relative_pose
 
-    found = _run(["localize", "-c", str(cfg), "-m", str(vmap), "--at", *AT], capsys)
+    found = run_json(["localize", "-c", str(cfg), "-m", str(vmap), "--at", *AT], capsys)
     origin = Pose2D.from_list(ours.meta["origin_room_pose"])  # the same map frame
     truth = relative_pose(origin, Pose2D(*(float(v) for v in AT)))
     assert found["status"] == "tracking"
@@ -253,6 +235,6 @@ def test_a_naoqi_driver2_recording_becomes_a_survey_that_builds_a_map(
         assert abs(kf.pose.x - rel.x) < 1e-9 and abs(kf.pose.y - rel.y) < 1e-9
         assert np.allclose(kf.camera_pose, mine.camera_pose, atol=1e-9)  # base_footprint
         assert kf.head_yaw == mine.head_yaw
-    built = _run(["build-map", "-c", str(cfg), "-d", str(bag), "-o", str(tmp_path / "d.npz"),
+    built = run_json(["build-map", "-c", str(cfg), "-d", str(bag), "-o", str(tmp_path / "d.npz"),
                   "--keep-unchecked"], capsys)  # fmt: skip
     assert built["images"] == n and built["neurons"] == 30
