@@ -669,17 +669,25 @@ class FilterTuning(_Model):
         "this is the mapped room",
     )
     identity_forget_per_picture: float = Field(
-        0.03,
+        0.01,
         ge=0,
         lt=1,
         description="share of the evidence that this is the mapped room a hypothesis forgets "
-        "per picture (slower than forget_per_observation: the room does not change)",
+        "per picture with distinctive matches (slower than forget_per_observation: the room "
+        "does not change; a blank or blurred view ages nothing)",
     )
     identity_cap_nats: float = Field(
         12.0,
         gt=0,
         description="most evidence one picture gives that this is the mapped room (nats): "
         "below null_nats, so no single picture decides it",
+    )
+    identity_floor_nats: float = Field(
+        3.0,
+        gt=0,
+        description="most evidence one picture gives against the mapped room (nats): its "
+        "matches share one view (a repeated texture, a poster matched to its twin), so one "
+        "picture alone cannot undo what many showed",
     )
     min_pnp_inliers: int = Field(
         12, ge=6, description="PnP inliers of one picture that propose a new hypothesis"
@@ -780,7 +788,7 @@ class FilterTuning(_Model):
         "update it (Mahalanobis, 3 degrees of freedom)",
     )
     forget_per_observation: float = Field(
-        0.1,
+        0.03,
         ge=0,
         lt=1,
         description="share of its evidence a hypothesis forgets per observation (a carried "

@@ -106,6 +106,30 @@ def relative_pose(start: Pose2D, end: Pose2D) -> Pose2D:
     return (pose2DInverse(start) * end).normalized()
 
 
+def midpose(a: Pose2D, b: Pose2D) -> Pose2D:
+    """The pose halfway between ``a`` and ``b`` (same frame; the heading the short way)."""
+    return Pose2D(
+        0.5 * (a.x + b.x),
+        0.5 * (a.y + b.y),
+        modulo2PI(a.theta + 0.5 * modulo2PI(b.theta - a.theta)),
+    )
+
+
+def mid_transform(a: Sequence[float], b: Sequence[float]) -> list[float]:
+    """The rigid transform halfway between two (16 floats, row-major 4 x 4, as ALMotion's
+    ``getTransform``): the translations averaged, the rotations' mean projected back onto
+    a rotation (SVD; exact for the small differences of one motion cycle)."""
+    m = 0.5 * (np.asarray(a, np.float64).reshape(4, 4) + np.asarray(b, np.float64).reshape(4, 4))
+    u, _, vt = np.linalg.svd(m[:3, :3])
+    r = u @ vt
+    if np.linalg.det(r) < 0:
+        u[:, -1] *= -1
+        r = u @ vt
+    m[:3, :3] = r
+    m[3] = (0.0, 0.0, 0.0, 1.0)
+    return [float(v) for v in m.reshape(-1)]
+
+
 # --- SE(2) on numpy arrays: poses ``(3,)`` = (x, y, theta) in metres and radians. ---
 
 

@@ -32,7 +32,7 @@ from naoloc.behaviours.nearest_wall import detect_nearest_wall, detect_wall_by_f
 from naoloc.behaviours.wall_follow import FloorEye
 from naoloc.config import Config
 from naoloc.errors import MotionError
-from naoloc.geometry import Pose2D, modulo2PI, relative_pose
+from naoloc.geometry import Pose2D, midpose, modulo2PI, relative_pose
 from naoloc.localization.localizer import Localizer, PoseEstimate, Status
 from naoloc.localization.observations import LineScan, Observation, Picture
 from naoloc.localization.paper import localize_paper
@@ -200,8 +200,9 @@ class Eyes:
         """The floor-wall lines the bottom camera sees now (None: no usable picture)."""
         if self.floor is None:
             return None
+        before = pose_of(self.robot.motion, True)  # bracketing the view's own readings
         view = self.floor.view()
-        odometry = pose_of(self.robot.motion, True)
+        odometry = midpose(before, pose_of(self.robot.motion, True))
         if view is None:
             return None
         t0 = time.process_time()

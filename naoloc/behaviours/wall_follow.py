@@ -20,7 +20,7 @@ import numpy as np
 
 from naoloc.config import CameraConfig
 from naoloc.constants import FRAME_ROBOT
-from naoloc.geometry import Pose2D, modulo2PI
+from naoloc.geometry import Pose2D, mid_transform, modulo2PI
 from naoloc.perception.floorline import WallLine, detect_wall_line, detect_wall_lines
 from naoloc.perception.wall_gate import in_front_range, side_line_angle
 from naoloc.robot import Robot
@@ -125,12 +125,17 @@ class FloorEye:
     def view(self) -> tuple[np.ndarray, float, float, np.ndarray] | None:
         """A picture (BGR), its fields of view (rad) and the camera's pose in FRAME_ROBOT;
         None when the robot reports no usable camera pose."""
+        motion = self.robot.motion
+        # The camera's pose read just before and after the image, halfway between (the
+        # head may be moving: see Camera.keyframe).
+        before = motion.getTransform("CameraBottom", FRAME_ROBOT, True)
         frame = self.camera.frame()
+        after = motion.getTransform("CameraBottom", FRAME_ROBOT, True)
         info = self.camera.info(frame)
-        pose = np.asarray(
-            self.robot.motion.getTransform("CameraBottom", FRAME_ROBOT, True), np.float64
-        )
-        if pose.size != 16 or not np.all(np.isfinite(pose)):
+        if len(before) != 16 or len(after) != 16:
+            return None
+        pose = np.asarray(mid_transform(before, after), np.float64)
+        if not np.all(np.isfinite(pose)):
             return None
         return frame.bgr(), info.hfov, info.vfov, pose
 

@@ -115,7 +115,10 @@ class MultiHypothesisFilter:
             self.window.append((evidence, odometry))
         # Odometry alone says nothing of where the robot is: only evidence ages the scores.
         keep = 1.0 - self.tun.forget_per_observation if evidence is not None else 1.0
-        kept = 1.0 - self.tun.identity_forget_per_picture
+        # Only a picture with distinctive matches ages the evidence of which room this is
+        # (a blank wall or a blurred view says nothing of it).
+        distinctive = isinstance(evidence, PictureMatches) and evidence.distinct.shape[0] > 0
+        kept = 1.0 - self.tun.identity_forget_per_picture if distinctive else 1.0
         leader = max(self.hypotheses, key=lambda h: h.score) if self.hypotheses else None
         gains = {}
         for h in self.hypotheses:
@@ -231,7 +234,9 @@ class MultiHypothesisFilter:
         self._behind = self._behind + 1 if behind else 0
         # Pictures the leader used to explain (its average evidence per informative picture)
         # and now explains nothing of, several in a row: it stopped fitting.
-        missed = gain < 1.0 and leader.usual > tun.contradiction_nats
+        # Only a picture the map explains somewhere (its PnP found a pose) can say so: a
+        # blurred or unmapped view explains nothing of any place and says nothing.
+        missed = gain < 1.0 and leader.usual > tun.contradiction_nats and m.proposal is not None
         leader.misses = leader.misses + 1 if missed else 0
         for h in self.hypotheses:
             if id(h) in gains:
@@ -287,12 +292,13 @@ class MultiHypothesisFilter:
     def _identity(self, h: Hypothesis, evidence: Evidence) -> float:
         """What an observation says of the map's room being the robot's at ``h``: a
         picture's distinctive matches at its pose (:func:`distinct_only`), at most
-        ``identity_cap_nats`` (one picture's matches share its view: one picture alone is
-        not another room's proof); lines, nothing."""
+        ``identity_cap_nats`` for it and ``identity_floor_nats`` against it (one picture's
+        matches share its view: one picture alone is not another room's proof); lines,
+        nothing."""
         if not isinstance(evidence, PictureMatches) or evidence.distinct.shape[0] == 0:
             return 0.0
         gain = picture_log_ratio(distinct_only(evidence), h.pose, self.tun)
-        return min(self.tun.identity_cap_nats, gain)
+        return min(self.tun.identity_cap_nats, max(-self.tun.identity_floor_nats, gain))
 
     def _propose(self, m: PictureMatches) -> None:
         """New hypotheses where the pictures put the robot, unless one explains them.
@@ -414,8 +420,12 @@ class MultiHypothesisFilter:
         for h in hs:
             if kept and h.score < kept[0].score - self.tun.prune_nats:
                 continue
-            if any(k.mahalanobis(h.pose, h.cov) < self.tun.merge_mahalanobis for k in kept):
-                continue  # the same place as a better hypothesis
+            same = [k for k in kept if k.mahalanobis(h.pose, h.cov) < self.tun.merge_mahalanobis]
+            if same:
+                # The same place as a better hypothesis: what the pictures showed of the
+                # room there stays with it (a hypothesis spawned from the window knows less).
+                same[0].seen_score = max(same[0].seen_score, h.seen_score)
+                continue
             kept.append(h)
             if len(kept) >= self.tun.max_hypotheses:
                 break
@@ -432,8 +442,12 @@ class MultiHypothesisFilter:
         weights = np.exp(scores - scores.max())
         weights /= weights.sum()
         best = int(np.argmax(scores))
-        seen = self.hypotheses[best].seen_score
-        other = 1.0 / (1.0 + math.exp(min(700.0, seen - null)))
+        # The room's evidence is the places' by their weight (log of the weighted mean of
+        # exp(seen)): a new place the window spawned knows less of the room than an old one.
+        seens = np.array([h.seen_score for h in self.hypotheses])
+        top = float(seens.max())
+        seen = top + math.log(max(1e-300, float(np.sum(weights * np.exp(seens - top)))))
+        other = 1.0 / (1.0 + math.exp(min(700.0, max(-700.0, seen - null))))
         weights = np.append(weights * (1.0 - other), other)
         h = self.hypotheses[best]
         # The belief's spread about the best pose: its own covariance, the hypotheses near

@@ -14,7 +14,7 @@ import math
 from naoloc.config import CameraConfig, Config
 from naoloc.constants import FOV_V5, FOV_V6, FRAME_ROBOT, JOINT_LIMITS
 from naoloc.errors import RobotError
-from naoloc.geometry import Pose2D, relative_pose
+from naoloc.geometry import Pose2D, mid_transform, midpose, relative_pose
 from naoloc.robot import Robot, pose_of
 from naoloc.robot.image import Frame, frame_from_naoqi
 from naoloc.robot.keyframe import CameraInfo, Keyframe
@@ -118,16 +118,27 @@ class Camera:
             The keyframe (pose relative to ``origin``) and the raw FRAME_WORLD odometry.
         """
         motion = self.robot.motion
-        frame = self.frame()
-        odometry = pose_of(motion, True)
-        command = pose_of(motion, False)
-        yaw, pitch = (float(a) for a in motion.getAngles(["HeadYaw", "HeadPitch"], True))
-        # The robot's own kinematics (a real NAO's included), never an assumed geometry.
         name = "CameraTop" if self.index == 0 else "CameraBottom"
-        camera_pose = tuple(float(v) for v in motion.getTransform(name, FRAME_ROBOT, True))
+        # The robot moves while the picture is taken (a walk, a swinging head): the state is
+        # read just before and just after the image, in mirrored order, and each value is
+        # the midpoint of its two readings, which bracket the image symmetrically (one
+        # ALMotion cycle each way in a simulator; on a NAO, the call's time).
+        odometry0 = pose_of(motion, True)
+        angles0 = motion.getAngles(["HeadYaw", "HeadPitch"], True)
+        camera0 = motion.getTransform(name, FRAME_ROBOT, True)  # its own kinematics, a NAO's too
+        frame = self.frame()
         truth = None
-        if self.robot.sim is not None:
+        if self.robot.sim is not None:  # the simulator's truth when the picture was taken
             truth = Pose2D.from_list(self.robot.sim.true_pose())
+        camera1 = motion.getTransform(name, FRAME_ROBOT, True)
+        angles1 = motion.getAngles(["HeadYaw", "HeadPitch"], True)
+        odometry1 = pose_of(motion, True)
+        command = pose_of(motion, False)
+        odometry = midpose(odometry0, odometry1)
+        yaw, pitch = (0.5 * (float(a) + float(b)) for a, b in zip(angles0, angles1, strict=True))
+        if len(camera0) != 16 or len(camera1) != 16:
+            raise RobotError("the robot reported a camera pose that is not 16 numbers")
+        camera_pose = tuple(mid_transform(camera0, camera1))
         pose = odometry if origin is None else relative_pose(origin, odometry)
         if command_origin is not None:
             command = relative_pose(command_origin, command)

@@ -264,9 +264,11 @@ class Simulation:
         """The predefined posture the legs are in (0.1 rad tolerance), or "Unknown".
 
         The last posture gone to wins among postures with the same legs (StandZero and
-        the lying postures, since the model does not lie down).
+        the lying postures, since the model does not lie down). While the robot walks, the
+        legs' stance (their commands, without the gait's swing) decides, as NAO reports
+        "Standing" while it walks.
         """
-        q = self.data.qpos[self._qadr]
+        q = self.command if self._gait_phase != 0.0 else self.data.qpos[self._qadr]
         legs = [self.joint_index[n] for n in _LEG_JOINTS]
         names = [self.posture_name, *(n for n in POSTURES if n != self.posture_name)]
         for name in names:
