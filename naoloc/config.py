@@ -892,13 +892,15 @@ class LocalizeConfig(_Model):
 class GoHomeConfig(_Model):
     """Walk back to the map origin."""
 
-    tolerance_m: float = Field(0.15, gt=0, description="stop when this close to the origin (m)")
+    tolerance_m: float = Field(
+        0.05, gt=0, description="stop when the belief is this close to the origin (m)"
+    )
     max_tries: int = Field(
         8,
         ge=1,
         le=50,
-        description="walks toward the origin (each at most 2 m; the last stops short of "
-        "home and a side-step settles it)",
+        description="looks from standstill, the first one included (another when the "
+        "belief is lost on the way)",
     )
 
 

@@ -6,8 +6,10 @@ map implies (:mod:`naoloc.navigation.grid`), steered by pure pursuit
 (:mod:`naoloc.navigation.route`) from the belief's pose, which every camera frame updates
 while it walks (:class:`naoloc.behaviours.track.Tracker`). It re-plans from the belief every
 :data:`REPLAN_S` seconds. It stops to look only when the belief is lost, at most
-``go_home.max_tries`` looks in all, and stops for good within ``go_home.tolerance_m`` of
-home, facing map +x as the survey started.
+``go_home.max_tries`` looks in all. Within :data:`APPROACH_M` of home it stops walking and
+steps onto home with short ``moveTo`` steps, refining the belief standing between them,
+until the belief is within ``go_home.tolerance_m`` of home facing map +x as the survey
+started.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from naoloc.behaviours.localize import (
 from naoloc.behaviours.track import Tracker, TrackPoint
 from naoloc.config import Config
 from naoloc.constants import WALK_SPEED
-from naoloc.geometry import Pose2D, modulo2PI
+from naoloc.geometry import Pose2D, modulo2PI, relative_pose
 from naoloc.localization.localizer import Localizer, PoseEstimate
 from naoloc.localization.observations import Relocalize
 from naoloc.mapping.map import VisualMap
@@ -43,6 +45,11 @@ REPLAN_S = 3.0
 REACHED_M = 0.15
 # Frames without a pose before the robot stops to look.
 LOST_FRAMES = 15
+# Within this of home (by the belief) the walk ends and the final approach begins (m).
+APPROACH_M = 0.3
+# The final approach: frames taken standing before each short step, and steps at most.
+SETTLE_FRAMES = 8
+FINAL_STEPS = 3
 # Robot time allowed per metre of the first plan, and at least (s).
 TIME_PER_M = 30.0
 MIN_TIME_S = 60.0
@@ -166,13 +173,12 @@ def go_home(
                 continue
             lost = 0
             here = est.pose()
-            if math.hypot(here.x - home.x, here.y - home.y) <= tol:
+            if math.hypot(here.x - home.x, here.y - home.y) <= max(tol, APPROACH_M):
                 robot.motion.stopMove()
-                _face(robot, here, home)
-                # The filter takes the turn, so the final pose's heading is after it.
-                result.trail.append(_point(tracker, on_point))
-                result.reached = True
-                break
+                result.reached = _final_approach(robot, tracker, loc, home, tol, result, on_point)
+                if result.reached or not loc.pose().found:
+                    break
+                continue  # still short (the belief moved): walk on
             now = robot_clock(robot)
             if not route or now - planned_at > REPLAN_S:
                 try:
@@ -213,11 +219,42 @@ def _point(tracker: Tracker, on_point: Callable[[TrackPoint], None] | None) -> T
     return point
 
 
-def _face(robot: Robot, here: Pose2D, home: Pose2D) -> None:
-    """Turn in place to face the map's +x (the survey's start heading)."""
-    turn = modulo2PI(home.theta - here.theta)
-    if abs(turn) > 0.1:
+def _final_approach(
+    robot: Robot,
+    tracker: Tracker,
+    loc: Localizer,
+    home: Pose2D,
+    tol: float,
+    result: GoHomeResult,
+    on_point: Callable[[TrackPoint], None] | None,
+) -> bool:
+    """Short steps onto home, facing map +x (the survey's start heading).
+
+    Standing, the tracker takes :data:`SETTLE_FRAMES` frames (the head keeps swinging, so
+    walls and art refine the belief), then one blocking ``moveTo`` to where the belief puts
+    home; at most :data:`FINAL_STEPS` steps. The filter takes every step's odometry.
+
+    Returns:
+        Whether the belief ends within ``tol`` of home, facing +x within 0.1 rad.
+    """
+    for step in range(FINAL_STEPS + 1):
+        for _ in range(SETTLE_FRAMES):
+            result.trail.append(_point(tracker, on_point))
+        est = loc.pose()
+        if not est.found:
+            return False
+        here = est.pose()
+        rel = relative_pose(here, home)  # home in FRAME_ROBOT now
+        near = math.hypot(rel.x, rel.y) <= tol
+        if near and abs(modulo2PI(home.theta - here.theta)) <= 0.1:
+            return True
+        if step == FINAL_STEPS or math.hypot(rel.x, rel.y) > 2 * APPROACH_M:
+            return near
         try:
-            robot.motion.moveTo(0.0, 0.0, turn)
+            if near:  # only the heading is left
+                robot.motion.moveTo(0.0, 0.0, modulo2PI(home.theta - here.theta))
+            else:
+                robot.motion.moveTo(rel.x, rel.y, rel.theta)
         finally:
             robot.motion.stopMove()
+    return False

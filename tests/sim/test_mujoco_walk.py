@@ -212,3 +212,19 @@ def test_postures_stiffness_and_rest() -> None:
             posture.goToPosture("Handstand", 0.5)
         with pytest.raises(RobotError):
             sim.teleport(0.05, 1.0, 0.0)  # into the wall
+
+
+def test_move_while_walking_keeps_walking_and_leaves_the_head_alone() -> None:
+    """NAOqi's move() while walking changes the velocity only: mid-stride legs (the gait's
+    swing) are still the standing posture, the walk goes on and the head keeps its angle."""
+    with _connect(_ideal(ROOMS[0])) as robot:
+        motion = robot.motion
+        motion.wakeUp()
+        motion.move(0.08, 0.0, 0.0)
+        motion.setAngles(["HeadYaw"], [0.6], 0.5)
+        for _ in range(60):  # a second of walking, move() at the control rate
+            motion.move(0.08, 0.0, 0.0)
+        assert motion.getAngles(["HeadYaw"], True)[0] == pytest.approx(0.6, abs=0.02)
+        assert motion.moveIsActive()
+        assert motion.getRobotPosition(False)[0] > 0.05  # it walked on, not stood up again
+        motion.stopMove()

@@ -78,3 +78,20 @@ def test_list_round_trip_and_distance() -> None:
     assert p.to_list() == [1.0, 2.0, 3.0]
     assert list(p) == [1.0, 2.0, 3.0]
     assert p.distance(Pose2D(4.0, 6.0, 0.0)) == pytest.approx(5.0)
+
+
+def test_midpose_and_mid_transform_halve_a_motion() -> None:
+    from naoloc.geometry import mid_transform, midpose
+
+    a, b = Pose2D(1.0, 2.0, 3.1), Pose2D(1.2, 1.8, -3.1)  # across the +-pi seam
+    mid = midpose(a, b)
+    assert (mid.x, mid.y) == pytest.approx((1.1, 1.9))
+    assert abs(math.remainder(mid.theta - math.pi, 2 * math.pi)) < 1e-9
+
+    def rz(t: float, x: float) -> list[float]:
+        c, s = math.cos(t), math.sin(t)
+        return [c, -s, 0, x, s, c, 0, 0, 0, 0, 1, 0.5, 0, 0, 0, 1]
+
+    m = np.array(mid_transform(rz(0.1, 0.0), rz(0.3, 0.2))).reshape(4, 4)
+    assert m == pytest.approx(np.array(rz(0.2, 0.1)).reshape(4, 4), abs=2e-3)
+    assert np.linalg.det(m[:3, :3]) == pytest.approx(1.0)

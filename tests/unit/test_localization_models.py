@@ -188,3 +188,42 @@ def test_the_filter_starts_from_the_lines_and_a_picture_decides() -> None:
     b = f.belief()
     assert b.pose is not None and math.hypot(*(b.pose[:2] - truth[:2])) < 0.02
     assert decide(b, TUN)[0] is Status.TRACKING
+
+
+def test_a_merged_hypothesis_keeps_what_the_pictures_showed_of_the_room() -> None:
+    f = MultiHypothesisFilter(WALLS, TUN)
+    old = Hypothesis(np.array([2.0, 0.5, 0.7]), np.diag([0.02**2, 0.02**2, 0.01**2]), TUN, 50.0)
+    new = Hypothesis(np.array([2.005, 0.5, 0.7]), np.diag([0.02**2, 0.02**2, 0.01**2]), TUN, 55.0)
+    old.seen_score, new.seen_score = 40.0, 3.0  # the new one was spawned from the window
+    f.hypotheses = [old, new]
+    f._prune()
+    assert len(f.hypotheses) == 1 and f.hypotheses[0] is new
+    assert f.hypotheses[0].seen_score == 40.0
+
+
+def test_the_room_evidence_is_the_places_by_their_weight() -> None:
+    """Two places equally likely, one of which the pictures showed to be the mapped room
+    many times: the room is the mapped one, whichever place leads."""
+    f = MultiHypothesisFilter(WALLS, TUN)
+    a = Hypothesis(np.array([2.0, 0.5, 0.7]), np.eye(3) * 1e-4, TUN, 50.0)
+    b = Hypothesis(np.array([1.0, 0.5, 0.7]), np.eye(3) * 1e-4, TUN, 50.0)
+    a.seen_score, b.seen_score = 3.0, 60.0
+    f.hypotheses = [a, b]
+    assert f.belief().other_room < 1e-6
+    a.seen_score = b.seen_score = 3.0
+    assert f.belief().other_room > 0.99
+
+
+def test_a_picture_no_place_explains_does_not_contradict_the_leader() -> None:
+    """A blurred or unmapped view (its PnP found no pose) explains nothing of the leader,
+    nor of anywhere else: it says nothing, and the leader keeps tracking."""
+    truth = np.array([2.0, 0.5, 0.7])
+    f = MultiHypothesisFilter(WALLS, TUN)
+    odo = Pose2D(0.0, 0.0, 0.0)
+    f.observe(None, odo)
+    f.set_pose(truth, np.diag([0.01**2, 0.01**2, 0.005**2]), 40.0)
+    f.hypotheses[0].usual = 3 * TUN.contradiction_nats  # its pictures usually fit well
+    for seed in range(4):  # every match wrong: a view no place of the map explains
+        f.observe(_picture(truth, seed=seed, wrong=1.0), odo)
+        assert f.hypotheses[0].misses == 0 and not f.contradicted
+    assert decide(f.belief(), TUN)[1] != "the latest picture puts the robot elsewhere"
