@@ -794,11 +794,26 @@ class FilterTuning(_Model):
         description="share of its evidence a hypothesis forgets per observation (a carried "
         "robot's old place fades)",
     )
-    missed_pictures: int = Field(
-        2,
-        ge=2,
-        description="informative pictures in a row that explain nothing of the leading place "
-        "(whose pictures usually do) before it gives no pose: the robot was carried",
+    fade_share: float = Field(
+        0.15,
+        gt=0,
+        lt=1,
+        description="the leading place's recent picture evidence below this share of its "
+        "usual makes it contradicted (gives no pose): the robot was carried, or it is wrong",
+    )
+    recent_rate: float = Field(
+        0.5,
+        gt=0,
+        le=1,
+        description="weight of the latest informative picture in the recent "
+        "average of a place's evidence",
+    )
+    usual_rate: float = Field(
+        0.1,
+        gt=0,
+        le=1,
+        description="weight of the latest informative picture in the usual "
+        "(slow) average of a place's evidence",
     )
     contradiction_nats: float = Field(
         6.0,

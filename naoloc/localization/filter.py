@@ -217,14 +217,19 @@ class MultiHypothesisFilter:
         return total
 
     def _watch(self, leader: Hypothesis, m: PictureMatches, gains: dict[int, float]) -> None:
-        """Whether the leading hypothesis still explains what the robot sees: when two
+        """Whether the leading hypothesis still explains what the robot sees (nav2 AMCL
+        watches its likelihood's short- against its long-term average the same way).
+
+        The leader is contradicted (the robot was carried, or the leader is wrong) when two
         informative pictures in a row are explained clearly (``2 * contradiction_nats``) and
-        ``contradiction_nats`` better by another hypothesis, or a new one a picture proposed,
-        or when ``missed_pictures`` in a row explain nothing of a place its pictures usually
-        explain (nav2 AMCL watches its likelihood's short-term average the same way), the
-        leader is contradicted (the robot was carried, or the leader is wrong), its
-        score is cut to the other-room alternative's and the window keeps only those two
-        observations: the evidence of what the robot sees now decides.
+        ``contradiction_nats`` better by another hypothesis, or a new one a picture proposed;
+        or when the evidence its informative pictures gave lately (``recent_rate``'s fast
+        average) fell below ``fade_share`` of what they usually gave (``usual_rate``'s slow
+        average, which stops following while it has faded). A picture is informative when
+        the map could explain it somewhere (its PnP found a pose, or it has
+        ``min_pnp_inliers`` distinctive matches): a blurred or unmapped view says nothing.
+        While contradicted, the window keeps only the latest observations: what was seen
+        before may be of another place (a carried robot's odometry did not move).
         """
         tun = self.tun
         gain = gains.get(id(leader), 0.0)
@@ -232,19 +237,24 @@ class MultiHypothesisFilter:
         best = max([*gains.values(), *fresh], default=0.0)
         behind = best > 2 * tun.contradiction_nats and best - gain > tun.contradiction_nats
         self._behind = self._behind + 1 if behind else 0
-        # Pictures the leader used to explain (its average evidence per informative picture)
-        # and now explains nothing of, several in a row: it stopped fitting.
-        # Only a picture the map explains somewhere (its PnP found a pose) can say so: a
-        # blurred or unmapped view explains nothing of any place and says nothing.
-        missed = gain < 1.0 and leader.usual > tun.contradiction_nats and m.proposal is not None
-        leader.misses = leader.misses + 1 if missed else 0
-        for h in self.hypotheses:
-            if id(h) in gains:
-                h.usual += 0.1 * (gains[id(h)] - h.usual)
-        self.contradicted = self._behind >= 2 or leader.misses >= tun.missed_pictures
+        if m.proposal is not None or m.distinct.shape[0] >= tun.min_inliers:
+            for h in self.hypotheses:
+                if id(h) not in gains:
+                    continue
+                # The more distinctive matches (or its own PnP pose), the more a picture
+                # says on its own: with twice min_pnp_inliers it is all the recent evidence.
+                share = m.distinct.shape[0] / (2.0 * tun.min_pnp_inliers)
+                rate = 1.0 if m.proposal is not None else min(1.0, tun.recent_rate * 2 * share)
+                h.recent += rate * (gains[id(h)] - h.recent)
+                if h.recent >= 0.5 * h.usual:  # not while it is fading
+                    h.usual += tun.usual_rate * (gains[id(h)] - h.usual)
+        faded = (
+            leader.usual > tun.contradiction_nats and leader.recent < tun.fade_share * leader.usual
+        )
+        if faded:  # its past no longer speaks for it: it competes on what is seen now
+            leader.score = min(leader.score, 0.0)
+        self.contradicted = self._behind >= 2 or faded
         if self.contradicted:
-            # What was seen before the pictures stopped fitting may be of another place (a
-            # carried robot's odometry did not move): new hypotheses replay only since then.
             while len(self.window) > 2:
                 self.window.popleft()
 

@@ -145,8 +145,8 @@ class Hypothesis:
         self.line_support = 0  # floor lines that corrected it
         self.last_inliers = 0
         self.seen_score = 0.0  # the pictures' part of the score (nats)
-        self.usual = 0.0  # average evidence per informative picture (nats)
-        self.misses = 0  # informative pictures in a row it explained nothing of
+        self.usual = 0.0  # slow average of its evidence per informative picture (nats)
+        self.recent = 0.0  # fast average of the same (nats)
 
     @property
     def pose(self) -> np.ndarray:

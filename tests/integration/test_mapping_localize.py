@@ -338,11 +338,6 @@ def test_a_carried_robot_notices_and_is_found_again(carried: tuple[list[Any], li
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="between a carry and the recovery the filter may "
-    "briefly take a look-alike place confidently (issue 30's integrity target)",
-)
 def test_no_confident_wrong_pose_between_a_carry_and_the_recovery(
     carried: tuple[list[Any], list[Any]],
 ) -> None:

@@ -3,6 +3,7 @@ model, one hypothesis' updates, the status decision (a table), proposals from li
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -215,15 +216,35 @@ def test_the_room_evidence_is_the_places_by_their_weight() -> None:
 
 
 def test_a_picture_no_place_explains_does_not_contradict_the_leader() -> None:
-    """A blurred or unmapped view (its PnP found no pose) explains nothing of the leader,
+    """A blurred view (no distinctive match, no PnP pose) explains nothing of the leader,
     nor of anywhere else: it says nothing, and the leader keeps tracking."""
     truth = np.array([2.0, 0.5, 0.7])
     f = MultiHypothesisFilter(WALLS, TUN)
     odo = Pose2D(0.0, 0.0, 0.0)
     f.observe(None, odo)
     f.set_pose(truth, np.diag([0.01**2, 0.01**2, 0.005**2]), 40.0)
-    f.hypotheses[0].usual = 3 * TUN.contradiction_nats  # its pictures usually fit well
-    for seed in range(4):  # every match wrong: a view no place of the map explains
-        f.observe(_picture(truth, seed=seed, wrong=1.0), odo)
-        assert f.hypotheses[0].misses == 0 and not f.contradicted
+    f.hypotheses[0].usual = f.hypotheses[0].recent = 3 * TUN.contradiction_nats  # usually fit
+    for seed in range(4):  # every match wrong and none distinctive: a blurred view
+        blurred = dataclasses.replace(
+            _picture(truth, seed=seed, wrong=1.0),
+            distinct=np.zeros((0, 3)),
+            distinct_pixels=np.zeros((0, 2)),
+        )
+        f.observe(blurred, odo)
+        assert f.hypotheses[0].recent == 3 * TUN.contradiction_nats and not f.contradicted
     assert decide(f.belief(), TUN)[1] != "the latest picture puts the robot elsewhere"
+
+
+def test_a_view_the_leader_no_longer_explains_contradicts_it() -> None:
+    """Distinctive matches the leading place explains nothing of, where its pictures
+    usually fit well (a carried robot): it gives no pose at once, and its past evidence
+    no longer outweighs a new place."""
+    truth = np.array([2.0, 0.5, 0.7])
+    f = MultiHypothesisFilter(WALLS, TUN)
+    odo = Pose2D(0.0, 0.0, 0.0)
+    f.observe(None, odo)
+    f.set_pose(truth, np.diag([0.01**2, 0.01**2, 0.005**2]), 40.0)
+    f.hypotheses[0].usual = f.hypotheses[0].recent = 5 * TUN.contradiction_nats
+    f.observe(_picture(truth + np.array([1.5, -0.5, 1.0]), seed=5), odo)  # somewhere else
+    assert f.contradicted
+    assert decide(f.belief(), TUN)[0] is not Status.TRACKING
