@@ -815,6 +815,13 @@ class FilterTuning(_Model):
         description="weight of the latest informative picture in the usual "
         "(slow) average of a place's evidence",
     )
+    usual_hold_share: float = Field(
+        0.5,
+        gt=0,
+        le=1,
+        description="the usual average stops following a place's evidence while the recent "
+        "one is below this share of it (a fading place keeps what it used to explain)",
+    )
     contradiction_nats: float = Field(
         6.0,
         gt=0,

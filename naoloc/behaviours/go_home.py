@@ -245,10 +245,11 @@ def _final_approach(
             return False
         here = est.pose()
         rel = relative_pose(here, home)  # home in FRAME_ROBOT now
-        near = math.hypot(rel.x, rel.y) <= tol
+        dist = math.hypot(rel.x, rel.y)
+        near = dist <= tol
         if near and abs(modulo2PI(home.theta - here.theta)) <= 0.1:
             return True
-        if step == FINAL_STEPS or math.hypot(rel.x, rel.y) > 2 * APPROACH_M:
+        if step == FINAL_STEPS or dist > 2 * APPROACH_M:
             return near
         try:
             if near:  # only the heading is left

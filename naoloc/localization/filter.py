@@ -225,9 +225,10 @@ class MultiHypothesisFilter:
         ``contradiction_nats`` better by another hypothesis, or a new one a picture proposed;
         or when the evidence its informative pictures gave lately (``recent_rate``'s fast
         average) fell below ``fade_share`` of what they usually gave (``usual_rate``'s slow
-        average, which stops following while it has faded). A picture is informative when
-        the map could explain it somewhere (its PnP found a pose, or it has
-        ``min_pnp_inliers`` distinctive matches): a blurred or unmapped view says nothing.
+        average, which stops following while the fast one is below ``usual_hold_share`` of
+        it). A picture is informative when the map could explain it somewhere (its PnP
+        found a pose, or it has ``min_inliers`` distinctive matches): a blurred or unmapped
+        view says nothing.
         While contradicted, the window keeps only the latest observations: what was seen
         before may be of another place (a carried robot's odometry did not move).
         """
@@ -242,11 +243,15 @@ class MultiHypothesisFilter:
                 if id(h) not in gains:
                     continue
                 # The more distinctive matches (or its own PnP pose), the more a picture
-                # says on its own: with twice min_pnp_inliers it is all the recent evidence.
-                share = m.distinct.shape[0] / (2.0 * tun.min_pnp_inliers)
-                rate = 1.0 if m.proposal is not None else min(1.0, tun.recent_rate * 2 * share)
+                # says on its own: recent_rate at min_pnp_inliers of them, all at once at
+                # min_pnp_inliers / recent_rate.
+                rate = (
+                    1.0
+                    if m.proposal is not None
+                    else min(1.0, tun.recent_rate * m.distinct.shape[0] / tun.min_pnp_inliers)
+                )
                 h.recent += rate * (gains[id(h)] - h.recent)
-                if h.recent >= 0.5 * h.usual:  # not while it is fading
+                if h.recent >= tun.usual_hold_share * h.usual:  # not while it is fading
                     h.usual += tun.usual_rate * (gains[id(h)] - h.usual)
         faded = (
             leader.usual > tun.contradiction_nats and leader.recent < tun.fade_share * leader.usual
