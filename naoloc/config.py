@@ -505,6 +505,26 @@ class MapCheckTuning(_Model):
         description="largest disagreement of the configured sides along x with those along y, "
         "by the metres per odometry metre each implies (%)",
     )
+    max_lap_disagreement_m: float = Field(
+        0.1,
+        gt=0,
+        description="largest median distance, over a side of a later lap, between its "
+        "pictures' map poses and where the first lap's landmarks put them (m): PnP at a "
+        "wall errs a few centimetres",
+    )
+    lap_view_radius_m: float = Field(
+        0.6, gt=0, description="first-lap pictures within this of a later one are its views (m)"
+    )
+    lap_view_angle_deg: float = Field(
+        30.0, gt=0, le=90, description="and whose view is within this angle of its (deg)"
+    )
+    lap_pnp_inliers: int = Field(
+        12, ge=6, description="PnP inliers that place a later picture on the first lap's landmarks"
+    )
+    lap_pnp_px: float = Field(4.0, gt=0, description="that PnP's RANSAC inlier threshold (px)")
+    lap_min_frames: int = Field(
+        3, ge=1, description="placed pictures a later side needs for its median to count"
+    )
 
 
 class MapTuning(_Model):

@@ -98,6 +98,7 @@ def build_map_data(
     progress: ProgressFn | None = None,
     extractor: FeatureExtractor | None = None,
     far: Sequence[tuple[int, Keyframe]] = (),
+    wall_features: Sequence[Features] | None = None,
 ) -> MapData:
     """Algorithm 4: features -> vocabulary -> histograms -> GCS -> neuron poses; landmarks.
 
@@ -118,6 +119,8 @@ def build_map_data(
         extractor: The feature extractor to use (default: one for ``cfg.features``).
         far: Far pictures, each with its stop (an index into ``keyframes``); poses in the
             frame of the keyframes' poses.
+        wall_features: The features of ``keyframes`` already extracted with ``extractor``
+            (build-map's checks extract them first); None extracts them here.
 
     Returns:
         The map.
@@ -141,9 +144,11 @@ def build_map_data(
     tune = cfg.tuning
     lens = Lens.from_dict((meta or {}).get("lens"))  # the survey camera's, when recorded
     cams_info = [query_camera(kf) for kf in keyframes]
-    feats: list[Features] = []
-    for i, (kf, cam) in enumerate(zip(keyframes, cams_info, strict=True)):
-        feats.append(pinhole_features(extractor, kf, cam, lens))
+    feats: list[Features] = list(wall_features or [])
+    if len(feats) not in (0, walls):
+        raise DatasetError(f"{len(feats)} wall pictures' features for {walls} wall pictures")
+    for i in range(len(feats), n):
+        feats.append(pinhole_features(extractor, keyframes[i], cams_info[i], lens))
         report("features", i + 1, n)
     t1 = time.perf_counter()
     vocab = train_vocabulary(

@@ -22,7 +22,11 @@ the survey's own records can contradict, and gives a figure, its limit and a ver
   and the corners' turn per odometry turn, against what a NAO's odometry errs;
 - ``room_size``: the circuit's sides against the room the config gives: the metres per
   odometry metre the sides imply (configured length over the odometry's walk) along x
-  against those along y.
+  against those along y;
+- ``laps_agree``: the laps' pictures against each other: where the first lap's landmarks
+  put each later lap's pictures (PnP) against where the map has them, the largest median
+  over a side (m, :mod:`naoloc.mapping.laps`); a lap that turned early at furniture and
+  was drawn where the rectangle says stands apart from the first lap's view of it.
 
 The limits are the config's ``map.checks`` tuning record. :func:`check_survey` runs them,
 :func:`failed` names the failing ones, and :func:`map_checked` tells whether a map (its
@@ -39,6 +43,7 @@ from typing import Any, Literal
 import numpy as np
 
 from naoloc.config import MapCheckTuning
+from naoloc.mapping.laps import LapAgreement
 
 Verdict = Literal["pass", "fail", "skip"]
 
@@ -89,7 +94,11 @@ def _check(
 
 
 def check_survey(
-    data: Any, walled: Any, survey: dict[str, Any], tuning: MapCheckTuning
+    data: Any,
+    walled: Any,
+    survey: dict[str, Any],
+    tuning: MapCheckTuning,
+    laps: LapAgreement | None = None,
 ) -> list[Check]:
     """Every check of a survey's map frame (see the module's docstring).
 
@@ -100,6 +109,8 @@ def check_survey(
             when the floor lines could not place them.
         survey: The survey's config section (``laps``, ``wall_offset_m``), as a dict.
         tuning: The limits.
+        laps: The laps' agreement (:func:`naoloc.mapping.laps.lap_agreement`); None skips
+            ``laps_agree``.
 
     Returns:
         The checks, in the order of the module's docstring.
@@ -137,6 +148,7 @@ def check_survey(
     checks.append(_loop_closure(walled, tuning))
     checks.append(_odometry(walled, tuning))
     checks.append(_room_size(walled, meta, tuning))
+    checks.append(_laps_agree(laps, tuning))
     return checks
 
 
@@ -273,6 +285,26 @@ def _room_size(walled: Any, meta: dict[str, Any], tuning: MapCheckTuning) -> Che
     return _check(
         "room_size", worst, tuning.max_size_error_pct, "%", worst <= tuning.max_size_error_pct,
         "the configured sides along x against those along y, by the walk",
+    )  # fmt: skip
+
+
+def _laps_agree(laps: LapAgreement | None, tuning: MapCheckTuning) -> Check:
+    """The largest median, over a later lap's side, of its pictures' distance from where
+    the first lap's landmarks place them."""
+    limit = tuning.max_lap_disagreement_m
+    worst = None if laps is None else laps.worst
+    if laps is None or worst is None:
+        why = (
+            "one lap, or no later side with enough pictures placed on the first lap's landmarks"
+            if laps is not None
+            else "not measured"
+        )
+        return _check("laps_agree", None, limit, "m", None, why)
+    side, figure = worst
+    return _check(
+        "laps_agree", figure, limit, "m", figure <= limit,
+        f"the first lap's landmarks against the map, worst on side {side + 1} "
+        f"({len(laps.frames)} of {laps.tried} later pictures placed)",
     )  # fmt: skip
 
 

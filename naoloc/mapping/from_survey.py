@@ -14,11 +14,15 @@ from typing import Any
 from naoloc.config import MapConfig
 from naoloc.errors import MapCheckFailed
 from naoloc.geometry import Pose2D
-from naoloc.mapping.builder import ProgressFn, carried
+from naoloc.mapping.builder import ProgressFn, carried, pinhole_features
 from naoloc.mapping.checks import Check, check_survey, failed
+from naoloc.mapping.landmarks import query_camera
+from naoloc.mapping.laps import lap_agreement
 from naoloc.mapping.map import VisualMap, build_map
 from naoloc.mapping.wall_poses import SCALE_RANGE, WallPoses, wall_poses
+from naoloc.perception.features import FeatureExtractor, Features
 from naoloc.robot.keyframe import Keyframe
+from naoloc.robot.lens import Lens
 
 # Fewest frames a map is built from: one or two pictures give no place to tell apart.
 MIN_MAP_FRAMES = 3
@@ -140,11 +144,46 @@ def survey_value(data: Any, key: str, default: Any) -> Any:
     return float(value) if isinstance(value, (int, float)) else default
 
 
-def run_checks(data: Any, cfg: MapConfig, walled: WallPoses | None) -> list[Check]:
-    """build-map's checks of the survey's map frame (:mod:`naoloc.mapping.checks`)."""
+def map_extractor(cfg: MapConfig) -> FeatureExtractor:
+    """The feature extractor ``cfg`` builds maps with."""
+    return FeatureExtractor(
+        cfg.features, akaze_threshold=cfg.akaze_threshold, min_keypoints=cfg.min_keypoints
+    )
+
+
+def wall_features(data: Any, keyframes: Sequence[Keyframe], cfg: MapConfig) -> list[Features]:
+    """The features of the survey's wall pictures, as the map is built from them (the map's
+    extractor, the survey camera's lens undone)."""
+    extractor = map_extractor(cfg)
+    lens = Lens.from_dict(data.meta.get("lens") if isinstance(data.meta, dict) else None)
+    return [pinhole_features(extractor, kf, query_camera(kf), lens) for kf in keyframes]
+
+
+def run_checks(
+    data: Any,
+    cfg: MapConfig,
+    walled: WallPoses | None,
+    features: Sequence[Features] | None = None,
+) -> list[Check]:
+    """build-map's checks of the survey's map frame (:mod:`naoloc.mapping.checks`).
+
+    Args:
+        data: The dataset.
+        cfg: The map config.
+        walled: The wall poses (None: the floor lines placed none).
+        features: The wall pictures' features (:func:`wall_features`); extracted here when
+            None and the survey walked more than one lap.
+    """
     survey = data.config.get("survey") if isinstance(data.config, dict) else None
+    laps = None
+    if walled is not None and len(set(s // 4 for s in walled.sides_of)) > 1:
+        feats = wall_features(data, walled.keyframes, cfg) if features is None else features
+        laps = lap_agreement(
+            walled.keyframes, feats, walled.sides_of, map_extractor(cfg).binary,
+            cfg.tuning.checks, cfg.tuning.landmarks,
+        )  # fmt: skip
     return check_survey(data, walled, survey if isinstance(survey, dict) else {},
-                        cfg.tuning.checks)  # fmt: skip
+                        cfg.tuning.checks, laps)  # fmt: skip
 
 
 def far_keyframes(data: Any, keyframes: Sequence[Keyframe]) -> list[tuple[int, Keyframe]]:
@@ -202,7 +241,8 @@ def build_from_survey(
             the first failing check and its figure.
     """
     keyframes, facts, walled = pose_survey(data, cfg, offset)
-    checks = run_checks(data, cfg, walled)
+    feats = wall_features(data, keyframes, cfg)
+    checks = run_checks(data, cfg, walled, feats)
     if on_checks is not None:
         on_checks(checks)
     bad = failed(checks)
@@ -219,5 +259,5 @@ def build_from_survey(
     map_meta.pop("vision", None)  # per-frame survey measurements stay in the dataset
     map_meta.update({**(meta or {}), **facts})
     far = far_keyframes(data, keyframes) if cfg.far_pictures else []
-    vmap = build_map(keyframes, cfg, meta=map_meta, progress=progress, far=far)
+    vmap = build_map(keyframes, cfg, meta=map_meta, progress=progress, far=far, wall_features=feats)
     return vmap, facts

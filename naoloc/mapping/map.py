@@ -74,10 +74,13 @@ def build_map(
     meta: dict[str, Any] | None = None,
     progress: ProgressFn | None = None,
     far: Sequence[tuple[int, Keyframe]] = (),
+    wall_features: Sequence[Features] | None = None,
 ) -> VisualMap:
     """Algorithm 4 (see :func:`naoloc.mapping.builder.build_map_data`) as a :class:`VisualMap`.
 
-    ``far``: the survey's far pictures with their stops (indices into ``keyframes``).
+    ``far``: the survey's far pictures with their stops (indices into ``keyframes``);
+    ``wall_features``: the features of ``keyframes`` when already extracted with the map's
+    extractor.
 
     Raises:
         DatasetError: When there are no keyframes, or a far picture's stop is not one.
@@ -86,7 +89,13 @@ def build_map(
         cfg.features, akaze_threshold=cfg.akaze_threshold, min_keypoints=cfg.min_keypoints
     )
     data = build_map_data(
-        keyframes, cfg, meta=meta, progress=progress, extractor=extractor, far=far
+        keyframes,
+        cfg,
+        meta=meta,
+        progress=progress,
+        extractor=extractor,
+        far=far,
+        wall_features=wall_features,
     )
     return VisualMap.of(data, extractor)
 
