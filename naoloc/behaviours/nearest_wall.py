@@ -232,14 +232,17 @@ def _not_the_arm(line: WallLine) -> bool:
 def decide_side(
     left: float | None, right: float | None, offset: float | None = None
 ) -> Side | None:
-    """The nearer side wall from the floor lines actually seen (distances in m).
+    """The side wall to follow from the floor lines actually seen (distances in m).
 
     A side that shows no line is unseen, not far: it never makes the other side the
-    nearer one by itself. Both seen: the nearer. One seen: that side. With the survey's
-    ``offset``, the chosen line must also be within
-    :data:`naoloc.perception.wall_gate.SIDE_OFFSET_ERROR_M` of it (the wall the survey was
-    set beside): a lone line farther away says nothing about the unseen side, which may be
-    the nearer, and a wall far from the offset cannot be followed. Else None.
+    chosen one by itself. Without ``offset``: both seen, the nearer (the paper's nearest
+    wall); one seen, that side. With the survey's ``offset`` (the robot was set that far
+    from the wall it should follow): both seen, the one nearer the offset (a piece of
+    furniture beside the robot reads nearer than the wall; the config says which distance
+    is the wall's); and the chosen line must be no farther than
+    :data:`naoloc.perception.wall_gate.SIDE_OFFSET_ERROR_M` beyond it (a lone line farther
+    away says nothing about the unseen side, and a wall far from the offset cannot be
+    followed). Else None.
 
     Args:
         left: Distance to the left wall's line, m (None: unseen).
@@ -247,7 +250,14 @@ def decide_side(
         offset: The survey's wall offset, m (None: any lone line decides).
     """
     seen: Side
-    if left is not None and (right is None or left < right):
+    if offset is None:
+        nearer_left = left is not None and (right is None or left < right)
+    else:
+        nearer_left = left is not None and (
+            right is None or abs(left - offset) < abs(right - offset)
+        )
+    if nearer_left:
+        assert left is not None
         seen, distance = "left", left
     elif right is not None:
         seen, distance = "right", right
@@ -261,7 +271,8 @@ def decide_side(
 def detect_wall_by_floorline(
     robot: Robot, eye: FloorEye, pitch: float = DEFAULT_HEAD_PITCH, offset: float | None = None
 ) -> FloorLineWall:
-    """Look left and right with the bottom camera; the nearer floor-wall line wins.
+    """Look left and right with the bottom camera; the floor-wall line nearer the robot
+    (or, given ``offset``, nearer the offset: :func:`decide_side`) wins.
 
     Needs no texture on the walls and no step. The robot's body does not move.
 

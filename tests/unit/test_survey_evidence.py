@@ -32,6 +32,10 @@ def test_a_side_with_no_line_is_unseen_not_far() -> None:
     assert decide_side(0.52, None, offset=0.5) == "left"
     assert decide_side(2.48, 0.49, offset=0.5) == "right"  # both seen: the nearer
     assert decide_side(0.7, 0.6, offset=0.5) == "right"
+    # Furniture 0.67 m to the left, the wall 1.03 m to the right, the robot set 1.05 m from
+    # its wall (room 530663737): the line at the offset is the wall's, not the nearer one.
+    assert decide_side(0.67, 1.03, offset=1.05) == "right"
+    assert decide_side(0.67, 1.03) == "left"  # without the offset: the paper's nearest
     assert decide_side(None, None, offset=0.5) is None
     assert decide_side(3.0, 3.0, offset=0.75) is None  # the middle of a room: no wall beside
     # without a survey offset (localize's use) a lone line still decides, as before
@@ -182,3 +186,4 @@ def test_a_wall_ahead_that_vanishes_near_is_carried_not_forgotten() -> None:
     watch.front_line(None, Pose2D(1.52, 0.0, 0.0), 1.48, 3.0)  # carried: 0.48 m, one strike
     with pytest.raises(SurveyBlocked, match="the wall ahead is 0.26 m away"):
         watch.front_line(None, Pose2D(1.74, 0.0, 0.0), 1.26, 3.0)
+
