@@ -508,9 +508,9 @@ class MapCheckTuning(_Model):
     max_lap_disagreement_m: float = Field(
         0.1,
         gt=0,
-        description="largest median distance, over a side of a later lap, between its "
-        "pictures' map poses and where the first lap's landmarks put them (m): PnP at a "
-        "wall errs a few centimetres",
+        description="largest distance, over a side of a later lap, between its pictures' "
+        "map poses and where the first lap's landmarks put them (their precision-weighted "
+        "mean offset, m)",
     )
     lap_view_radius_m: float = Field(
         0.6, gt=0, description="first-lap pictures within this of a later one are its views (m)"
@@ -523,7 +523,16 @@ class MapCheckTuning(_Model):
     )
     lap_pnp_px: float = Field(4.0, gt=0, description="that PnP's RANSAC inlier threshold (px)")
     lap_min_frames: int = Field(
-        3, ge=1, description="placed pictures a later side needs for its median to count"
+        3, ge=1, description="placed pictures a later side needs for its offset to count"
+    )
+    lap_pixel_sigma_px: float = Field(
+        2.0, gt=0, description="a placed picture's reprojection error (px, std; measured 1.5-2.4)"
+    )
+    lap_floor_m: float = Field(
+        0.02,
+        ge=0,
+        description="error every placement carries besides its fit's: the first lap's "
+        "landmarks' own (m, std)",
     )
 
 

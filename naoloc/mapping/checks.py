@@ -24,9 +24,10 @@ the survey's own records can contradict, and gives a figure, its limit and a ver
   odometry metre the sides imply (configured length over the odometry's walk) along x
   against those along y;
 - ``laps_agree``: the laps' pictures against each other: where the first lap's landmarks
-  put each later lap's pictures (PnP) against where the map has them, the largest median
-  over a side (m, :mod:`naoloc.mapping.laps`); a lap that turned early at furniture and
-  was drawn where the rectangle says stands apart from the first lap's view of it.
+  put each later lap's pictures (PnP) against where the map has them, the largest
+  precision-weighted mean offset over a side (m, :mod:`naoloc.mapping.laps`); a lap that
+  turned early at furniture and was drawn where the rectangle says stands apart from the
+  first lap's view of it.
 
 The limits are the config's ``map.checks`` tuning record. :func:`check_survey` runs them,
 :func:`failed` names the failing ones, and :func:`map_checked` tells whether a map (its
@@ -289,8 +290,8 @@ def _room_size(walled: Any, meta: dict[str, Any], tuning: MapCheckTuning) -> Che
 
 
 def _laps_agree(laps: LapAgreement | None, tuning: MapCheckTuning) -> Check:
-    """The largest median, over a later lap's side, of its pictures' distance from where
-    the first lap's landmarks place them."""
+    """How far, at most over a later lap's side, the first lap's landmarks put its pictures
+    from their map poses (the precision-weighted mean offset)."""
     limit = tuning.max_lap_disagreement_m
     worst = None if laps is None else laps.worst
     if laps is None or worst is None:
@@ -300,11 +301,11 @@ def _laps_agree(laps: LapAgreement | None, tuning: MapCheckTuning) -> Check:
             else "not measured"
         )
         return _check("laps_agree", None, limit, "m", None, why)
-    side, figure = worst
     return _check(
-        "laps_agree", figure, limit, "m", figure <= limit,
-        f"the first lap's landmarks against the map, worst on side {side + 1} "
-        f"({len(laps.frames)} of {laps.tried} later pictures placed)",
+        "laps_agree", worst.offset_m, limit, "m", worst.offset_m <= limit,
+        f"the first lap's landmarks against the map, worst on side {worst.side + 1} "
+        f"(+-{worst.sigma_m:.3f} m, {worst.pictures} pictures; {len(laps.frames)} of "
+        f"{laps.tried} later pictures placed)",
     )  # fmt: skip
 
 

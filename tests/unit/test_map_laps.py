@@ -19,7 +19,14 @@ import pytest
 from naoloc.config import LandmarkTuning, MapCheckTuning
 from naoloc.geometry import Pose2D, robot_matrix
 from naoloc.mapping.checks import _laps_agree
-from naoloc.mapping.laps import LapAgreement, _place, lap_agreement
+from naoloc.mapping.laps import (
+    LapAgreement,
+    PlacedPicture,
+    SideAgreement,
+    _place,
+    lap_agreement,
+    side_agreement,
+)
 from naoloc.perception.features import Features
 from naoloc.robot.keyframe import CameraInfo, Keyframe, camera_in_robot
 
@@ -106,16 +113,16 @@ def _agreement(shift: float) -> LapAgreement:
 def test_laps_drawn_where_they_stood_agree() -> None:
     laps = _agreement(0.0)
     assert laps.sides, "no later side was placed"
-    assert laps.worst is not None and laps.worst[1] < 0.03
+    assert laps.worst is not None and laps.worst.offset_m < 0.03
     assert _laps_agree(laps, MapCheckTuning()).verdict == "pass"
 
 
 def test_a_lap_drawn_off_where_it_stood_fails_on_its_side() -> None:
     laps = _agreement(0.3)
-    assert laps.worst is not None
-    side, figure = laps.worst
-    assert side == 4  # lap 2's first side
-    assert figure == pytest.approx(0.3, abs=0.05)
+    worst = laps.worst
+    assert worst is not None
+    assert worst.side == 4  # lap 2's first side
+    assert worst.offset_m == pytest.approx(0.3, abs=0.05)
     check = _laps_agree(laps, MapCheckTuning())
     assert check.verdict == "fail"
     assert "side 5" in check.detail  # sides are named from 1
@@ -134,8 +141,32 @@ def test_one_lap_or_nothing_measured_skips() -> None:
 
 @pytest.mark.parametrize(("figure", "verdict"), [(0.02, "pass"), (0.099, "pass"), (0.101, "fail")])
 def test_the_limit_is_the_tuning_records(figure: float, verdict: str) -> None:
-    laps = LapAgreement([(10, 4, figure)] * 3, [(4, figure)], 3)
+    pics = [PlacedPicture(10 + i, 4, (figure, 0.0), 0.01) for i in range(3)]
+    laps = LapAgreement(pics, [SideAgreement(4, 3, figure, 0.01)], 3)
     assert _laps_agree(laps, MapCheckTuning(max_lap_disagreement_m=0.1)).verdict == verdict
+
+
+def test_a_side_s_offset_weighs_each_picture_by_its_precision() -> None:
+    """Room 1720470303: on a short side, three pictures placed poorly (0.04-0.05 m error)
+    read 0.11-0.16 m off and one placed well 0.03 m; the median said 0.11 m, the side's
+    pictures are truly 0.03 m off. The weighted mean follows the precise picture; pictures
+    that agree in direction add up, and a side with too few pictures has no figure."""
+    pics = [
+        PlacedPicture(1, 5, (0.16, 0.02), 0.054),
+        PlacedPicture(2, 5, (-0.10, 0.04), 0.037),
+        PlacedPicture(3, 5, (0.03, 0.0), 0.014),
+        PlacedPicture(4, 5, (0.01, -0.12), 0.036),
+        PlacedPicture(7, 6, (0.2, 0.0), 0.01),
+        PlacedPicture(8, 6, (0.2, 0.0), 0.01),
+    ]
+    sides = side_agreement(pics, 0.02, 3)
+    assert [s.side for s in sides] == [5]  # side 6 has two pictures
+    assert sides[0].offset_m < 0.05
+    assert sides[0].sigma_m == pytest.approx(
+        1 / math.sqrt(sum(1 / (p.sigma_m**2 + 0.02**2) for p in pics[:4]))
+    )
+    same = [PlacedPicture(i, 4, (0.12, 0.01), 0.03) for i in range(4)]
+    assert side_agreement(same, 0.02, 3)[0].offset_m == pytest.approx(math.hypot(0.12, 0.01))
 
 
 def test_the_planar_fit_finds_the_pose_a_full_pnp_misses_on_one_wall() -> None:
@@ -152,7 +183,9 @@ def test_the_planar_fit_finds_the_pose_a_full_pnp_misses_on_one_wall() -> None:
     c_r = camera_in_robot(HEAD_YAW, HEAD_PITCH, 0)
     start = np.array([pose.x - 0.3, pose.y + 0.1, pose.theta - 0.05])  # where a map drew it
     px = feats.xy[keep].astype(np.float64)
-    found = _place(obj, px, CAM.matrix(), c_r, MapCheckTuning(), 0, start)
-    assert found is not None
+    placed = _place(obj, px, CAM.matrix(), c_r, MapCheckTuning(), 0, start)
+    assert placed is not None
+    found, sigma = placed
     assert math.hypot(found[0] - pose.x, found[1] - pose.y) < 0.01
     assert abs(found[2] - pose.theta) < 0.005
+    assert 0.0 < sigma < 0.02  # a few dozen points at 2 px
