@@ -207,11 +207,11 @@ def survey(
     and turns its head to a wall: ``cfg.survey.head_yaw_rad`` if set, else ``head_yaw`` if
     given, else the side whose floor-wall line (bottom camera, looked for beside and behind
     the arm) is nearer ``survey.wall_offset_m`` (the distance the robot was set from its
-    wall; furniture beside it reads nearer); a side that shows no line is unseen, not far, and when no side
-    can be told the survey stops before walking. Then it records the origin and walks,
-    steered by the floor-wall lines and watched by the robot's own evidence
-    (:func:`_walk_laps`, :class:`naoloc.behaviours.walk_watch.WalkWatch`). Motion is stopped
-    on every exit path (an exception or Ctrl-C included); frames already handed to
+    wall; furniture beside it reads nearer); a side that shows no line is unseen, not
+    far, and when no side can be told the survey stops before walking. Then it records
+    the origin and walks, steered by the floor-wall lines and watched by the robot's own
+    evidence (:func:`_walk_laps`, :class:`naoloc.behaviours.walk_watch.WalkWatch`). Motion
+    is stopped on every exit path (an exception or Ctrl-C included); frames already handed to
     ``on_frame`` stay with the caller.
 
     Args:

@@ -186,4 +186,3 @@ def test_a_wall_ahead_that_vanishes_near_is_carried_not_forgotten() -> None:
     watch.front_line(None, Pose2D(1.52, 0.0, 0.0), 1.48, 3.0)  # carried: 0.48 m, one strike
     with pytest.raises(SurveyBlocked, match="the wall ahead is 0.26 m away"):
         watch.front_line(None, Pose2D(1.74, 0.0, 0.0), 1.26, 3.0)
-
