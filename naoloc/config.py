@@ -764,7 +764,8 @@ class FilterTuning(_Model):
         ge=0,
         description="error no number of observations removes: the map's own placement of "
         "its walls and landmarks around the robot (m, std; added to the reported "
-        "covariance)",
+        "covariance); a map whose survey's laps show a larger error (meta keyframe_sigma_m) "
+        "uses that",
     )
     map_floor_rad: float = Field(0.01, ge=0, description="the same for the heading (rad, std)")
     line_sigma_m: float = Field(0.02, gt=0, description="floor-line distance noise (m, std)")

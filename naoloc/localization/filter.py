@@ -82,11 +82,20 @@ class MultiHypothesisFilter:
         walls: The map's walls (None: the floor lines are not used).
         tun: The filter's tuning.
         turn_scale: The robot's odometry turn per true turn, as the survey measured it.
+        map_floor_m: The map's own position error (std, m), added to the reported
+            covariance; None: ``tun.map_floor_m``. The larger of the two is used.
     """
 
-    def __init__(self, walls: WallMap | None, tun: FilterTuning, turn_scale: float = 1.0) -> None:
+    def __init__(
+        self,
+        walls: WallMap | None,
+        tun: FilterTuning,
+        turn_scale: float = 1.0,
+        map_floor_m: float | None = None,
+    ) -> None:
         self.walls = walls
         self.tun = tun
+        self.map_floor_m = max(tun.map_floor_m, map_floor_m or 0.0)
         self.turn_scale = turn_scale if turn_scale > 0 else 1.0
         self.hypotheses: list[Hypothesis] = []
         self.window: deque[tuple[Evidence, Pose2D]] = deque(maxlen=tun.window)
@@ -479,7 +488,7 @@ class MultiHypothesisFilter:
             near += w
         if near > 0:
             cov = (weights[best] * cov + spread) / (weights[best] + near)
-        cov = cov + np.diag([self.tun.map_floor_m**2] * 2 + [self.tun.map_floor_rad**2])
+        cov = cov + np.diag([self.map_floor_m**2] * 2 + [self.tun.map_floor_rad**2])
         return Belief(
             h.pose.copy(),
             cov,

@@ -95,6 +95,15 @@ def turn_scale_of(meta: dict[str, Any]) -> float:
     return float(scale) if isinstance(scale, (int, float)) and scale > 0 else 1.0
 
 
+def keyframe_sigma_of(meta: dict[str, Any]) -> float | None:
+    """The map's keyframes' own error (``meta.keyframe_sigma_m``, std per axis, m: how its
+    survey's laps disagree, :mod:`naoloc.mapping.laps`), or None (one lap, older maps)."""
+    value = meta.get("keyframe_sigma_m")
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        return None
+    return float(value) if math.isfinite(value) and value >= 0 else None
+
+
 def decide(belief: Belief, tun: FilterTuning) -> tuple[Status, str]:
     """The status of a belief (a pure function of it and the tuning).
 
@@ -142,8 +151,9 @@ class Localizer:
 
     def _new_filter(self) -> MultiHypothesisFilter:
         return MultiHypothesisFilter(
-            wall_map(self.vmap.meta), self.tuning, turn_scale_of(self.vmap.meta)
-        )
+            wall_map(self.vmap.meta), self.tuning, turn_scale_of(self.vmap.meta),
+            keyframe_sigma_of(self.vmap.meta),
+        )  # fmt: skip
 
     def update(self, obs: Observation) -> None:
         """Take one observation (in the order they were made)."""

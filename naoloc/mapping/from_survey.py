@@ -17,7 +17,7 @@ from naoloc.geometry import Pose2D
 from naoloc.mapping.builder import ProgressFn, carried, pinhole_features
 from naoloc.mapping.checks import Check, check_survey, failed
 from naoloc.mapping.landmarks import query_camera
-from naoloc.mapping.laps import lap_agreement
+from naoloc.mapping.laps import LapAgreement, lap_agreement
 from naoloc.mapping.map import VisualMap, build_map
 from naoloc.mapping.wall_poses import SCALE_RANGE, WallPoses, wall_poses
 from naoloc.perception.features import FeatureExtractor, Features
@@ -159,11 +159,36 @@ def wall_features(data: Any, keyframes: Sequence[Keyframe], cfg: MapConfig) -> l
     return [pinhole_features(extractor, kf, query_camera(kf), lens) for kf in keyframes]
 
 
+def survey_laps(
+    data: Any,
+    cfg: MapConfig,
+    walled: WallPoses | None,
+    features: Sequence[Features] | None = None,
+) -> LapAgreement | None:
+    """How the survey's laps agree picture by picture (:mod:`naoloc.mapping.laps`); None for
+    a survey of one lap or without wall poses.
+
+    Args:
+        data: The dataset.
+        cfg: The map config.
+        walled: The wall poses.
+        features: The wall pictures' features (:func:`wall_features`); extracted when None.
+    """
+    if walled is None or len(set(s // 4 for s in walled.sides_of)) < 2:
+        return None
+    feats = wall_features(data, walled.keyframes, cfg) if features is None else features
+    return lap_agreement(
+        walled.keyframes, feats, walled.sides_of, map_extractor(cfg).binary,
+        cfg.tuning.checks, cfg.tuning.landmarks,
+    )  # fmt: skip
+
+
 def run_checks(
     data: Any,
     cfg: MapConfig,
     walled: WallPoses | None,
     features: Sequence[Features] | None = None,
+    laps: LapAgreement | None = None,
 ) -> list[Check]:
     """build-map's checks of the survey's map frame (:mod:`naoloc.mapping.checks`).
 
@@ -173,15 +198,11 @@ def run_checks(
         walled: The wall poses (None: the floor lines placed none).
         features: The wall pictures' features (:func:`wall_features`); extracted here when
             None and the survey walked more than one lap.
+        laps: :func:`survey_laps`, when already measured.
     """
     survey = data.config.get("survey") if isinstance(data.config, dict) else None
-    laps = None
-    if walled is not None and len(set(s // 4 for s in walled.sides_of)) > 1:
-        feats = wall_features(data, walled.keyframes, cfg) if features is None else features
-        laps = lap_agreement(
-            walled.keyframes, feats, walled.sides_of, map_extractor(cfg).binary,
-            cfg.tuning.checks, cfg.tuning.landmarks,
-        )  # fmt: skip
+    if laps is None:
+        laps = survey_laps(data, cfg, walled, features)
     return check_survey(data, walled, survey if isinstance(survey, dict) else {},
                         cfg.tuning.checks, laps)  # fmt: skip
 
@@ -242,7 +263,8 @@ def build_from_survey(
     """
     keyframes, facts, walled = pose_survey(data, cfg, offset)
     feats = wall_features(data, keyframes, cfg)
-    checks = run_checks(data, cfg, walled, feats)
+    laps = survey_laps(data, cfg, walled, feats)
+    checks = run_checks(data, cfg, walled, feats, laps)
     if on_checks is not None:
         on_checks(checks)
     bad = failed(checks)
@@ -255,6 +277,9 @@ def build_from_survey(
         )
     facts["checks"] = [c.to_dict() for c in checks]
     facts["checked"] = not bad
+    # The keyframes' own error, as the laps' disagreement shows it: the localizer's floor.
+    sigma = None if laps is None else laps.keyframe_sigma_m
+    facts["keyframe_sigma_m"] = None if sigma is None else round(sigma, 4)
     map_meta = dict(data.meta)
     map_meta.pop("vision", None)  # per-frame survey measurements stay in the dataset
     map_meta.update({**(meta or {}), **facts})

@@ -45,6 +45,7 @@ NEAREST_VIEWS = 4  # lap-1 pictures a later picture is matched with (nearest fir
 RANSAC_ITERATIONS = 200  # the PnP RANSAC that picks the matches that agree
 FIT_ITERATIONS = 15  # Gauss-Newton steps of the planar fit
 FD_STEP = 1e-5  # its finite-difference step (m, rad)
+MIN_SIGMA_PICTURES = 10  # placed pictures the keyframes' error is estimated from
 
 
 @dataclass(frozen=True, slots=True)
@@ -99,6 +100,22 @@ class LapAgreement:
     frames: list[PlacedPicture]
     sides: list[SideAgreement]
     tried: int
+
+    @property
+    def keyframe_sigma_m(self) -> float | None:
+        """The keyframes' own position error (std per axis, m), from how the laps disagree.
+
+        A placed picture's offset is its keyframe's error less the first lap's there, plus
+        its placement's error: per axis ``2 s_k^2 + s_p^2``, so over the pictures
+        ``s_k^2 = (mean |offset|^2 - 2 mean s_p^2) / 4``. None with fewer than
+        :data:`MIN_SIGMA_PICTURES` placed pictures. It misses what every lap shares (a map
+        frame turned as a whole).
+        """
+        if len(self.frames) < MIN_SIGMA_PICTURES:
+            return None
+        sq = float(np.mean([f.offset[0] ** 2 + f.offset[1] ** 2 for f in self.frames]))
+        placement = float(np.mean([f.sigma_m**2 for f in self.frames]))
+        return math.sqrt(max(0.0, sq - 2.0 * placement) / 4.0)
 
     @property
     def worst(self) -> SideAgreement | None:

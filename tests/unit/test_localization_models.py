@@ -248,3 +248,26 @@ def test_a_view_the_leader_no_longer_explains_contradicts_it() -> None:
     f.observe(_picture(truth + np.array([1.5, -0.5, 1.0]), seed=5), odo)  # somewhere else
     assert f.contradicted
     assert decide(f.belief(), TUN)[0] is not Status.TRACKING
+
+
+def test_a_map_whose_laps_disagree_reports_its_own_error_in_the_covariance() -> None:
+    """The map's keyframes' error (meta ``keyframe_sigma_m``, from how its survey's laps
+    disagree) is a floor of the reported covariance when it exceeds the tuning's; a map
+    without it, or with less, keeps ``map_floor_m``; a malformed value is no floor."""
+    from naoloc.localization.localizer import keyframe_sigma_of
+
+    tun = FilterTuning()
+    pose = np.array([1.0, 2.0, 0.3])
+    tight = np.diag([0.001**2, 0.001**2, 0.001**2])
+    for floor, expected in ((None, tun.map_floor_m), (0.005, tun.map_floor_m), (0.05, 0.05)):
+        f = MultiHypothesisFilter(None, tun, map_floor_m=floor)
+        f.set_pose(pose, tight, 40.0)
+        cov = f.belief().cov
+        assert cov is not None
+        assert cov[0, 0] == pytest.approx(expected**2 + 0.001**2)
+        assert cov[1, 1] == pytest.approx(expected**2 + 0.001**2)
+    assert keyframe_sigma_of({"keyframe_sigma_m": 0.04}) == 0.04
+    for bad in ({}, {"keyframe_sigma_m": None}, {"keyframe_sigma_m": "0.04"},
+                {"keyframe_sigma_m": -1.0}, {"keyframe_sigma_m": float("nan")},
+                {"keyframe_sigma_m": True}):  # fmt: skip
+        assert keyframe_sigma_of(bad) is None

@@ -189,3 +189,15 @@ def test_the_planar_fit_finds_the_pose_a_full_pnp_misses_on_one_wall() -> None:
     assert math.hypot(found[0] - pose.x, found[1] - pose.y) < 0.01
     assert abs(found[2] - pose.theta) < 0.005
     assert 0.0 < sigma < 0.02  # a few dozen points at 2 px
+
+
+def test_the_keyframes_error_is_what_the_laps_disagreement_leaves_after_placement() -> None:
+    """Offsets of lap 2 against lap 1 with keyframe errors of 3 cm per axis in each lap and
+    placements of 1 cm: the keyframes' error comes back; fewer than ten pictures give none."""
+    rng = np.random.default_rng(11)
+    n, s_k, s_p = 4000, 0.03, 0.01
+    off = rng.normal(0, s_k, (n, 2)) - rng.normal(0, s_k, (n, 2)) + rng.normal(0, s_p, (n, 2))
+    pics = [PlacedPicture(i, 4, (float(a), float(b)), s_p) for i, (a, b) in enumerate(off)]
+    laps = LapAgreement(pics, side_agreement(pics, 0.02, 3), n)
+    assert laps.keyframe_sigma_m == pytest.approx(s_k, rel=0.05)
+    assert LapAgreement(pics[:9], [], 9).keyframe_sigma_m is None
