@@ -75,6 +75,13 @@ def ride_with_stops(walls: np.ndarray, given: np.ndarray, stops: Sequence[int]) 
     return np.concatenate(rows, axis=0)
 
 
+def map_extractor(cfg: MapConfig) -> FeatureExtractor:
+    """The feature extractor ``cfg`` builds maps with."""
+    return FeatureExtractor(
+        cfg.features, akaze_threshold=cfg.akaze_threshold, min_keypoints=cfg.min_keypoints
+    )
+
+
 def pinhole_features(
     extractor: FeatureExtractor, kf: Keyframe, cam: CameraInfo, lens: Lens | None
 ) -> Features:
@@ -138,9 +145,7 @@ def build_map_data(
     keyframes = [*keyframes, *(kf for _, kf in far)]
     n = len(keyframes)
     t0 = time.perf_counter()
-    extractor = extractor or FeatureExtractor(
-        cfg.features, akaze_threshold=cfg.akaze_threshold, min_keypoints=cfg.min_keypoints
-    )
+    extractor = extractor or map_extractor(cfg)
     tune = cfg.tuning
     lens = Lens.from_dict((meta or {}).get("lens"))  # the survey camera's, when recorded
     cams_info = [query_camera(kf) for kf in keyframes]

@@ -14,13 +14,13 @@ from typing import Any
 from naoloc.config import MapConfig
 from naoloc.errors import MapCheckFailed
 from naoloc.geometry import Pose2D
-from naoloc.mapping.builder import ProgressFn, carried, pinhole_features
+from naoloc.mapping.builder import ProgressFn, carried, map_extractor, pinhole_features
 from naoloc.mapping.checks import Check, check_survey, failed
 from naoloc.mapping.landmarks import query_camera
 from naoloc.mapping.laps import LapAgreement, lap_agreement
 from naoloc.mapping.map import VisualMap, build_map
 from naoloc.mapping.wall_poses import SCALE_RANGE, WallPoses, wall_poses
-from naoloc.perception.features import FeatureExtractor, Features
+from naoloc.perception.features import Features
 from naoloc.robot.keyframe import Keyframe
 from naoloc.robot.lens import Lens
 
@@ -142,13 +142,6 @@ def survey_value(data: Any, key: str, default: Any) -> Any:
     survey = data.config.get("survey") if isinstance(data.config, dict) else None
     value = survey.get(key) if isinstance(survey, dict) else None
     return float(value) if isinstance(value, (int, float)) else default
-
-
-def map_extractor(cfg: MapConfig) -> FeatureExtractor:
-    """The feature extractor ``cfg`` builds maps with."""
-    return FeatureExtractor(
-        cfg.features, akaze_threshold=cfg.akaze_threshold, min_keypoints=cfg.min_keypoints
-    )
 
 
 def wall_features(data: Any, keyframes: Sequence[Keyframe], cfg: MapConfig) -> list[Features]:

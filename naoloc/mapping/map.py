@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from naoloc.config import MapConfig
-from naoloc.mapping.builder import ProgressFn, build_map_data, pinhole_features
+from naoloc.mapping.builder import ProgressFn, build_map_data, map_extractor, pinhole_features
 from naoloc.mapping.data import MapData
 from naoloc.mapping.landmarks import query_camera
 from naoloc.mapping.mapfile import read_map, save_map
@@ -85,9 +85,7 @@ def build_map(
     Raises:
         DatasetError: When there are no keyframes, or a far picture's stop is not one.
     """
-    extractor = FeatureExtractor(
-        cfg.features, akaze_threshold=cfg.akaze_threshold, min_keypoints=cfg.min_keypoints
-    )
+    extractor = map_extractor(cfg)
     data = build_map_data(
         keyframes,
         cfg,
