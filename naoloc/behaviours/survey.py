@@ -42,6 +42,7 @@ from naoloc.behaviours.nearest_wall import (
 from naoloc.behaviours.walk_watch import WalkWatch
 from naoloc.behaviours.wall_follow import (
     BESIDE_VIEW,
+    FLOOR_BEYOND_M,
     FRONT_PITCH,
     MIN_KEEP_M,
     MIN_OFFSET_M,
@@ -62,7 +63,7 @@ from naoloc.config import Config
 from naoloc.errors import ConfigError, MotionError, SurveyError
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
 from naoloc.perception.floorline import WallLine
-from naoloc.perception.wall_gate import in_front_range
+from naoloc.perception.wall_gate import crosses_path, in_front_range
 from naoloc.robot import Robot, pose_of
 from naoloc.robot.camera import Camera, clamp_head, lens_of, look, stand
 from naoloc.robot.keyframe import Keyframe
@@ -71,7 +72,6 @@ FRONT_LOOKAHEAD_M = 1.0  # start looking at the front wall this far before the c
 MAX_EXTRA_STEPS = 8  # steps a side may take beyond its planned count (odometry too short)
 PROBE_STEP_M = 0.4  # the nearest-wall detector's step out of a corner, m
 PROBE_CLEAR_M = 0.45  # room the body needs beyond the step before the wall ahead, m
-FLOOR_BEYOND_M = 0.4  # floor seen this far past a line ahead: the line is no wall, m
 
 FrameSink = Callable[[Keyframe, int, Pose2D], None]
 """Called with (keyframe, lap, raw FRAME_WORLD odometry) right after each picture."""
@@ -660,9 +660,12 @@ def trusted_front(
         ``line`` when it is within the camera's range, not nearer than half the offset, and
         puts the corner within ``0.25 * length + 0.3`` m of the odometry's (a NAO's
         distance scale errs 10 %; a rug's edge or a low piece of furniture would not
-        agree), else None.
+        agree), and crosses the robot's way (:func:`crosses_path`: a table's face beside
+        the way is not the corner), else None.
     """
     if line is None or not in_front_range(line.distance) or line.distance < 0.5 * offset:
+        return None
+    if not crosses_path(line):
         return None
     if abs(line.distance - offset - remaining) > 0.25 * length + 0.3:
         return None

@@ -31,8 +31,9 @@ import numpy as np
 
 from naoloc.behaviours.wall_follow import carry
 from naoloc.errors import SurveyBlocked
-from naoloc.geometry import Pose2D
+from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.perception.floorline import WallLine
+from naoloc.perception.wall_gate import crosses_path
 from naoloc.robot import Robot
 
 FRONT_CHECK_M = 1.6  # front lines farther than this err too much to say a step did not close
@@ -46,9 +47,9 @@ MIN_MATCHES = 12  # matched features a picture comparison needs
 MIN_FRONT_ADVANCE_M = 0.15  # odometry advance toward the front wall a comparison needs
 MAX_FRONT_ADVANCE_M = 0.6  # and the most: lines measured farther apart are not compared
 MIN_FRONT_SHARE = 0.3  # the front line must close at least this share of that advance
+SAME_LINE_RAD = 0.15  # two lines ahead whose directions (map frame) differ more are not one
 STRIKES = 2  # evidence on this many steps in a row stops the survey
 MIN_AHEAD_M = 0.35  # lines nearer than this ahead are the feet or a seam at them, m
-PATH_HALF_M = 0.2  # half the robot's way: its body (0.15 m) and a margin, m
 MIN_AHEAD_SPAN_M = 0.5  # a wall across the path fills the view; a door frame's edge does not
 FRONT_WATCH_M = 1.2  # a line ahead this near, sooner than expected, is looked at every stop
 MAX_AHEAD_DISAGREEMENT_M = 0.3  # and a quarter of the side: how much sooner the wall ahead
@@ -85,16 +86,6 @@ def image_shift(
     )
     dx = [abs(kp2[m.trainIdx].pt[0] - kp1[m.queryIdx].pt[0]) for m in good]
     return float(np.median(dx)), float(np.mean(moved < STILL_PX)), len(good)
-
-
-def _across_the_path(line: WallLine) -> bool:
-    """Whether a line ahead crosses the robot's way (within :data:`PATH_HALF_M` of its
-    centre line), as a wall across it would: a chair's or a cabinet's face beside the way
-    does not (a line whose ends are not known is taken to cross it)."""
-    if line.ends_m is None:
-        return True
-    low, high = line.ends_m
-    return low < PATH_HALF_M and high > -PATH_HALF_M
 
 
 def features(gray: np.ndarray) -> tuple[Any, Any]:
@@ -137,7 +128,7 @@ class WalkWatch:
     lap: int = 0
     walked: float = 0.0
     _picture: tuple[Any, Any] | None = None
-    _front: tuple[float, Pose2D] | None = None
+    _front: tuple[float, float, bool, Pose2D] | None = None
     _seen_ahead: tuple[WallLine, Pose2D] | None = None
     ahead_m: float = math.inf  # the last line ahead judged (measured or carried), m
     _near: bool = False
@@ -277,8 +268,10 @@ class WalkWatch:
                 :data:`MIN_STEP_M` while the odometry had more than a quarter of the side
                 plus :data:`MAX_AHEAD_DISAGREEMENT_M` to go (a robot walking into a wall; a
                 NAO's odometry errs 10 %), or the line closed less than
-                :data:`MIN_FRONT_SHARE` of the odometry's advance toward it. Lines nearer
-                than :data:`MIN_AHEAD_M` are no evidence (the feet, a seam at them).
+                :data:`MIN_FRONT_SHARE` of the odometry's advance toward it (both lines
+                across the way, and one line: directions within :data:`SAME_LINE_RAD`).
+                Lines nearer than :data:`MIN_AHEAD_M` are no evidence (the feet, a seam
+                at them).
         """
         if line is None and self._seen_ahead is not None:
             # Unseen is not gone: the last wall seen ahead, carried by the odometry (a wall
@@ -290,14 +283,18 @@ class WalkWatch:
             return
         if line is None or line.distance < MIN_AHEAD_M:
             return  # no view sees a wall that near: the robot's own feet, a seam at them
-        if _across_the_path(line):
+        if crosses_path(line):
             self._seen_ahead = (line, here)
         self._ahead(line, remaining, length)
-        before, self._front = self._front, (line.distance, here)
+        across = crosses_path(line)
+        before, self._front = self._front, (line.distance, here.theta + line.normal, across, here)
         if before is None or line.distance > FRONT_CHECK_M:
             return
-        distance, there = before
-        heading = there.theta + line.normal
+        distance, heading, was_across, there = before
+        if not (across and was_across):
+            return  # a face beside the way: another thing at each look, perhaps
+        if abs(modulo2PI(here.theta + line.normal - heading)) > SAME_LINE_RAD:
+            return  # another line than the last one: its distance says nothing of the walk
         advance = (here.x - there.x) * math.cos(heading) + (here.y - there.y) * math.sin(heading)
         if not MIN_FRONT_ADVANCE_M <= advance <= MAX_FRONT_ADVANCE_M:
             return  # too short to judge, or so long since that it may be another thing
@@ -317,7 +314,7 @@ class WalkWatch:
             "ahead",
             line.distance < self.offset + MIN_STEP_M
             and line.span_m >= MIN_AHEAD_SPAN_M
-            and _across_the_path(line)
+            and crosses_path(line)
             and early > 0.25 * length + MAX_AHEAD_DISAGREEMENT_M,
             f"the wall ahead is {line.distance:.2f} m away with {remaining:.1f} m of the "
             "side still to walk by the odometry",

@@ -21,8 +21,8 @@ import numpy as np
 from naoloc.config import CameraConfig
 from naoloc.constants import FRAME_ROBOT
 from naoloc.geometry import Pose2D, mid_transform, modulo2PI
-from naoloc.perception.floorline import WallLine, detect_wall_line, detect_wall_lines
-from naoloc.perception.wall_gate import in_front_range, side_line_angle
+from naoloc.perception.floorline import WallLine, detect_wall_lines, wall_line_candidates
+from naoloc.perception.wall_gate import crosses_path, in_front_range, side_line_angle
 from naoloc.robot import Robot
 from naoloc.robot.camera import Camera, look
 from naoloc.robot.lens import Lens
@@ -55,6 +55,7 @@ MIN_OFFSET_M = 0.5  # nearer, neither view sees the wall reliably (and a step's 
 MIN_KEEP_M = 0.6
 # The front wall's line: head up for a wall 0.6-2.6 m ahead, level for one 0.5-1.0 m ahead.
 FRONT_NEAR_PITCH = 0.0
+FLOOR_BEYOND_M = 0.4  # floor seen this far past a line ahead: the line is no wall, m
 FRONT_NEAR_M = 0.8  # a front wall expected nearer than this is looked for level first
 MAX_CARRY_M = 0.8  # a side line carried by the odometry steers for this much walk, m
 JUMP_M = 0.15  # a side line this far from the carried one sees something else, m
@@ -99,15 +100,23 @@ class FloorEye:
             tolerance: Largest accepted difference, rad.
             blur: Gaussian blur of the picture first, px (odd; 0: none).
         """
+        found = self.candidates(expect_normal, tolerance, blur)
+        return found[0] if found else None
+
+    def candidates(
+        self, expect_normal: float, tolerance: float = 0.5, blur: int = 0
+    ) -> list[WallLine]:
+        """Every line :meth:`measure` could give, the one it gives first (up to two: a
+        piece of furniture's face and the wall behind it)."""
         view = self.view()
         if view is None:
-            return None
+            return []
         image, hfov, vfov, pose = view
         if blur > 1:
             import cv2
 
             image = cv2.GaussianBlur(image, (blur | 1, blur | 1), 0)
-        return detect_wall_line(
+        return wall_line_candidates(
             image, hfov, vfov, pose, expect_normal=expect_normal, tolerance=tolerance,
             lens=self.lens,
         )  # fmt: skip
@@ -170,7 +179,8 @@ def look_for_line(
         normal: The wall's expected direction in FRAME_ROBOT, rad (``-pi/2``: right).
         views: ``(|HeadYaw| rad, HeadPitch rad, blur px)``; the yaw takes the sign of
             ``normal`` (a yaw of 0 looks ahead).
-        accept: Optional ``accept(line) -> bool``: a line it refuses counts as unseen.
+        accept: Optional ``accept(line) -> bool``: a line it refuses counts as unseen, and
+            a view's second line (the wall behind a piece of furniture) is judged next.
         tolerance: Largest difference between the line's normal and ``normal``, rad.
 
     Returns:
@@ -179,9 +189,9 @@ def look_for_line(
     side = 1.0 if normal >= 0 else -1.0
     for yaw, pitch, blur in views:
         look(robot, side * yaw, pitch)
-        line = eye.measure(normal, tolerance, blur)
-        if line is not None and (accept is None or accept(line)):
-            return line, (yaw, pitch, blur)
+        for line in eye.candidates(normal, tolerance, blur)[: None if accept else 1]:
+            if accept is None or accept(line):
+                return line, (yaw, pitch, blur)
     return None, None
 
 
@@ -243,13 +253,27 @@ def measure_front(
         eye: The bottom camera.
         expected: Where the odometry expects the front wall, m.
         accept: Optional ``accept(line) -> bool``: a line it refuses counts as unseen.
+
+    A line more than :data:`FLOOR_BEYOND_M` nearer than one across the way that the first
+    pitch showed (head up: a wall out of the trusted range, say) is the floor's own seam
+    and counts as unseen too.
     """
     pitches = [FRONT_PITCH, FRONT_NEAR_PITCH]
     if expected < FRONT_NEAR_M:
         pitches.reverse()
-    line, view = look_for_line(robot, eye, 0.0, [(0.0, p, 0) for p in pitches], accept, 0.4)
-    eye.last_pitch = None if view is None else view[1]
-    return line
+    beyond = 0.0  # the farthest line across the way an earlier pitch showed, m
+    for pitch in pitches:
+        look(robot, 0.0, pitch)
+        found = eye.candidates(0.0, 0.4)
+        for line in found[: None if accept else 1]:
+            if line.distance < beyond - FLOOR_BEYOND_M:
+                continue  # the floor goes on past it: a plank's seam, not a wall
+            if accept is None or accept(line):
+                eye.last_pitch = pitch
+                return line
+        beyond = max([beyond] + [ln.distance for ln in found if crosses_path(ln)])
+    eye.last_pitch = None
+    return None
 
 
 def carry(line: WallLine, motion: Pose2D) -> WallLine:
@@ -463,5 +487,10 @@ def metric_scale(samples: list[FrontSample]) -> tuple[float | None, list[float]]
 
 
 def line_dict(line: WallLine | None) -> dict[str, Any] | None:
-    """JSON-able line (or None)."""
-    return None if line is None else line.to_dict()
+    """JSON-able line (or None), with where its inliers end along it (``ends_m``)."""
+    if line is None:
+        return None
+    out: dict[str, Any] = line.to_dict()
+    if line.ends_m is not None:
+        out["ends_m"] = [round(e, 3) for e in line.ends_m]
+    return out

@@ -501,8 +501,34 @@ def detect_wall_line(
     Returns:
         The line with at least half of the boundary pixels it was fitted among, or None.
     """
+    lines = wall_line_candidates(
+        image, hfov, vfov, camera_pose, expect_normal=expect_normal, tolerance=tolerance,
+        seed=seed, lens=lens,
+    )  # fmt: skip
+    return lines[0] if lines else None
+
+
+def wall_line_candidates(
+    image: np.ndarray,
+    hfov: float,
+    vfov: float,
+    camera_pose: np.ndarray,
+    *,
+    expect_normal: float | None = None,
+    tolerance: float = 0.5,
+    seed: int = 0,
+    lens: Lens | None = None,
+) -> list[WallLine]:
+    """Every line :func:`detect_wall_line` could return, the one it returns first.
+
+    Args: as :func:`detect_wall_line`.
+
+    Returns:
+        The lines within ``tolerance`` of ``expect_normal`` (all of them for None), most
+        inliers first; a line after the image's best one needs :data:`MIN_INLIER_FRACTION`
+        of the boundary pixels left to it.
+    """
     lines = detect_wall_lines(image, hfov, vfov, camera_pose, seed=seed, lens=lens)
     if expect_normal is not None:
         lines = [ln for ln in lines if abs(modulo2PI(ln.normal - expect_normal)) <= tolerance]
-    lines = [ln for ln in lines if ln.fraction >= MIN_INLIER_FRACTION or ln is lines[0]]
-    return lines[0] if lines else None
+    return [ln for ln in lines if ln.fraction >= MIN_INLIER_FRACTION or ln is lines[0]]

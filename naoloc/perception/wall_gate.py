@@ -12,9 +12,13 @@ direction (rad, FRAME_ROBOT) from the origin to the line's nearest point.
 
 from __future__ import annotations
 
-from typing import Final
+import math
+from typing import TYPE_CHECKING, Final
 
 from naoloc.geometry import modulo2PI
+
+if TYPE_CHECKING:
+    from naoloc.perception.floorline import WallLine
 
 # The floor line of a wall ahead is trusted up to this distance, m. The detector is scored
 # to it (tools/floorline_accuracy.py: fronts 0.9-2.2 m ahead); the survey's lines read
@@ -29,11 +33,34 @@ SIDE_ANGLE_ERROR_RAD: Final = 0.35
 # Nor one nearer than this, m: no view of the bottom camera sees a wall's foot that near
 # beside the robot; what it shows there is the robot's own arm (tools/floorline_views.py).
 SIDE_MIN_M: Final = 0.35
+# Half the robot's way ahead, m: its body (0.15 m) and a margin. A wall the robot walks
+# toward crosses it; a cabinet's or a table's face beside the way does not.
+PATH_HALF_M: Final = 0.2
 
 
 def in_front_range(distance: float) -> bool:
     """Whether a front line ``distance`` m ahead is within the trusted range."""
     return distance <= FRONT_RANGE_M
+
+
+def crosses_path(line: WallLine, half_width: float = PATH_HALF_M) -> bool:
+    """Whether a line ahead crosses the robot's way (its centre line, x forward, within
+    ``half_width`` m to either side) where its inliers lie.
+
+    The line's ``ends_m`` run along it from its nearest point to FRAME_ROBOT's origin; the
+    way's centre line meets it at ``-distance * tan(normal)`` in those coordinates, and the
+    way's edges ``half_width / cos(normal)`` to either side. A line whose ends are not
+    known, or that runs along the way (``|normal|`` of 60 deg or more), is taken to cross it.
+    """
+    if line.ends_m is None:
+        return True
+    c = math.cos(line.normal)
+    if c < 0.5:
+        return True
+    centre = -line.distance * math.tan(line.normal)
+    reach = half_width / c
+    low, high = line.ends_m
+    return low < centre + reach and high > centre - reach
 
 
 def side_line_angle(

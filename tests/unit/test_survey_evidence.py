@@ -93,6 +93,24 @@ def test_a_wall_ahead_that_does_not_come_nearer_stops_the_survey() -> None:
         watch.front_line(_line(1.07, 0.0), Pose2D(1.6, 0.0, 0.0), 1.4, 3.0)
 
 
+def test_lines_ahead_that_are_not_one_wall_across_the_way_are_no_evidence() -> None:
+    # A table's face beside the way, then another line: different things at each look,
+    # whose distances say nothing of the walk (room 225772294 stopped on such a pair).
+    beside = WallLine(1.05, 0.0, 100, 1.0, 0.01, 1.0, (-1.4, -0.4))
+    watch = _watch()
+    watch.new_side(0, 1)
+    for k in range(1, 5):
+        watch.stepped(0.2)
+        watch.front_line(beside, Pose2D(0.2 * k, 0.0, 0.0), 2.6 - 0.2 * k, 3.0)
+    # one wall across, then a line 0.3 rad turned from it (a seam, a skirting's corner)
+    watch = _watch()
+    watch.new_side(0, 1)
+    for k in range(1, 5):
+        watch.stepped(0.2)
+        turned = 0.3 * (k % 2)
+        watch.front_line(_line(1.1, turned), Pose2D(0.2 * k, 0.0, 0.0), 2.6 - 0.2 * k, 3.0)
+
+
 def test_walking_into_the_wall_ahead_is_refused_before_the_step() -> None:
     watch = _watch()
     watch.new_side(0, 0)
