@@ -179,8 +179,7 @@ def look_for_line(
         normal: The wall's expected direction in FRAME_ROBOT, rad (``-pi/2``: right).
         views: ``(|HeadYaw| rad, HeadPitch rad, blur px)``; the yaw takes the sign of
             ``normal`` (a yaw of 0 looks ahead).
-        accept: Optional ``accept(line) -> bool``: a line it refuses counts as unseen, and
-            a view's second line (the wall behind a piece of furniture) is judged next.
+        accept: Optional ``accept(line) -> bool``: a line it refuses counts as unseen.
         tolerance: Largest difference between the line's normal and ``normal``, rad.
 
     Returns:
@@ -189,9 +188,9 @@ def look_for_line(
     side = 1.0 if normal >= 0 else -1.0
     for yaw, pitch, blur in views:
         look(robot, side * yaw, pitch)
-        for line in eye.candidates(normal, tolerance, blur)[: None if accept else 1]:
-            if accept is None or accept(line):
-                return line, (yaw, pitch, blur)
+        line = eye.measure(normal, tolerance, blur)
+        if line is not None and (accept is None or accept(line)):
+            return line, (yaw, pitch, blur)
     return None, None
 
 
@@ -265,12 +264,11 @@ def measure_front(
     for pitch in pitches:
         look(robot, 0.0, pitch)
         found = eye.candidates(0.0, 0.4)
-        for line in found[: None if accept else 1]:
-            if line.distance < beyond - FLOOR_BEYOND_M:
-                continue  # the floor goes on past it: a plank's seam, not a wall
-            if accept is None or accept(line):
-                eye.last_pitch = pitch
-                return line
+        line = found[0] if found else None
+        seam = line is not None and line.distance < beyond - FLOOR_BEYOND_M  # floor goes on
+        if line is not None and not seam and (accept is None or accept(line)):
+            eye.last_pitch = pitch
+            return line
         beyond = max([beyond] + [ln.distance for ln in found if crosses_path(ln)])
     eye.last_pitch = None
     return None

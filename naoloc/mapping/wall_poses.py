@@ -525,7 +525,7 @@ def _along_sides(
                 if o < o1 and abs(t - (t0 + (o - o0) * (t1 - t0) / (o1 - o0))) <= FRONT_AGREE_M
             ]  # fmt: skip
         else:
-            anchors += fronts
+            anchors += agreeing_fronts(anchors[0], fronts)
         anchors.sort()
         kept = [anchors[0]]
         for o, t in anchors[1:]:
@@ -550,6 +550,47 @@ def _along_sides(
     for idx, length in zip(frames_of, lengths, strict=True):
         out[idx] = np.clip(out[idx], 0.0, length + 0.5)
     return out, scales
+
+
+def agreeing_fronts(
+    start: tuple[float, float], fronts: Sequence[tuple[float, float]]
+) -> list[tuple[float, float]]:
+    """The front lines of one side that agree with one walk along it.
+
+    Each front line puts the frame it was measured at somewhere along the side; over one
+    side those places lie on one line against the odometry's distance walked (its slope the
+    metres per odometry metre). A line that saw a plank's seam or a rug's edge instead of
+    the wall does not. The walk taken is the line through two of the points (the side's
+    start among them) with a slope in :data:`SCALE_RANGE` that most front lines agree
+    with, within :data:`FRONT_AGREE_M` (ties: the smaller sum of residuals).
+
+    Args:
+        start: The side's start: (odometry along, true along), m.
+        fronts: The front lines' (odometry along, true along), m.
+
+    Returns:
+        The front lines that agree (all of them with fewer than two, or no walk with two
+        agreeing).
+    """
+    if len(fronts) < 2:
+        return list(fronts)
+    o = np.array([f[0] for f in fronts])
+    t = np.array([f[1] for f in fronts])
+    best: tuple[int, float] = (1, 0.0)
+    kept: list[tuple[float, float]] = list(fronts)
+    for a, b in itertools.combinations([start, *fronts], 2):
+        if abs(b[0] - a[0]) < 1e-6:
+            continue
+        slope = (b[1] - a[1]) / (b[0] - a[0])
+        if not SCALE_RANGE[0] <= slope <= SCALE_RANGE[1]:
+            continue
+        residual = np.abs(t - (a[1] + slope * (o - a[0])))
+        inliers = residual <= FRONT_AGREE_M
+        count, total = int(inliers.sum()), float(residual[inliers].sum())
+        if count > best[0] or (count == best[0] and count > 1 and total < best[1]):
+            best = (count, total)
+            kept = [f for f, k in zip(fronts, inliers, strict=True) if k]
+    return kept
 
 
 def _inward(step: Pose2D, delta: float, turn: float) -> float:

@@ -78,11 +78,10 @@ def test_a_seam_nearer_than_a_wall_the_head_up_view_saw_is_no_front(
     assert eye.last_pitch == FRONT_PITCH
     # the level view first (the corner expected near): its line is not judged by the other
     assert measure_front(robot, eye, 0.5, near_only) is seam  # type: ignore[arg-type]
-    # a wall behind a piece of furniture in the same view: the one the gate accepts
+    # a view's best line is judged, not the one behind it (a second line is most often
+    # a rug's edge or a piece of furniture's foot partly across the way)
     chair = _line(0.9, 0.0, (-0.1, 0.3))
     far_wall = _line(1.9, 0.0, (-1.0, 1.0))
     eye = _Eye(robot, {FRONT_PITCH: [far_wall, chair]})
-    past_chair = lambda line: line.distance > 1.5  # noqa: E731
-    before_wall = lambda line: line.distance < 1.5  # noqa: E731
-    assert measure_front(robot, eye, 1.9, past_chair) is far_wall  # type: ignore[arg-type]
-    assert measure_front(robot, eye, 1.9, before_wall) is chair  # type: ignore[arg-type]
+    assert measure_front(robot, eye, 1.9, lambda line: line.distance > 1.5) is far_wall  # type: ignore[arg-type]
+    assert measure_front(robot, eye, 1.9, lambda line: line.distance < 1.5) is None  # type: ignore[arg-type]

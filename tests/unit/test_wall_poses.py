@@ -19,7 +19,12 @@ import pytest
 from naoloc.data import dataset
 from naoloc.geometry import Pose2D
 from naoloc.localization.walls import wall_map
-from naoloc.mapping.wall_poses import _start_from_wall, side_distances, wall_poses
+from naoloc.mapping.wall_poses import (
+    _start_from_wall,
+    agreeing_fronts,
+    side_distances,
+    wall_poses,
+)
 from naoloc.robot.keyframe import Keyframe
 
 OFFSET = 1.0
@@ -304,3 +309,16 @@ def test_a_start_beside_furniture_is_placed_from_the_wall_frames_after_it() -> N
     assert _start_from_wall(dists, on_wall, inward) == pytest.approx(1.0, abs=0.01)
     # No frame sees the wall soon enough: the stretch's depth is all there is.
     assert _start_from_wall(dists, [False] * len(dists), inward) == dists[0]
+
+
+def test_a_front_line_that_saw_a_seam_does_not_place_the_side() -> None:
+    # Room 325587020's last side: the odometry reads 0.95 of the walk; one front line read
+    # 0.33 m short (a plank's seam at the camera's range), the others saw the wall.
+    walk = [(o, o / 0.95) for o in (1.0, 1.2, 1.4, 1.6, 1.8)]
+    seam = (0.8, 0.8 / 0.95 + 0.33)
+    assert agreeing_fronts((0.0, 0.0), [seam, *walk]) == walk
+    assert agreeing_fronts((0.0, 0.0), walk) == walk  # all agree: all kept
+    assert agreeing_fronts((0.0, 0.0), [seam]) == [seam]  # one alone: nothing to judge by
+    # two lines that disagree with each other and with the start: none is preferred
+    odd = [(1.0, 0.5), (1.2, 2.4)]
+    assert agreeing_fronts((0.0, 0.0), odd) == odd
