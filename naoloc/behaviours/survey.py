@@ -50,6 +50,7 @@ from naoloc.behaviours.wall_follow import (
     FrontSample,
     SideMemory,
     corrected_step,
+    heading_views,
     line_dict,
     look_for_line,
     measure_front,
@@ -422,8 +423,11 @@ def _walk_laps(
     try:
         here = Pose2D()
         # The origin's own line gives the map frame's heading: every view's, the median
-        # (in a corner one view's line can mix in the other wall).
+        # (in a corner one view's line can mix in the other wall, and a short or distant
+        # line reads a degree off).
         start_lines = measure_side_views(robot, eye, side_normal, offset)
+        # and three more views centred on the wall's foot: one line can read a degree off
+        start_lines += measure_side_views(robot, eye, side_normal, offset, heading_views(offset))
         side_line = median_line(start_lines)
         if side_line is None:
             side_line = measure_side(robot, eye, side_normal, offset)

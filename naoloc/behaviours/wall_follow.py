@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from naoloc.config import CameraConfig
-from naoloc.constants import FRAME_ROBOT
+from naoloc.constants import BOTTOM_CAMERA_IN_HEAD, FRAME_ROBOT
 from naoloc.geometry import Pose2D, mid_transform, modulo2PI
 from naoloc.perception.floorline import WallLine, detect_wall_lines, wall_line_candidates
 from naoloc.perception.wall_gate import crosses_path, in_front_range, side_line_angle
@@ -45,6 +45,8 @@ MAX_SCALE_SPREAD = 0.1  # relative median absolute deviation of the per-side rat
 BESIDE_VIEW = (math.pi / 2, -0.672, 0)
 BEHIND_VIEW = (2.0, 0.0, 15)
 BEHIND_LOW_VIEW = (2.0, 0.2, 15)  # near a corner the level view's floor is too little
+HEAD_HEIGHT_M = 0.44  # the head joint above the floor, standing, m
+HEADING_YAWS = (1.35, 1.7, 2.0)  # |HeadYaw| of :func:`heading_views`, rad
 NEAR_OFFSET_M = 0.65  # below this offset the behind view is tried first
 MIN_OFFSET_M = 0.5  # nearer, neither view sees the wall reliably (and a step's correction
 #                     of MAX_LATERAL_M leaves the body too little room): the survey refuses
@@ -217,14 +219,29 @@ def measure_side(robot: Robot, eye: FloorEye, side_normal: float, offset: float)
     return line if line is not None else (first[0] if first else None)
 
 
+def heading_views(offset: float) -> list[tuple[float, float, int]]:
+    """Views (|HeadYaw| rad, HeadPitch rad, blur px) whose bottom-camera picture is centred
+    on the floor ``offset`` m beside the robot, ahead of, beside and behind the shoulder:
+    more lines of the side wall for the survey start's heading, each seen across the whole
+    picture (the side views look for the line, these measure it again)."""
+    (_, _, height), tilt = BOTTOM_CAMERA_IN_HEAD
+    pitch = math.atan2(HEAD_HEIGHT_M + height, max(offset, 0.3)) - tilt
+    return [(yaw, pitch, 0) for yaw in HEADING_YAWS]
+
+
 def measure_side_views(
-    robot: Robot, eye: FloorEye, side_normal: float, offset: float
+    robot: Robot,
+    eye: FloorEye,
+    side_normal: float,
+    offset: float,
+    views: list[tuple[float, float, int]] | None = None,
 ) -> list[WallLine]:
-    """The side wall's line from every view of :func:`side_views` that sees one within
-    the side-line gate (:func:`trusted`; the survey's start: its heading is the map's)."""
+    """The side wall's line from every view (default :func:`side_views`) that sees one
+    within the side-line gate (:func:`trusted`; the survey's start: its heading is the
+    map's)."""
     side = 1.0 if side_normal >= 0 else -1.0
     out = []
-    for yaw, pitch, blur in side_views(offset):
+    for yaw, pitch, blur in side_views(offset) if views is None else views:
         look(robot, side * yaw, pitch)
         line = trusted(eye.measure(side_normal, 0.5, blur), offset, side_normal)
         if line is not None:

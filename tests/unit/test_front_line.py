@@ -6,12 +6,21 @@ head is the fake backend's (its HeadPitch says which view the eye is looking thr
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 import naoloc
 from naoloc.behaviours.survey import trusted_front
-from naoloc.behaviours.wall_follow import FRONT_NEAR_PITCH, FRONT_PITCH, measure_front
+from naoloc.behaviours.wall_follow import (
+    FRONT_NEAR_PITCH,
+    FRONT_PITCH,
+    HEAD_HEIGHT_M,
+    heading_views,
+    measure_front,
+)
 from naoloc.config import load_config
+from naoloc.constants import BOTTOM_CAMERA_IN_HEAD
 from naoloc.perception.floorline import WallLine
 from naoloc.perception.wall_gate import crosses_path
 
@@ -85,3 +94,15 @@ def test_a_seam_nearer_than_a_wall_the_head_up_view_saw_is_no_front(
     eye = _Eye(robot, {FRONT_PITCH: [far_wall, chair]})
     assert measure_front(robot, eye, 1.9, lambda line: line.distance > 1.5) is far_wall  # type: ignore[arg-type]
     assert measure_front(robot, eye, 1.9, lambda line: line.distance < 1.5) is None  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("offset", [0.5, 0.65, 0.8, 1.0, 1.2])
+def test_the_start_heading_views_look_at_the_wall_foot_beside(offset: float) -> None:
+    (_, _, height), tilt = BOTTOM_CAMERA_IN_HEAD
+    views = heading_views(offset)
+    assert len(views) == 3 and len({yaw for yaw, _, _ in views}) == 3
+    for yaw, pitch, blur in views:
+        assert 1.2 < yaw < 2.1 and blur == 0  # ahead of, beside and behind the shoulder
+        # the bottom camera's centre ray meets the floor at the offset
+        reach = (HEAD_HEIGHT_M + height) / math.tan(pitch + tilt)
+        assert reach == pytest.approx(offset, rel=1e-6)
