@@ -20,6 +20,7 @@ from naoloc.data import dataset
 from naoloc.geometry import Pose2D
 from naoloc.localization.walls import wall_map
 from naoloc.mapping.wall_poses import (
+    _own_heading,
     _start_from_wall,
     agreeing_fronts,
     side_distances,
@@ -322,3 +323,24 @@ def test_a_front_line_that_saw_a_seam_does_not_place_the_side() -> None:
     # two lines that disagree with each other and with the start: none is preferred
     odd = [(1.0, 0.5), (1.2, 2.4)]
     assert agreeing_fronts((0.0, 0.0), odd) == odd
+
+
+def test_the_start_heading_is_the_median_of_its_clean_views() -> None:
+    def view(normal: float, fraction: float, rms: float = 0.004) -> dict[str, float]:
+        return {"distance_m": 1.1, "normal_rad": normal, "fraction": fraction, "rms_m": rms}
+
+    # Room 992322877's start: one view 1.2 deg off with most of its boundary on the line,
+    # four within 0.4 deg whose pictures also show the wall behind (half their boundary).
+    meta = {
+        "start_views": [
+            view(1.5596, 0.56), view(1.5707, 0.55), view(1.5506, 0.69),
+            view(1.5706, 0.57), view(1.5763, 0.48),
+        ]
+    }  # fmt: skip
+    own, clean = _own_heading(meta, 1.11, math.pi / 2)
+    assert clean and own is not None
+    assert abs(math.degrees(own)) < 0.1
+    # a scattered line (a corner's other wall mixed in) is no clean view
+    meta = {"start_views": [view(1.60, 0.8, rms=0.02), view(1.5706, 0.5)]}
+    own, clean = _own_heading(meta, 1.11, math.pi / 2)
+    assert clean and own == pytest.approx(math.pi / 2 - 1.5706)
