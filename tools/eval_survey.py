@@ -117,6 +117,10 @@ def room_config(room: dict[str, Any], laps: int) -> Config:
                 },
                 "sim": {"light": room["light"]},
                 "start_pose": list(start),
+                # each room its own NAO's odometry errors (--odometry-per-room), else seed 0's
+                **(
+                    {"odometry": {"seed": room["odometry_seed"]}} if "odometry_seed" in room else {}
+                ),
             },
             "survey": {
                 "laps": laps,
@@ -340,12 +344,19 @@ def main() -> int:
         help="one room as JSON (size_m, style, light, offset_m, corner, wall, seed; optional "
         "posters, and start [x, y, theta] with sides [a, b])",
     )  # fmt: skip
+    parser.add_argument(
+        "--odometry-per-room", action="store_true",
+        help="draw each room's odometry errors from its seed (default: world.odometry.seed 0, "
+        "one NAO's odometry for every room)",
+    )  # fmt: skip
     args = parser.parse_args()
     if args.room:
         rooms = [json.loads(args.room)]
     else:
         seeds = args.seeds or [int.from_bytes(os.urandom(4), "little") >> 1 for _ in range(args.n)]
         rooms = [draw_room(s) for s in seeds]
+    if args.odometry_per_room:
+        rooms = [{**room, "odometry_seed": room["seed"]} for room in rooms]
     out = args.out or Path(tempfile.mkdtemp(prefix="naoloc_eval_survey_"))
     out.mkdir(parents=True, exist_ok=True)
     rows = []
