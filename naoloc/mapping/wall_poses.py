@@ -274,7 +274,7 @@ def wall_poses(
         dists, on_wall = found
         if k == 0:
             back = _start_from_wall(dists, on_wall, dy)
-            agrees = start_agrees(dists, on_wall, back)
+            agrees = on_wall[0] and abs(dists[0] - back) <= START_AGREE_M
             start_dist = dists[0] if agrees else back
             dists, on_wall = dists[1:], on_wall[1:]
         used += sum(on_wall)
@@ -694,30 +694,6 @@ def _start_from_wall(
         if on_wall[j]
     ]
     return float(np.median(back)) if back else float(dists[0])
-
-
-def start_agrees(dists: Sequence[float], on_wall: Sequence[bool], back: float) -> bool:
-    """Whether the survey start's own line gives its distance from side 0's wall.
-
-    It does when it saw the wall and agrees, within :data:`START_AGREE_M`, with the first
-    frames' lines: either as they are (the walk kept the robot where it started, the
-    survey's steering at work) or less the odometry's walk inward since the start
-    (``back``, :func:`_start_from_wall`: the robot moved). The first test matters: a NAO's
-    odometry turns a heading error into a sideways walk, 0.1 m within its first metre with
-    some robots' odometry (room 450156539), while the lines stayed within 3 cm of the
-    start's.
-
-    Args:
-        dists: :func:`side_distances` of side 0, the start first (m).
-        on_wall: Whether each line saw the wall, the start first.
-        back: :func:`_start_from_wall` of the same (m).
-    """
-    if not on_wall[0]:
-        return False
-    if abs(dists[0] - back) <= START_AGREE_M:
-        return True
-    first = [dists[j] for j in range(1, min(len(dists), START_FROM_WALL_FRAMES + 1)) if on_wall[j]]
-    return bool(first) and abs(dists[0] - float(np.median(first))) <= START_AGREE_M
 
 
 def _own_heading(

@@ -20,12 +20,10 @@ from naoloc.data import dataset
 from naoloc.geometry import Pose2D
 from naoloc.localization.walls import wall_map
 from naoloc.mapping.wall_poses import (
-    START_AGREE_M,
     _own_heading,
     _start_from_wall,
     agreeing_fronts,
     side_distances,
-    start_agrees,
     wall_poses,
 )
 from naoloc.robot.keyframe import Keyframe
@@ -346,24 +344,3 @@ def test_the_start_heading_is_the_median_of_its_clean_views() -> None:
     meta = {"start_views": [view(1.60, 0.8, rms=0.02), view(1.5706, 0.5)]}
     own, clean = _own_heading(meta, 1.11, math.pi / 2)
     assert clean and own == pytest.approx(math.pi / 2 - 1.5706)
-
-
-def test_the_start_keeps_its_own_line_when_the_frames_lines_agree_with_it() -> None:
-    # Room 450156539 with another NAO's odometry: the lines stay at 0.91-0.96 m, the
-    # odometry walks 0.01-0.036 m away from the wall each step; chained back, the frames
-    # put the start at 0.83 m, 0.1 m from its own clean line.
-    dists = [0.932, 0.906, 0.912, 0.924, 0.914, 0.909, 0.961]
-    inward = [0.0, 0.01, 0.036, 0.03, 0.017, 0.028, 0.033]
-    on_wall = [True] * len(dists)
-    back = _start_from_wall(dists, on_wall, inward)
-    assert back == pytest.approx(0.826, abs=0.01)
-    assert start_agrees(dists, on_wall, back)
-    # the robot truly stepped 0.1 m away from the wall at once: its lines read 0.1 m
-    # farther, the odometry says so too; the start's line still agrees (back)
-    moved = [0.9, 1.0, 1.01, 1.0, 1.0]
-    assert start_agrees(moved, [True] * 5, _start_from_wall(moved, [True] * 5, [0, 0.1, 0, 0, 0]))
-    # the start's line saw a cabinet 0.25 m in front of the wall: neither test agrees
-    cabinet = [0.68, 0.93, 0.92, 0.94]
-    assert not start_agrees(cabinet, [True] * 4, _start_from_wall(cabinet, [True] * 4, [0.0] * 4))
-    assert not start_agrees([0.93, 0.93], [False, True], 0.93)  # its line was not the wall's
-    assert START_AGREE_M < 0.1
