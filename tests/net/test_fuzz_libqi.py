@@ -72,17 +72,20 @@ def test_fuzzed_libqi_server_survives_answers_and_stays_small() -> None:
             capture_output=True, text=True, timeout=120,
         )  # fmt: skip
         assert "Traceback" not in server.stderr(), server.stderr()[-3000:]
-        assert after - before < MAX_GROWTH_MB, (before, after)
-        assert fds_after - fds_before < 20, (fds_before, fds_after, _fd_kinds(pid), report)
         if check.returncode != 0:
             # Seen in 1 of 6 runs alone and 4 of 5 under pytest (Dec 2026): the relay accepts
             # TCP, libqi answers no handshake, with 60-105 authenticated sessions closed
             # (far under libqi 3.1.5's ~500 hang-up limit). Cause not found: docs/RESULTS.md,
-            # Known limits.
+            # Known limits. A wedged libqi closes no socket either (one such run kept 195,
+            # the raw connections' too), so this is judged before the descriptors.
             pytest.xfail(
                 f"after the fuzz ({report.sessions} sessions) the libqi transport answered "
-                "no new client: " + check.stderr.strip().splitlines()[-1][:200]
+                "no new client: "
+                + check.stderr.strip().splitlines()[-1][:200]
+                + f"; descriptors {fds_before} -> {fds_after}, RSS {before:.0f} -> {after:.0f} MB"
             )
+        assert after - before < MAX_GROWTH_MB, (before, after, report)
+        assert fds_after - fds_before < 20, (fds_before, fds_after, _fd_kinds(pid), report)
 
 
 _WATCHDOG = """
