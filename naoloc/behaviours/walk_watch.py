@@ -283,10 +283,10 @@ class WalkWatch:
             return
         if line is None or line.distance < MIN_AHEAD_M:
             return  # no view sees a wall that near: the robot's own feet, a seam at them
-        if crosses_path(line):
+        across = crosses_path(line)
+        if across:
             self._seen_ahead = (line, here)
         self._ahead(line, remaining, length)
-        across = crosses_path(line)
         before, self._front = self._front, (line.distance, here.theta + line.normal, across, here)
         if before is None or line.distance > FRONT_CHECK_M:
             return
