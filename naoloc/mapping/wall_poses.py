@@ -77,6 +77,14 @@ START_FROM_WALL_FRAMES: Final = 8
 # The start's own line places it unless those frames, carried back, disagree by more than
 # this (m): in a corner the one view that sees the wall at 0.5 m can read the wall behind.
 START_AGREE_M: Final = 0.04
+# ... unless the start's views agree with its line: at least this many within
+# START_VIEWS_M of it. Views repeated from the standing robot measure where it stands; the
+# frames carried back add the odometry's sideways walk, which another NAO's heading error
+# bends 0.01-0.06 m per 0.2 m step (with each room's own odometry, 8 of 18 origins 0.05-0.11 m
+# off). A start seen once, or by two views that disagree, is a corner's or the arm's
+# misreading as often (the 3 x 3 m room at 0.5 m: one view, 0.1 m long).
+START_VIEWS: Final = 3
+START_VIEWS_M: Final = 0.015
 END_FRAMES: Final = 3  # a side's last frames whose wall lines place where it ended
 WALL_LEVEL_M: Final = 0.1  # stretches whose levels are this close see the same thing
 MIN_WALL_FRAMES: Final = 3  # frames that must see a side's wall
@@ -274,7 +282,10 @@ def wall_poses(
         dists, on_wall = found
         if k == 0:
             back = _start_from_wall(dists, on_wall, dy)
-            agrees = on_wall[0] and abs(dists[0] - back) <= START_AGREE_M
+            agrees = on_wall[0] and (
+                abs(dists[0] - back) <= START_AGREE_M
+                or start_views_agree(meta.get("start_views"), dists[0] - skirting)
+            )
             start_dist = dists[0] if agrees else back
             dists, on_wall = dists[1:], on_wall[1:]
         used += sum(on_wall)
@@ -676,7 +687,8 @@ def _start_from_wall(
     dists: Sequence[float], on_wall: Sequence[bool], inward: Sequence[float]
 ) -> float:
     """The survey start's distance from side 0's wall from its first frames (m): when its
-    own line saw furniture, or disagrees with them by more than :data:`START_AGREE_M`.
+    own line saw furniture, or disagrees with them by more than :data:`START_AGREE_M`
+    while its views do not repeat it (:func:`start_views_agree`).
 
     Each of the first :data:`START_FROM_WALL_FRAMES` frames whose line sees the wall gives
     its distance less the odometry's walk inward since the start; their median. Without
@@ -694,6 +706,24 @@ def _start_from_wall(
         if on_wall[j]
     ]
     return float(np.median(back)) if back else float(dists[0])
+
+
+def start_views_agree(views: Any, distance: float) -> bool:
+    """Whether the survey start's views repeat its side line's distance: at least
+    :data:`START_VIEWS` of them within :data:`START_VIEWS_M` of it.
+
+    Args:
+        views: The survey meta's ``start_views`` (line dicts as the survey wrote them).
+        distance: The start's side line distance, as seen (m, before the skirting).
+    """
+    if not isinstance(views, list):
+        return False
+    near = 0
+    for view in views:
+        d = view.get("distance_m") if isinstance(view, dict) else None
+        if isinstance(d, (int, float)) and math.isfinite(d) and abs(d - distance) <= START_VIEWS_M:
+            near += 1
+    return near >= START_VIEWS
 
 
 def _own_heading(

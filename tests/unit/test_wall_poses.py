@@ -24,6 +24,7 @@ from naoloc.mapping.wall_poses import (
     _start_from_wall,
     agreeing_fronts,
     side_distances,
+    start_views_agree,
     wall_poses,
 )
 from naoloc.robot.keyframe import Keyframe
@@ -40,8 +41,10 @@ def _survey(
     laps: int = 2,
     outlier_at: int | None = None,
     turn_scale: float = 1.0,
+    slip: tuple[float, ...] = (),
 ) -> tuple[list[Keyframe], list[Pose2D], dict[str, Any]]:
-    """(keyframes with odometry poses, true poses in the map frame, survey meta)."""
+    """(keyframes with odometry poses, true poses in the map frame, survey meta); ``slip``:
+    the odometry's sideways error in each of the first steps (m, to the left)."""
     truth: list[Pose2D] = []
     vision: list[dict[str, Any]] = []
     corner = np.zeros(2)
@@ -67,7 +70,8 @@ def _survey(
     for t in truth:
         step = previous.inverse() * t
         turned = math.remainder(step.theta, 2 * math.pi) * turn_scale  # the turn, scaled
-        noisy = Pose2D(step.x * scale, step.y * scale, turned + drift)
+        sideways = slip[len(odometry) - 1] if len(odometry) <= len(slip) else 0.0
+        noisy = Pose2D(step.x * scale, step.y * scale + sideways, turned + drift)
         odometry.append(odometry[-1] * noisy)
         previous = t
     image = np.zeros((8, 8), np.uint8)
@@ -344,3 +348,31 @@ def test_the_start_heading_is_the_median_of_its_clean_views() -> None:
     meta = {"start_views": [view(1.60, 0.8, rms=0.02), view(1.5706, 0.5)]}
     own, clean = _own_heading(meta, 1.11, math.pi / 2)
     assert clean and own == pytest.approx(math.pi / 2 - 1.5706)
+
+
+def test_the_start_views_keep_the_origin_when_the_odometry_walks_sideways() -> None:
+    """Room 450156539 with its own NAO's odometry: the side lines stayed within 3 cm of the
+    start's five views while the odometry walked 0.01-0.036 m away from the wall each step;
+    carried back, the frames put the start 0.1 m off, and every map pose with it."""
+    slip = (0.01, 0.036, 0.03, 0.017, 0.028, 0.033)
+    keyframes, truth, meta = _survey(scale=1.0, drift=0.0, slip=slip)
+    one_view = wall_poses(keyframes, meta, offset=OFFSET)  # the start seen once
+    assert one_view is not None
+    assert np.median(_errors(one_view.keyframes, truth)[0]) > 0.07
+    views = [{"distance_m": OFFSET + e, "normal_rad": SIDE_NORMAL} for e in (-0.003, 0.0, 0.004)]
+    walled = wall_poses(keyframes, {**meta, "start_views": views}, offset=OFFSET)
+    assert walled is not None
+    assert np.median(_errors(walled.keyframes, truth)[0]) < 0.02
+
+
+def test_the_start_views_agree_only_when_several_repeat_its_line() -> None:
+    def views(*distances: float) -> list[dict[str, float]]:
+        return [{"distance_m": d, "normal_rad": 0.0} for d in distances]
+
+    assert start_views_agree(views(0.919, 0.918, 0.919, 0.92, 0.919), 0.92)
+    assert start_views_agree(views(1.095, 0.782, 1.098, 1.097), 1.097)  # one view off
+    assert not start_views_agree(views(0.596), 0.596)  # the 3 x 3 m room's start: one view
+    assert not start_views_agree(views(0.522, 0.49), 0.506)  # two that disagree
+    assert not start_views_agree(views(0.70, 0.70, 0.70), 0.66)  # not the line's distance
+    assert not start_views_agree(None, 0.9)
+    assert not start_views_agree([None, {"distance_m": "x"}, *views(0.9, 0.9)], 0.9)
