@@ -476,10 +476,11 @@ class MapCheckTuning(_Model):
         0.75, ge=0, le=1, description="least share of the circuit's corners a wall placed"
     )
     max_origin_heading_deg: float = Field(
-        2.5,
+        4.0,
         gt=0,
         description="largest difference between the start's heading from its own lines and "
-        "from its first steps' (deg)",
+        "from its first steps' (deg); the steps' carry the odometry's turn, about 1.7 deg "
+        "(one std) over their first half metre",
     )
     min_coverage: float = Field(
         0.7, ge=0, le=1, description="least share of each wall's stops with its floor line"
