@@ -3,13 +3,14 @@
 Usage::
 
     MUJOCO_GL=egl python tools/floorline_accuracy.py [--seeds 101 202 303 404] [--views 36]
-        [--set world.sim.light=0.3] [--compare REV]
+        [--set world.sim.light=0.3] [--compare REV] [--front 2.2 3.6]
 
 For each room (``tools/eval_unseen_rooms.py``'s rooms: home style, furniture, the default
 honest camera) the robot is put at random poses facing a stretch of wall with no furniture
 in front of it (a 1.6 m wide strip): two thirds of the views as the survey measures a side
 wall (head turned to the wall on the right, 0.7-1.4 m away), one third as it measures the
-front wall before a corner (0.9-2.2 m ahead). The bottom camera's image goes to
+front wall before a corner (0.9-2.2 m ahead; ``--front`` sets the range, e.g. the
+farther walls a localization's scans see). The bottom camera's image goes to
 :func:`naoloc.perception.floorline.detect_wall_line` and the distance it reads is compared with the
 true one. Prints, per kind and per room: lines found, median and p90 of |error| (m), the
 share off by more than 0.1 m, and the median signed error. ``--compare REV`` scores the
@@ -54,10 +55,13 @@ def _clear(rects: list[tuple[float, ...]], x: float, y: float, normal: float, d:
     return True
 
 
-def views(seed: int, n: int, overrides: dict[str, Any]) -> list[dict[str, Any]]:
-    """``n`` bottom-camera views of bare wall in room ``seed`` with their true distances."""
-    from backends.mujoco.interior import plan_walls
-    from backends.mujoco.room import build_layout
+def views(
+    seed: int, n: int, overrides: dict[str, Any], front: tuple[float, float] = (0.9, 2.2)
+) -> list[dict[str, Any]]:
+    """``n`` bottom-camera views of bare wall in room ``seed`` with their true distances
+    (front walls ``front`` m ahead)."""
+    from naoloc.backends.mujoco.interior import plan_walls
+    from naoloc.backends.mujoco.room import build_layout
 
     cfg = room_config(seed, overrides=overrides)
     sx, sy = cfg.world.room.size_m
@@ -73,7 +77,7 @@ def views(seed: int, n: int, overrides: dict[str, Any]) -> list[dict[str, Any]]:
                 if len(out) >= n:
                     break
                 side = len(out) % 3 != 0
-                d = float(rng.uniform(0.7, 1.4) if side else rng.uniform(0.9, 2.2))
+                d = float(rng.uniform(0.7, 1.4) if side else rng.uniform(*front))
                 wall = int(rng.integers(0, 4))
                 a = float(rng.uniform(0.8, (sx if wall % 2 == 0 else sy) - 0.8))
                 x, y, normal = [(a, d, -math.pi / 2), (sx - d, a, 0.0),
@@ -141,9 +145,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--views", type=int, default=36, help="views per room")
     add_set_option(parser, "config override of the rendered rooms, e.g. world.sim.light=0.3")
     parser.add_argument("--compare", metavar="REV", help="also score this git revision's detector")
+    parser.add_argument("--front", type=float, nargs=2, default=(0.9, 2.2), metavar=("MIN", "MAX"),
+                        help="the front walls' distances, m (default 0.9 2.2)")  # fmt: skip
     args = parser.parse_args(argv)
     overrides = parse_sets(args.set)
-    data = [v for seed in args.seeds for v in views(seed, args.views, overrides)]
+    data = [v for seed in args.seeds for v in views(seed, args.views, overrides, args.front)]
     lens = lens_of(room_config(args.seeds[0], overrides=overrides))
     from naoloc.perception import floorline
 
