@@ -752,13 +752,6 @@ class FilterTuning(_Model):
     landmark_sigma_rad: float = Field(
         0.005, ge=0, description="heading error of a picture's pose from the landmarks (rad)"
     )
-    landmark_depth_sigma: float = Field(
-        0.06,
-        ge=0,
-        description="a landmark's own error along the ray it was triangulated on, per metre "
-        "of that ray (std; tools/landmark_accuracy.py: 4 % for the wall pictures', 5-7 % "
-        "for the far pictures'); 0: landmarks without error of their own",
-    )
     wall_sigma_m: float = Field(
         0.015,
         ge=0,

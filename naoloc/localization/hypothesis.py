@@ -33,7 +33,6 @@ import numpy as np
 from naoloc.config import FilterTuning
 from naoloc.localization.pictures import (
     PictureMatches,
-    landmark_covariance,
     mixture,
     reprojection,
 )
@@ -102,7 +101,6 @@ def predictive_evidence(
     res, front, jac = reprojection(m, pose, jacobian=True)
     assert jac is not None
     s = jac @ cov @ jac.transpose(0, 2, 1) + tun.pixel_sigma_px**2 * np.eye(2)
-    s = s + landmark_covariance(m, pose, tun.landmark_depth_sigma)
     _, ratios = mixture(m, res, front, s, tun)
     return min(tun.picture_evidence_cap_nats, tun.match_weight * float(ratios.sum()))
 
@@ -243,18 +241,15 @@ class Hypothesis:
             res, front, jac3 = reprojection(m, seen, jacobian=True)
             assert jac3 is not None
             jac = np.concatenate([jac3, jac3], axis=2)
-            noise = sig2 * np.eye(2) + landmark_covariance(m, seen, tun.landmark_depth_sigma)
-            s = jac @ cur @ jac.transpose(0, 2, 1) + noise
+            s = jac @ cur @ jac.transpose(0, 2, 1) + sig2 * np.eye(2)
             resp, ratios = mixture(m, res, front, s, tun)
             if predictive is None:  # the evidence before the picture moves the pose
                 predictive = min(
                     tun.picture_evidence_cap_nats, tun.match_weight * float(ratios.sum())
                 )
-            # each match's information: its pixel noise, its landmark's own error included
-            wk = (tun.match_weight * resp)[:, None, None] * np.linalg.inv(noise)
-            wj = wk @ jac
-            h = np.einsum("nij,nik->jk", jac, wj)
-            g = np.einsum("nij,ni->j", wj, res)
+            wk = tun.match_weight * resp / sig2
+            h = np.einsum("n,nij,nik->jk", wk, jac, jac)
+            g = np.einsum("n,nij,ni->j", wk, jac, res)
             info = p_inv + h
             step = -np.linalg.solve(info, g + p_inv @ _delta(x, mu))
             x = x + step

@@ -7,10 +7,6 @@ nearest one. The pose then only decides which matches are right: each match's
 reprojection error from a pose is Gaussian (``pixel_sigma_px``) when the match is right
 and uniform over the image when it is wrong (``match_outlier_share``), and a picture's
 matches share the map's errors, so each carries ``match_weight`` of a match's evidence.
-A landmark also errs on its own, along the ray it was triangulated on (the depth a short
-baseline gives, ``landmark_depth_sigma`` per metre of that ray): seen from another place
-that error moves its pixel, and the match's pixel covariance grows by it
-(:func:`landmark_covariance`).
 
 Retrieval and PnP also *propose* poses: a picture whose matches a PnP RANSAC fits with
 ``min_pnp_inliers`` proposes the robot pose at capture for a new hypothesis (global
@@ -38,7 +34,6 @@ __all__ = [
     "LandmarkIndex",
     "PictureMatches",
     "distinct_only",
-    "landmark_covariance",
     "match_picture",
     "mixture",
     "picture_log_ratio",
@@ -68,9 +63,6 @@ class PictureMatches:
         distinct: ``(d, 3)`` the nearest landmark of each feature that passes Lowe's ratio
             test over the whole map (:meth:`LandmarkIndex.candidates`).
         distinct_pixels: ``(d, 2)`` those features' pixels.
-        rays: ``(n, 3)`` each candidate's triangulation ray: from the camera of the keyframe
-            it belongs to, to it (map frame, m; its error lies along it); empty: none known.
-        distinct_rays: ``(d, 3)`` the same for ``distinct``.
     """
 
     points: np.ndarray
@@ -87,8 +79,6 @@ class PictureMatches:
     proposal_inliers: int
     distinct: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     distinct_pixels: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
-    rays: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
-    distinct_rays: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     def __len__(self) -> int:
         """Features with landmark candidates."""
@@ -189,13 +179,11 @@ def match_picture(
     proposal, inliers = None, 0
     if idx.size >= tun.min_pnp_inliers:
         proposal, inliers = _pnp_pose(obj, pixels, kmat, c_q, tun, seed)
-    points, px, group, distinct, rays = landmarks.candidates(
-        feats, tun.neighbours, tun.distinct_ratio
-    )
+    points, px, group, distinct = landmarks.candidates(feats, tun.neighbours, tun.distinct_ratio)
     first = np.flatnonzero(distinct) * tun.neighbours  # each distinctive feature's nearest
     return PictureMatches(
         points, px, group, tun.neighbours, obj, pixels, projection, area, len(feats),
-        tuple(cands), proposal, inliers, points[first], px[first], rays, rays[first],
+        tuple(cands), proposal, inliers, points[first], px[first],
     )  # fmt: skip
 
 
@@ -210,7 +198,6 @@ class LandmarkIndex:
         points = np.asarray(vmap.kp_points, np.float64)
         known = np.flatnonzero(np.isfinite(points).all(axis=1))
         self.points = points[known]
-        self.rays = self.points - _camera_centres(vmap)[known]
         desc = np.ascontiguousarray(vmap.kp_desc[known])
         self.binary = bool(vmap.vocabulary.binary)
         self.desc = pad_packed(desc) if self.binary else desc
@@ -218,20 +205,18 @@ class LandmarkIndex:
 
     def candidates(
         self, feats: Features, k: int, ratio: float
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Each feature's ``k`` nearest landmark descriptors, and which features are
         distinctive.
 
         Returns:
-            The candidates' points and pixels, their feature index, per feature whether
+            The candidates' points and pixels, their feature index, and per feature whether
             its nearest landmark is ``ratio`` times nearer in descriptor space than the
             nearest *other* landmark (one 0.1 m away or more: the same point triangulated
-            from two pairs of keyframes is one landmark), Lowe's test over the whole map,
-            and the candidates' triangulation rays.
+            from two pairs of keyframes is one landmark), Lowe's test over the whole map.
         """
         if len(feats) == 0 or self.points.shape[0] == 0:
-            none = np.zeros((0, 3))
-            return none, np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, bool), none
+            return np.zeros((0, 3)), np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, bool)
         query = pad_packed(feats.descriptors) if self.binary else feats.descriptors
         dist, nearest = self.matcher.knn(query, self.desc, k)
         pts = self.points[nearest]  # (n, k, 3)
@@ -239,22 +224,7 @@ class LandmarkIndex:
         second = np.where(other, dist, np.inf).min(axis=1)
         distinct = dist[:, 0] < ratio * second
         group = np.repeat(np.arange(len(feats)), nearest.shape[1])
-        rays = self.rays[nearest].reshape(-1, 3)
-        return pts.reshape(-1, 3), feats.xy[group].astype(np.float64), group, distinct, rays
-
-
-def _camera_centres(vmap: MapData) -> np.ndarray:
-    """``(M, 3)`` the centre of the camera of each keypoint's keyframe (map frame, m), from
-    the keyframes' refined poses."""
-    from naoloc.mapping.landmarks import camera_poses
-
-    cams = np.asarray(vmap.keyframe_cameras)
-    t_map_cam = camera_poses(
-        np.asarray(vmap.refined_poses, np.float64), np.asarray(vmap.keyframe_heads, np.float64),
-        [int(c) for c in cams[:, 4]],
-    )  # fmt: skip
-    frame_of = np.repeat(np.arange(len(cams)), np.diff(np.asarray(vmap.kp_offsets)))
-    return t_map_cam[frame_of, :3, 3]
+        return pts.reshape(-1, 3), feats.xy[group].astype(np.float64), group, distinct
 
 
 def reprojection(
@@ -293,30 +263,6 @@ def reprojection(
         zs[:, None, None] ** 2
     )
     return res, front, duv @ dpr
-
-
-def landmark_covariance(m: PictureMatches, pose: np.ndarray, depth_sigma: float) -> np.ndarray:
-    """``(n, 2, 2)`` each candidate's pixel covariance from its landmark's own error, seen
-    from robot ``pose`` at capture (map frame).
-
-    A landmark errs along the ray it was triangulated on (``m.rays``), ``depth_sigma`` of
-    that ray's length (std); the error moves its pixel by the projection's Jacobian. Seen
-    along the same ray it hardly moves; seen across it, by the whole error. Zero without
-    rays.
-    """
-    n = m.points.shape[0]
-    if depth_sigma <= 0.0 or m.rays.shape != (n, 3) or n == 0:
-        return np.zeros((n, 2, 2))
-    c, s = math.cos(pose[2]), math.sin(pose[2])
-    dx, dy = m.points[:, 0] - pose[0], m.points[:, 1] - pose[1]
-    pr = np.column_stack([c * dx + s * dy, -s * dx + c * dy, m.points[:, 2]])
-    h = pr @ m.projection[:, :3].T + m.projection[:, 3]
-    zs = np.where(h[:, 2] > 0.05, h[:, 2], 1.0)
-    ray = depth_sigma * m.rays
-    moved = np.column_stack([c * ray[:, 0] + s * ray[:, 1], -s * ray[:, 0] + c * ray[:, 1],
-                             ray[:, 2]]) @ m.projection[:, :3].T  # fmt: skip
-    v = (moved[:, :2] * zs[:, None] - h[:, :2] * moved[:, 2:3]) / (zs[:, None] ** 2)
-    return v[:, :, None] * v[:, None, :]
 
 
 def mixture(
@@ -367,7 +313,7 @@ def distinct_only(m: PictureMatches) -> PictureMatches:
     return PictureMatches(
         m.distinct, m.distinct_pixels, np.arange(n), 1, m.matched, m.matched_pixels,
         m.projection, m.area_px, n, m.retrieved, m.proposal, m.proposal_inliers,
-        m.distinct, m.distinct_pixels, m.distinct_rays, m.distinct_rays,
+        m.distinct, m.distinct_pixels,
     )  # fmt: skip
 
 
@@ -377,6 +323,5 @@ def picture_log_ratio(m: PictureMatches, pose: np.ndarray, tun: FilterTuning) ->
     if m.points.shape[0] == 0:
         return 0.0
     res, front, _ = reprojection(m, pose)
-    cov = tun.pixel_sigma_px**2 * np.eye(2) + landmark_covariance(m, pose, tun.landmark_depth_sigma)
-    _, ratios = mixture(m, res, front, cov, tun)
+    _, ratios = mixture(m, res, front, tun.pixel_sigma_px**2 * np.eye(2), tun)
     return min(tun.picture_evidence_cap_nats, float(tun.match_weight * ratios.sum()))
