@@ -4,6 +4,7 @@ Usage::
 
     MUJOCO_GL=egl python tools/floorline_accuracy.py [--seeds 101 202 303 404] [--views 36]
         [--set world.sim.light=0.3] [--compare REV] [--front 2.2 3.6]
+        [--side 0.45 0.65 2.0 0.0 15]
 
 For each room (``tools/eval_unseen_rooms.py``'s rooms: home style, furniture, the default
 honest camera) the robot is put at random poses facing a stretch of wall with no furniture
@@ -56,10 +57,15 @@ def _clear(rects: list[tuple[float, ...]], x: float, y: float, normal: float, d:
 
 
 def views(
-    seed: int, n: int, overrides: dict[str, Any], front: tuple[float, float] = (0.9, 2.2)
+    seed: int,
+    n: int,
+    overrides: dict[str, Any],
+    front: tuple[float, float] = (0.9, 2.2),
+    side: tuple[float, float, float, float, int] = (0.7, 1.4, math.pi / 2, -0.672, 0),
 ) -> list[dict[str, Any]]:
     """``n`` bottom-camera views of bare wall in room ``seed`` with their true distances
-    (front walls ``front`` m ahead)."""
+    (front walls ``front`` m ahead; side walls ``side[:2]`` m away, seen at |HeadYaw|
+    ``side[2]``, HeadPitch ``side[3]``, blurred ``side[4]`` px as the survey does)."""
     from naoloc.backends.mujoco.interior import plan_walls
     from naoloc.backends.mujoco.room import build_layout
 
@@ -76,8 +82,8 @@ def views(
             for _ in range(20 * n):
                 if len(out) >= n:
                     break
-                side = len(out) % 3 != 0
-                d = float(rng.uniform(0.7, 1.4) if side else rng.uniform(*front))
+                beside = len(out) % 3 != 0
+                d = float(rng.uniform(*side[:2]) if beside else rng.uniform(*front))
                 wall = int(rng.integers(0, 4))
                 a = float(rng.uniform(0.8, (sx if wall % 2 == 0 else sy) - 0.8))
                 x, y, normal = [(a, d, -math.pi / 2), (sx - d, a, 0.0),
@@ -87,17 +93,22 @@ def views(
                 if not _clear(rects, x, y, normal, d):
                     continue
                 try:
-                    robot.sim.teleport(x, y, normal + math.pi / 2 if side else normal)
+                    robot.sim.teleport(x, y, normal + math.pi / 2 if beside else normal)
                 except RobotError:
                     continue  # the robot would overlap something
-                expect = -math.pi / 2 if side else 0.0
-                look(robot, expect, -0.672 if side else FRONT_PITCH)
+                expect = -math.pi / 2 if beside else 0.0
+                look(robot, -side[2] if beside else 0.0, side[3] if beside else FRONT_PITCH)
                 frame = eye.camera.frame()
                 info = eye.camera.info(frame)
                 pose = np.asarray(robot.motion.getTransform("CameraBottom", FRAME_ROBOT, True))
-                out.append({"image": frame.bgr(), "pose": pose, "hfov": info.hfov,
+                image = frame.bgr()
+                if beside and side[4] > 1:  # the survey's blur of that view
+                    import cv2
+
+                    image = cv2.GaussianBlur(image, (side[4] | 1, side[4] | 1), 0)
+                out.append({"image": image, "pose": pose, "hfov": info.hfov,
                             "vfov": info.vfov, "truth": d, "expect": expect,
-                            "kind": "side" if side else "front", "seed": seed})  # fmt: skip
+                            "kind": "side" if beside else "front", "seed": seed})  # fmt: skip
         finally:
             eye.close()
     return out
@@ -147,9 +158,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--compare", metavar="REV", help="also score this git revision's detector")
     parser.add_argument("--front", type=float, nargs=2, default=(0.9, 2.2), metavar=("MIN", "MAX"),
                         help="the front walls' distances, m (default 0.9 2.2)")  # fmt: skip
+    parser.add_argument("--side", type=float, nargs=5, default=(0.7, 1.4, math.pi / 2, -0.672, 0),
+                        metavar=("MIN", "MAX", "YAW", "PITCH", "BLUR"),
+                        help="the side walls' distances (m) and the view (|HeadYaw|, HeadPitch "
+                        "rad, blur px; default 0.7 1.4 1.5708 -0.672 0: the survey's beside "
+                        "view; 0.45 0.65 2.0 0.0 15: its behind view)")  # fmt: skip
     args = parser.parse_args(argv)
     overrides = parse_sets(args.set)
-    data = [v for seed in args.seeds for v in views(seed, args.views, overrides, args.front)]
+    side = (*args.side[:4], int(args.side[4]))
+    data = [v for seed in args.seeds for v in views(seed, args.views, overrides, args.front, side)]
     lens = lens_of(room_config(args.seeds[0], overrides=overrides))
     from naoloc.perception import floorline
 
