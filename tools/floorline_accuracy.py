@@ -30,6 +30,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+import cv2
 import numpy as np
 
 import naoloc
@@ -103,8 +104,6 @@ def views(
                 pose = np.asarray(robot.motion.getTransform("CameraBottom", FRAME_ROBOT, True))
                 image = frame.bgr()
                 if beside and side[4] > 1:  # the survey's blur of that view
-                    import cv2
-
                     image = cv2.GaussianBlur(image, (side[4] | 1, side[4] | 1), 0)
                 out.append({"image": image, "pose": pose, "hfov": info.hfov,
                             "vfov": info.vfov, "truth": d, "expect": expect,

@@ -284,7 +284,9 @@ def wall_poses(
             back = _start_from_wall(dists, on_wall, dy)
             agrees = on_wall[0] and (
                 abs(dists[0] - back) <= START_AGREE_M
-                or start_views_agree(meta.get("start_views"), dists[0] - skirting)
+                or start_views_agree(
+                    meta.get("start_views"), dists[0] - skirting, offset, side_normal
+                )
             )
             start_dist = dists[0] if agrees else back
             dists, on_wall = dists[1:], on_wall[1:]
@@ -708,22 +710,21 @@ def _start_from_wall(
     return float(np.median(back)) if back else float(dists[0])
 
 
-def start_views_agree(views: Any, distance: float) -> bool:
+def start_views_agree(views: Any, distance: float, offset: float, side_normal: float) -> bool:
     """Whether the survey start's views repeat its side line's distance: at least
-    :data:`START_VIEWS` of them within :data:`START_VIEWS_M` of it.
+    :data:`START_VIEWS` trusted side lines (:func:`_line`) within :data:`START_VIEWS_M` of it.
 
     Args:
         views: The survey meta's ``start_views`` (line dicts as the survey wrote them).
         distance: The start's side line distance, as seen (m, before the skirting).
+        offset: ``survey.wall_offset_m``, m.
+        side_normal: Where the side wall is, rad (FRAME_ROBOT).
     """
     if not isinstance(views, list):
         return False
-    near = 0
-    for view in views:
-        d = view.get("distance_m") if isinstance(view, dict) else None
-        if isinstance(d, (int, float)) and math.isfinite(d) and abs(d - distance) <= START_VIEWS_M:
-            near += 1
-    return near >= START_VIEWS
+    lines = [_line(view, offset, side_normal) for view in views]
+    near = [ln for ln in lines if ln is not None and abs(ln[0] - distance) <= START_VIEWS_M]
+    return len(near) >= START_VIEWS
 
 
 def _own_heading(

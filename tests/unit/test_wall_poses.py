@@ -367,12 +367,18 @@ def test_the_start_views_keep_the_origin_when_the_odometry_walks_sideways() -> N
 
 def test_the_start_views_agree_only_when_several_repeat_its_line() -> None:
     def views(*distances: float) -> list[dict[str, float]]:
-        return [{"distance_m": d, "normal_rad": 0.0} for d in distances]
+        return [{"distance_m": d, "normal_rad": SIDE_NORMAL} for d in distances]
 
-    assert start_views_agree(views(0.919, 0.918, 0.919, 0.92, 0.919), 0.92)
-    assert start_views_agree(views(1.095, 0.782, 1.098, 1.097), 1.097)  # one view off
-    assert not start_views_agree(views(0.596), 0.596)  # the 3 x 3 m room's start: one view
-    assert not start_views_agree(views(0.522, 0.49), 0.506)  # two that disagree
-    assert not start_views_agree(views(0.70, 0.70, 0.70), 0.66)  # not the line's distance
-    assert not start_views_agree(None, 0.9)
-    assert not start_views_agree([None, {"distance_m": "x"}, *views(0.9, 0.9)], 0.9)
+    def agree(found: Any, distance: float) -> bool:
+        return start_views_agree(found, distance, distance, SIDE_NORMAL)
+
+    assert agree(views(0.919, 0.918, 0.919, 0.92, 0.919), 0.92)
+    assert agree(views(1.095, 0.782, 1.098, 1.097), 1.097)  # one view off
+    assert not agree(views(0.596), 0.596)  # the 3 x 3 m room's start: one view
+    assert not agree(views(0.522, 0.49), 0.506)  # two that disagree
+    assert not agree(views(0.70, 0.70, 0.70), 0.66)  # not the line's distance
+    assert not agree(None, 0.9)
+    assert not agree([None, {"distance_m": "x"}, *views(0.9, 0.9)], 0.9)
+    # views whose lines the side-line gate refuses (at a wrong angle) do not count
+    turned = [{"distance_m": 0.9, "normal_rad": SIDE_NORMAL + 0.5}] * 3
+    assert not agree(turned, 0.9)
