@@ -61,6 +61,9 @@ class Belief:
         pictures: Pictures with features seen so far.
         contradicted: Whether the latest pictures were explained far better elsewhere than
             by the leading hypothesis (the robot was carried, or the leader is wrong).
+        room_seen: The most evidence that this is the mapped room a probable place has
+            given so far (nats, forgotten as the places' is): a robot that recognised the
+            room and then lost its place (it was carried) is still in the room.
     """
 
     pose: np.ndarray | None
@@ -73,6 +76,7 @@ class Belief:
     seen_score: float
     pictures: int
     contradicted: bool
+    room_seen: float = 0.0
 
 
 class MultiHypothesisFilter:
@@ -103,6 +107,7 @@ class MultiHypothesisFilter:
         self.pictures = 0
         self.contradicted = False
         self._behind = 0  # pictures in a row the leader explained far worse than another
+        self.room_seen = 0.0  # see Belief.room_seen
         m, r = tun.proposal_sigma
         self._proposal_cov = np.diag([m**2, m**2, r**2])
         m, r = tun.line_proposal_sigma
@@ -147,6 +152,11 @@ class MultiHypothesisFilter:
                 self._add(z, None, self._line_cov)
             self._explore()
         self._prune()
+        if distinctive:
+            b = self.belief()
+            self.room_seen *= kept
+            if b.pose is not None and b.probability >= self.tun.confident:
+                self.room_seen = max(self.room_seen, b.seen_score)
 
     def _add(self, z: np.ndarray, anchor: PictureMatches | None, cov: np.ndarray | None) -> bool:
         """Spawn a hypothesis at ``z`` unless one explains it already; whether it was."""
@@ -459,7 +469,10 @@ class MultiHypothesisFilter:
         """The best hypothesis and how much the evidence favours it."""
         null = self.tun.null_nats
         if not self.hypotheses:
-            return Belief(None, None, 0.0, 1.0, 0, 0, 0.0, 0.0, self.pictures, self.contradicted)
+            return Belief(
+                None, None, 0.0, 1.0, 0, 0, 0.0, 0.0, self.pictures, self.contradicted,
+                self.room_seen,
+            )  # fmt: skip
         # Which place of the map: every observation's evidence. Whether the map's room at
         # all: the pictures' alone (any room's walls give floor lines a corner can fit).
         scores = np.array([h.score for h in self.hypotheses])
@@ -500,6 +513,7 @@ class MultiHypothesisFilter:
             h.seen_score,
             self.pictures,
             self.contradicted,
+            self.room_seen,
         )
 
     def set_pose(self, pose: np.ndarray, cov: np.ndarray, score: float) -> None:

@@ -108,17 +108,22 @@ def decide(belief: Belief, tun: FilterTuning) -> tuple[Status, str]:
     """The status of a belief (a pure function of it and the tuning).
 
     - no hypothesis, or the other-room alternative outweighs the best one, once
-      ``verdict_pictures`` pictures with features were seen: not the mapped room;
+      ``verdict_pictures`` pictures with features were seen: not the mapped room, unless a
+      probable place has shown the room before (``room_seen`` of ``null_nats`` or more: the
+      robot was carried, or lost its place, in the mapped room): lost;
     - the best place is probable (``confident``), its spread narrow (``max_sigma_*``) and
       the latest picture does not contradict it: tracking;
     - otherwise lost (with why).
     """
     enough = belief.pictures >= tun.verdict_pictures
+    known = belief.room_seen >= tun.null_nats
     if belief.pose is None or belief.cov is None:
-        if enough:
+        if enough and not known:
             return Status.NOT_MAPPED, "the pictures fit no place of the map"
-        return Status.LOST, "nothing recognised yet"
+        return Status.LOST, "nothing recognised yet" if not known else "the place is lost"
     if belief.other_room > belief.probability and enough:
+        if known:
+            return Status.LOST, "the room was recognised, the place is not yet"
         return Status.NOT_MAPPED, "the observations fit no place of the map"
     if belief.contradicted:
         return Status.LOST, "the latest picture puts the robot elsewhere"
@@ -196,6 +201,7 @@ class Localizer:
             "hypotheses": b.hypotheses,
             "probability": round(b.probability, 4),
             "other_room": round(b.other_room, 4),
+            "room_seen": round(b.room_seen, 2),
             "observations": len(self.log),
         }
         if status is not Status.TRACKING or b.pose is None:

@@ -156,6 +156,11 @@ def _belief(**kw: object) -> Belief:
         ({"probability": 0.2, "other_room": 0.8, "pictures": 2}, Status.LOST),  # too early
         ({"pose": None, "cov": None, "pictures": 9}, Status.NOT_MAPPED),
         ({"pose": None, "cov": None, "pictures": 1}, Status.LOST),
+        # A robot that recognised the room before (it was carried, or lost its place):
+        # no pose, but not "another room" either.
+        ({"probability": 0.2, "other_room": 0.8, "room_seen": 25.0}, Status.LOST),
+        ({"pose": None, "cov": None, "pictures": 9, "room_seen": 25.0}, Status.LOST),
+        ({"probability": 0.2, "other_room": 0.8, "room_seen": 15.0}, Status.NOT_MAPPED),
     ],
 )
 def test_the_status_is_a_function_of_the_belief(changes: dict, status: Status) -> None:
@@ -271,3 +276,27 @@ def test_a_map_whose_laps_disagree_reports_its_own_error_in_the_covariance() -> 
                 {"keyframe_sigma_m": -1.0}, {"keyframe_sigma_m": float("nan")},
                 {"keyframe_sigma_m": True}):  # fmt: skip
         assert keyframe_sigma_of(bad) is None
+
+
+def test_a_recognised_room_stays_recognised_when_the_place_is_lost() -> None:
+    """The room's evidence a probable place gave outlives the place: pictures that fit no
+    place (a carried robot's blank wall) make the belief lost, not "another room"."""
+    truth = np.array([2.0, 0.5, 0.7])
+    f = MultiHypothesisFilter(WALLS, TUN)
+    odo = Pose2D(0.0, 0.0, 0.0)
+    lines = tuple(_line(WALLS, truth, k) for k in (0, 1, 2))
+    f.observe(lines, odo)
+    for seed in range(1, 7):
+        f.observe(_picture(truth, seed=seed, wrong=0.3), odo)
+    assert decide(f.belief(), TUN)[0] is Status.TRACKING
+    assert f.belief().room_seen >= TUN.null_nats
+    # Carried: every picture's matches are now wrong for every place of the map.
+    for seed in range(10, 30):
+        f.observe(_picture(truth + np.array([1.3, 0.9, 2.0]), seed=seed, wrong=1.0), odo)
+    status, _ = decide(f.belief(), TUN)
+    assert status is Status.LOST
+    # A fresh filter given the same wrong pictures says it is not the mapped room.
+    g = MultiHypothesisFilter(WALLS, TUN)
+    for seed in range(10, 30):
+        g.observe(_picture(truth + np.array([1.3, 0.9, 2.0]), seed=seed, wrong=1.0), odo)
+    assert decide(g.belief(), TUN)[0] is Status.NOT_MAPPED
