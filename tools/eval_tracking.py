@@ -21,6 +21,10 @@ carries the robot to a random free pose without telling its odometry, and it wal
 walk has recovered when the pose is tracked within 0.45 m of the truth for 10 s of robot
 time after the carry; the time to recover and the confident wrong poses in between
 (more than 0.3 m off at confidence >= 0.5) are reported.
+
+A walk stops when the body touches a wall or furniture (the simulator's contacts, as a
+NAO's bumpers would tell); ``blocked`` counts those stops. After a carry, a blocked robot
+tracks standing (its head sweeping) for 15 s, so that its recovery can still be judged.
 """
 
 from __future__ import annotations
@@ -107,12 +111,14 @@ def one_walk(
     route = random_route(grid, first.estimate.pose(), args.walk_m, rng)
     tracker = Tracker(robot, loc, cfg)
     points: list[TrackPoint] = []
+    ends: list[str] = []  # why each walk_route ended
     carried_at = None
     try:
         if args.kidnap:
             half = route[: max(1, len(route) // 2)]
-            pts, _ = walk_route(robot, tracker, half, max_s=args.walk_m / 0.1 * 1.5)
+            pts, why = walk_route(robot, tracker, half, max_s=args.walk_m / 0.1 * 1.5)
             points += pts
+            ends.append(why)
             for _ in range(200):
                 x, y = rng.uniform(0.5, sx - 0.5), rng.uniform(0.5, sy - 0.5)
                 if sim.is_free(float(x), float(y), 0.35):
@@ -122,11 +128,17 @@ def one_walk(
             est = loc.pose()
             here = est.pose() if est.found else first.estimate.pose()
             rest = random_route(grid, here, args.walk_m / 2, rng)
-            pts, _ = walk_route(robot, tracker, rest, max_s=args.walk_m / 0.1, lost_steps=10**6)
+            pts, why = walk_route(robot, tracker, rest, max_s=args.walk_m / 0.1, lost_steps=10**6)
             points += pts
+            ends.append(why)
+            if why == "blocked":  # stopped at a contact: it tracks standing, head sweeping
+                t_end = robot_clock(robot) + RECOVERED_S + 5.0
+                while robot_clock(robot) < t_end:
+                    points.append(tracker.step())
         else:
-            pts, _ = walk_route(robot, tracker, route, max_s=args.walk_m / 0.1 * 1.5)
+            pts, why = walk_route(robot, tracker, route, max_s=args.walk_m / 0.1 * 1.5)
             points += pts
+            ends.append(why)
     finally:
         robot.motion.stopMove()
         tracker.close()
@@ -142,6 +154,7 @@ def one_walk(
         for p in points
     ]
     out["carried_at"] = carried_at
+    out["ends"] = ends
     return out
 
 
@@ -213,6 +226,8 @@ def main() -> int:
         print(f"room {seed}: {_figures(room_points)}", flush=True)
     kid = [w for w in walks_out if w.get("carried_at") is not None]
     summary: dict[str, Any] = {"walks": len(walks_out), **_figures(pooled)}
+    # walks that stopped because the body touched a wall or furniture (a NAO's bumpers)
+    summary["blocked"] = sum(w.get("ends", []).count("blocked") for w in walks_out)
     if kid:
         rec = [recovery(w["points"], w["carried_at"]) for w in kid]
         times = [r for r, _ in rec if r is not None]

@@ -27,6 +27,7 @@ from naoloc.behaviours.localize import (
     truth_in_map,
 )
 from naoloc.behaviours.track import Tracker, TrackPoint
+from naoloc.behaviours.walk_watch import TOUCHING, touching
 from naoloc.config import Config
 from naoloc.constants import WALK_SPEED
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
@@ -197,6 +198,9 @@ def go_home(
             cmd = pursuit(here, route)
             robot.motion.move(cmd.x, cmd.y, cmd.theta)
             result.trail.append(_point(tracker, on_point))
+            if touching(robot):  # a robot that is blocked stops
+                result.reason = f"blocked: {TOUCHING}"
+                break
     finally:
         robot.motion.stopMove()
         tracker.close()

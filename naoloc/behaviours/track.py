@@ -17,6 +17,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from naoloc.behaviours.localize import Eyes, Localization, localize, robot_clock, truth_in_map
+from naoloc.behaviours.walk_watch import touching
 from naoloc.config import Config
 from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.localization.localizer import Localizer, PoseEstimate
@@ -167,11 +168,14 @@ def walk_route(
 
     The robot stops when the belief's pose reaches the last waypoint, when ``max_s`` of
     robot time have passed, or when the belief has been lost for ``lost_steps`` frames
-    (it is then stopped for the caller to look). It is stopped on every exit. Between
-    frames, ``ticks`` odometry-only poses keep the pose live at the odometry's rate.
+    (it is then stopped for the caller to look), or when the body touches a wall or
+    furniture (:func:`naoloc.behaviours.walk_watch.touching`). It is stopped on every
+    exit. Between frames, ``ticks`` odometry-only poses keep the pose live at the
+    odometry's rate.
 
     Returns:
-        The track's points and why it stopped (``arrived``, ``time``, ``lost``).
+        The track's points and why it stopped (``arrived``, ``time``, ``lost``,
+        ``blocked``).
     """
     points: list[TrackPoint] = []
     left = list(route)
@@ -185,6 +189,9 @@ def walk_route(
             points.append(point)
             if on_point is not None:
                 on_point(point)
+            if touching(robot):  # a robot that is blocked stops
+                why = "blocked"
+                break
             if steer is not None:  # the command stands until the next frame's: odometry poses
                 for _ in range(ticks):
                     tick = tracker.tick()

@@ -40,6 +40,7 @@ FRONT_CHECK_M = 1.6  # front lines farther than this err too much to say a step 
 MAX_SIDE_DEVIATION_M = 0.25  # side lines farther than this from the offset are not judged
 MIN_SIDE_STEP_M = 0.1  # odometry steps toward or away from the wall smaller are not judged
 CONTACT_CLEARANCE_M = 0.155  # simulator only: the body's disc (MuJoCo's 0.15 m capsule) touches
+TOUCHING = "the simulator reports the body touching a wall or furniture"
 MIN_STEP_M = 0.08  # odometry steps shorter than this are not judged by the pictures
 STILL_PX = 2.0  # a matched feature that moved less than this (px) stayed put
 MIN_STILL_SHARE = 0.7  # pictures with this share of their features still: the robot did not move
@@ -105,6 +106,18 @@ def expected_shift_px(step_m: float, offset: float, look_ahead: float, f_px: flo
     """
     reach = offset / max(0.2, math.cos(look_ahead))
     return f_px * abs(step_m) * math.cos(look_ahead) / reach
+
+
+def touching(robot: Robot) -> bool:
+    """Whether the body touches a wall or furniture: the simulator's contacts (the body's
+    disc, :data:`CONTACT_CLEARANCE_M`), as a NAO's bumpers would tell. Always False on a
+    real NAO: the robot interface (ALMotion, ALVideoDevice, ALRobotPosture) does not reach
+    the bumpers' ALMemory keys."""
+    sim = robot.sim
+    if sim is None:
+        return False
+    x, y, _ = sim.true_pose()
+    return not sim.is_free(x, y, CONTACT_CLEARANCE_M)
 
 
 @dataclass
@@ -181,11 +194,8 @@ class WalkWatch:
             SurveyBlocked: The simulator reports the body touching a wall or furniture.
         """
         self.walked += step_m
-        sim = self.robot.sim
-        if sim is not None:  # simulator only: contacts, as a NAO's bumpers would tell
-            x, y, _ = sim.true_pose()
-            if not sim.is_free(x, y, CONTACT_CLEARANCE_M):
-                raise self.blocked("the simulator reports the body touching a wall or furniture")
+        if touching(self.robot):
+            raise self.blocked(TOUCHING)
 
     def picture(self, gray: np.ndarray, step_m: float) -> dict[str, Any]:
         """A new wall picture after an odometry step of ``step_m`` m (along the side).

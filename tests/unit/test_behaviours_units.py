@@ -8,6 +8,9 @@ import numpy as np
 import pytest
 
 from naoloc.behaviours import circuit, count_halves, frames_per_lap, nearest_wall
+from naoloc.behaviours.track import TrackPoint, walk_route
+from naoloc.geometry import Pose2D
+from naoloc.localization.localizer import PoseEstimate, Status
 from naoloc.robot.camera import clamp_head
 
 
@@ -118,3 +121,67 @@ def test_pursuit_walks_toward_the_route(here: tuple[float, float, float], expect
     else:
         assert cmd.x > 0 and cmd.theta < 0
     assert pursuit(Pose2D(*here), []).x == 0.0
+
+
+class _Motion:
+    """ALMotion's walk calls, recorded."""
+
+    def __init__(self) -> None:
+        self.calls: list[str] = []
+
+    def move(self, x: float, y: float, theta: float) -> None:
+        self.calls.append("move")
+
+    def stopMove(self) -> None:
+        self.calls.append("stopMove")
+
+
+class _Sim:
+    """A simulator whose clock advances 0.1 s a reading and whose body touches something
+    from the ``touch_at``-th contact check on."""
+
+    def __init__(self, touch_at: int) -> None:
+        self.t = 0.0
+        self.checks = 0
+        self.touch_at = touch_at
+
+    def sim_time(self) -> float:
+        self.t += 0.1
+        return self.t
+
+    def true_pose(self) -> tuple[float, float, float]:
+        return (1.0, 1.0, 0.0)
+
+    def is_free(self, x: float, y: float, clearance: float) -> bool:
+        self.checks += 1
+        return self.checks < self.touch_at
+
+
+class _Robot:
+    def __init__(self, touch_at: int) -> None:
+        self.motion = _Motion()
+        self.sim = _Sim(touch_at)
+
+
+class _Tracking:
+    """A tracker whose belief is at the origin, tracking."""
+
+    def step(self) -> TrackPoint:
+        est = PoseEstimate(0.0, 0.0, 0.0, np.eye(3) * 1e-4, 1.0, Status.TRACKING)
+        return TrackPoint(0.0, est, None, 0.0)
+
+    def tick(self) -> TrackPoint:
+        return self.step()
+
+
+@pytest.mark.parametrize(("touch_at", "why"), [(5, "blocked"), (10**6, "time")])
+def test_a_walk_that_touches_something_stops(touch_at: int, why: str) -> None:
+    """The body touching a wall or furniture (the simulator's contacts, a NAO's bumpers)
+    stops the walk at once; it is stopped on the way out."""
+    robot = _Robot(touch_at)
+    route = [Pose2D(2.0, 0.0, 0.0), Pose2D(3.0, 0.0, 0.0)]
+    _points, got = walk_route(robot, _Tracking(), route, max_s=3.0, ticks=0)  # type: ignore[arg-type]
+    assert got == why
+    assert robot.motion.calls[-1] == "stopMove"
+    if why == "blocked":
+        assert robot.sim.checks == touch_at  # no step after the contact
