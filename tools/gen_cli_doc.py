@@ -68,8 +68,9 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "a pose (exit code 3)",
         "method": "`filter` (the localization filter), `gcs` (the paper's Algorithm 5, "
         "localize.mode paper), `none` without a pose",
-        "status": "`tracking` (a pose), `lost` (not concentrated yet) or `not the mapped room` "
-        "(the observations fit no place of the map; exit code 3)",
+        "status": "`tracking` (a pose), `lost` (not concentrated yet, or a room it recognised "
+        "whose place it lost) or `not the mapped room` (the observations fit no place of the "
+        "map; exit code 3)",
         "reason": "why there is no pose (absent with one)",
         "strategy": "`scan` (a short look: head sweep, turns while lost) or `paper`",
         "images": "top-camera pictures taken",
@@ -107,7 +108,8 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "robot_s": "the robot's time spent (s)",
         "walk_s": "time to walk the planned path at a NAO's 0.1 m/s (s)",
         "start": "where the first look put the robot [x, y, theta], map frame",
-        "reason": "why it stopped without reaching home",
+        "reason": "why it stopped without reaching home (`blocked: ...` when the body "
+        "touched a wall or furniture)",
         "error_m": "true distance from the map origin at the end (m); simulator only",
         "truth": "true final pose [x, y, theta], map frame; simulator only",
         "png": "the picture written with --png",
@@ -123,7 +125,7 @@ JSON_FIELDS: dict[str, dict[str, str]] = {
         "cpu_ms_median": "median CPU time per camera frame (ms)",
         "walked_m": "distance walked by odometry (m)",
         "median_error_m": "median error of the poses (m); simulator only",
-        "reason": "why it stopped early",
+        "reason": "why it stopped early (`blocked` when the body touched a wall or furniture)",
         "record": "with --record: the recording written (`naoloc replay` re-runs it)",
         "ros2": "with --format ros2: the ROS 2 MCAP written beside (NAME.ros2.mcap)",
         "at": "with --at: the start asked for, {room: [x, y, theta] as given (room frame), "
