@@ -21,6 +21,7 @@ import numpy as np
 
 from naoloc.errors import NaolocError
 from naoloc.geometry import Pose2D
+from naoloc.localization.walls import WallMap, wall_map
 
 FREE, UNKNOWN, BLOCKED = 0, 1, 2
 # Step cost per metre over free and unknown cells: walking where the survey walked is safe.
@@ -381,10 +382,33 @@ def grid_from_map(
     return grid
 
 
+def block_outside(grid: FloorGrid, walls: WallMap) -> None:
+    """Block every cell whose centre lies beyond one of the map's walls (map frame).
+
+    The landmarks' extent places the walls only roughly: a far picture's landmarks
+    triangulate up to decimetres behind their wall, and a path planned to the 98th
+    percentile of them ran along, or into, the wall itself.
+    """
+    ny, nx = grid.cells.shape
+    xs = grid.origin[0] + (np.arange(nx) + 0.5) * grid.resolution
+    ys = grid.origin[1] + (np.arange(ny) + 0.5) * grid.resolution
+    gx, gy = np.meshgrid(xs, ys)
+    outside = np.zeros(grid.cells.shape, dtype=bool)
+    for normal, coord in zip(walls.normals, walls.coords, strict=True):
+        outside |= math.cos(normal) * gx + math.sin(normal) * gy > coord
+    grid.cells[outside] = BLOCKED
+
+
 def grid_of_map(vmap: Any) -> FloorGrid:
-    """The floor grid of a map: keyframe poses walked free, landmarks near the floor blocked."""
+    """The floor grid of a map: keyframe poses walked free, landmarks near the floor blocked,
+    and beyond the walls the survey placed (``meta["wall_poses"]``) blocked."""
     refined = getattr(vmap, "refined_poses", None)
     poses = np.asarray(vmap.keyframe_poses if refined is None else refined)
     points = getattr(vmap, "kp_points", None)
     pts = np.empty((0, 3)) if points is None else np.asarray(points)
-    return grid_from_map(poses, pts)
+    grid = grid_from_map(poses, pts)
+    meta = getattr(vmap, "meta", None)
+    walls = wall_map(meta) if isinstance(meta, dict) else None
+    if walls is not None:
+        block_outside(grid, walls)
+    return grid

@@ -8,7 +8,16 @@ import numpy as np
 import pytest
 
 from naoloc.geometry import Pose2D
-from naoloc.navigation.grid import BLOCKED, FREE, FloorGrid, NoPath, grid_from_map, path_length
+from naoloc.navigation.grid import (
+    BLOCKED,
+    FREE,
+    FloorGrid,
+    NoPath,
+    block_outside,
+    grid_from_map,
+    grid_of_map,
+    path_length,
+)
 
 
 def _clear(grid: FloorGrid, path: list[Pose2D], start: Pose2D) -> bool:
@@ -128,3 +137,42 @@ def test_the_survey_start_is_free_and_the_filter_may_stand_by_furniture() -> Non
     assert standing(*at).tolist() == [True, True, False]
     assert not passing(np.array([0.0]), np.array([-0.3]))[0]  # a path keeps its clearance
     assert standing(np.array([0.0]), np.array([-0.3]))[0]
+
+
+def test_the_maps_walls_bound_the_grid() -> None:
+    """Landmarks triangulated behind their wall (far pictures) put the landmarks' box
+    0.4 m beyond it; the walls the survey placed block the floor beyond them, so a path
+    keeps the robot's clearance from the wall itself."""
+    from naoloc.localization.walls import WallMap
+
+    rng = np.random.default_rng(1)
+    side = np.linspace(0, 3, 16)
+    circuit = np.array([[x, 0, 0] for x in side] + [[3, y, 0] for y in side])
+    # walls at x = -1 and 4, y = -1 and 4; the landmarks of the x = 4 wall stand 0.2-0.8 m behind
+    pts = [[rng.uniform(-1, 4), y, 0.5] for _ in range(80) for y in (-1.0, 4.0)]
+    pts += [[-1.0, rng.uniform(-1, 4), 0.5] for _ in range(80)]
+    pts += [[rng.uniform(4.2, 4.8), rng.uniform(-1, 4), 0.5] for _ in range(80)]
+    walls = WallMap.of(Pose2D(0.0, 0.0, 0.0), (-1.0, 4.0, -1.0, 4.0))
+    grid = grid_from_map(circuit, np.array(pts))
+    assert grid.cells[grid.index(4.15, 2.0)] != BLOCKED  # beyond the wall, inside the box
+    block_outside(grid, walls)
+    assert grid.cells[grid.index(4.15, 2.0)] == BLOCKED
+    assert grid.cells[grid.index(3.85, 2.0)] != BLOCKED
+    passing = grid.free_test()
+    assert not passing(np.array([3.9]), np.array([2.0]))[0]  # the clearance from the wall
+    path = grid.plan(Pose2D(3.0, 0.0), Pose2D(3.0, 3.0))
+    assert max(p.x for p in path) < 4.0 - grid.robot_radius
+
+
+def test_a_maps_grid_takes_its_walls_from_the_meta() -> None:
+    from types import SimpleNamespace
+
+    side = np.linspace(0, 3, 16)
+    poses = np.array([[x, 0, 0] for x in side] + [[3, y, 0] for y in side])
+    pts = np.array([[4.5, y, 0.5] for y in np.linspace(-1, 4, 60)]
+                   + [[-1.0, y, 0.5] for y in np.linspace(-1, 4, 60)])  # fmt: skip
+    meta = {"wall_poses": {"wall_frame": [0.0, 0.0, 0.0], "walls_m": [-1.0, 4.0, -1.0, 4.0]}}
+    with_walls = grid_of_map(SimpleNamespace(keyframe_poses=poses, kp_points=pts, meta=meta))
+    without = grid_of_map(SimpleNamespace(keyframe_poses=poses, kp_points=pts, meta={}))
+    assert with_walls.cells[with_walls.index(4.2, 1.0)] == BLOCKED
+    assert without.cells[without.index(4.2, 1.0)] != BLOCKED
