@@ -238,9 +238,9 @@ def main() -> int:
     summary["blocked"] = sum(w.get("ends", []).count("blocked") for w in walks_out)
     if kid:
         summary["kidnap"] = _kidnap(kid)
-        checked = [w for w in kid if w.get("checked")]
-        if len(checked) < len(kid):  # the same, in the maps build-map accepts
-            summary["kidnap_checked_maps"] = _kidnap(checked) if checked else {"carried": 0}
+        accepted = [w for w in kid if w.get("checked")]
+        if len(accepted) < len(kid):  # the same, in the maps build-map accepts
+            summary["kidnap_checked_maps"] = _kidnap(accepted) if accepted else {"carried": 0}
     summary["wall_s"] = round(time.monotonic() - t0, 1)
     print(f"pooled: {json.dumps(summary)}")
     (out / "tracking.json").write_text(json.dumps({"summary": summary, "walks": walks_out}))

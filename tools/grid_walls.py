@@ -22,19 +22,7 @@ import numpy as np
 from naoloc.errors import NaolocError
 from naoloc.localization.walls import wall_map
 from naoloc.mapping.map import load_map
-from naoloc.navigation.grid import FloorGrid, grid_from_map, grid_of_map
-
-
-def _wall_distance(grid: FloorGrid, normals: np.ndarray, coords: np.ndarray) -> np.ndarray:
-    """Each cell centre's distance inside the nearest wall (m; negative beyond it)."""
-    ny, nx = grid.cells.shape
-    xs = grid.origin[0] + (np.arange(nx) + 0.5) * grid.resolution
-    ys = grid.origin[1] + (np.arange(ny) + 0.5) * grid.resolution
-    gx, gy = np.meshgrid(xs, ys)
-    d = np.full(gx.shape, np.inf)
-    for n, c in zip(normals, coords, strict=True):
-        d = np.minimum(d, c - (np.cos(n) * gx + np.sin(n) * gy))
-    return d
+from naoloc.navigation.grid import grid_from_map, grid_of_map
 
 
 def main() -> int:
@@ -46,7 +34,7 @@ def main() -> int:
         try:
             vmap = load_map(path)
         except NaolocError as err:
-            print(f"{path}: {err}", file=sys.stderr)
+            print(f"grid_walls: {err}", file=sys.stderr)
             return 1
         walls = wall_map(vmap.meta)
         if walls is None:
@@ -59,7 +47,7 @@ def main() -> int:
             ("walls", grid_of_map(vmap)),
         ):
             ok = grid.passable()
-            d = _wall_distance(grid, walls.normals, walls.coords)
+            d = walls.depth(*grid.centres())
             print(
                 f"{path}: {name}: {int(ok.sum())} passable cells, {int((ok & (d < 0)).sum())} "
                 f"beyond a wall, {int((ok & (d < 0.2)).sum())} beyond or within 0.2 m"

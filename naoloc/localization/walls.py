@@ -52,10 +52,17 @@ class WallMap:
         coords = n @ np.array([frame.x, frame.y]) + np.array([x1, y1, -x0, -y0])
         return cls(frame, (x0, x1, y0, y1), normals, coords)
 
+    def depth(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """How far map-frame points (m, arrays of one shape) stand inside the nearest wall
+        (m; negative beyond it)."""
+        d = np.full(np.shape(x), np.inf)
+        for normal, coord in zip(self.normals, self.coords, strict=True):
+            d = np.minimum(d, coord - (math.cos(normal) * x + math.sin(normal) * y))
+        return d
+
     def inside(self, x: float, y: float, margin: float = 0.0) -> bool:
         """Whether the map-frame point (m) is inside the walls by at least ``margin`` (m)."""
-        n = np.column_stack([np.cos(self.normals), np.sin(self.normals)])
-        return bool(np.all(self.coords - n @ np.array([x, y]) >= margin))
+        return bool(self.depth(np.asarray(x), np.asarray(y)) >= margin)
 
     def expected(self, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Each wall's distance (m) and direction (rad, FRAME_ROBOT) seen from ``pose``."""

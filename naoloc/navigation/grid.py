@@ -88,6 +88,14 @@ class FloorGrid:
             self.origin[1] + (r + 0.5) * self.resolution,
         )
 
+    def centres(self) -> tuple[np.ndarray, np.ndarray]:
+        """Map-frame x and y of every cell's centre, m: two ``(ny, nx)`` arrays."""
+        ny, nx = self.cells.shape
+        xs = self.origin[0] + (np.arange(nx) + 0.5) * self.resolution
+        ys = self.origin[1] + (np.arange(ny) + 0.5) * self.resolution
+        gx, gy = np.meshgrid(xs, ys)
+        return gx, gy
+
     def _disc(self, x: float, y: float, radius: float) -> tuple[slice, slice, np.ndarray]:
         r0, c0 = self.index(x - radius, y - radius)
         r1, c1 = self.index(x + radius, y + radius)
@@ -354,16 +362,8 @@ def grid_from_map(
         resolution,
         robot_radius,
     )
-    ny, nx = grid.cells.shape
-    xs = grid.origin[0] + (np.arange(nx) + 0.5) * resolution
-    ys = grid.origin[1] + (np.arange(ny) + 0.5) * resolution
-    outside = (
-        (xs[None, :] < lo[0])
-        | (xs[None, :] > hi[0])
-        | (ys[:, None] < lo[1])
-        | (ys[:, None] > hi[1])
-    )
-    grid.cells[outside] = BLOCKED
+    gx, gy = grid.centres()
+    grid.cells[(gx < lo[0]) | (gx > hi[0]) | (gy < lo[1]) | (gy > hi[1])] = BLOCKED
     z0, z1 = obstacle_heights
     inner = (
         (pts[:, 2] > z0)
@@ -389,14 +389,7 @@ def block_outside(grid: FloorGrid, walls: WallMap) -> None:
     triangulate up to decimetres behind their wall, and a path planned to the 98th
     percentile of them ran along, or into, the wall itself.
     """
-    ny, nx = grid.cells.shape
-    xs = grid.origin[0] + (np.arange(nx) + 0.5) * grid.resolution
-    ys = grid.origin[1] + (np.arange(ny) + 0.5) * grid.resolution
-    gx, gy = np.meshgrid(xs, ys)
-    outside = np.zeros(grid.cells.shape, dtype=bool)
-    for normal, coord in zip(walls.normals, walls.coords, strict=True):
-        outside |= math.cos(normal) * gx + math.sin(normal) * gy > coord
-    grid.cells[outside] = BLOCKED
+    grid.cells[walls.depth(*grid.centres()) < 0.0] = BLOCKED
 
 
 def grid_of_map(vmap: Any) -> FloorGrid:
