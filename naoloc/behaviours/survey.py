@@ -64,7 +64,7 @@ from naoloc.config import Config
 from naoloc.errors import ConfigError, MotionError, SurveyError
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
 from naoloc.perception.floorline import WallLine
-from naoloc.perception.wall_gate import crosses_path, in_front_range
+from naoloc.perception.wall_gate import crosses_path, in_far_front_range, in_front_range
 from naoloc.robot import Robot, pose_of
 from naoloc.robot.camera import Camera, clamp_head, lens_of, look, stand
 from naoloc.robot.keyframe import Keyframe
@@ -491,17 +491,21 @@ def _walk_laps(
                     keyframe, odometry = camera.keyframe(origin, command_origin)
                     motion = watch.picture(_gray(keyframe.image), here.distance(keyframe.pose))
                     far: list[tuple[Keyframe, Pose2D]] = []
+                    far_front: WallLine | None = None
                     for _ in range(cfg.survey.far_per_stop if fars else 0):
                         far_yaw = fars[result.far_frames % len(fars)]
                         look(robot, far_yaw, cfg.survey.far_pitch_rad)
                         far.append(camera.keyframe(origin, command_origin))
                         result.far_frames += 1
-                        if far_yaw == 0.0:  # the wall ahead: its line is the watch's too
+                        if far_yaw == 0.0:  # the wall ahead: its line is the watch's too,
+                            # and the map's where it is farther than the survey steers by
+                            ahead = eye.measure(0.0, 0.4)
+                            far_front = _far_front(ahead)
                             _watch_ahead(
                                 robot,
                                 eye,
                                 watch,
-                                _front_in_range(eye),
+                                _in_range(ahead),
                                 keyframe.pose,
                                 length - walked - length_now,
                                 length,
@@ -523,6 +527,7 @@ def _walk_laps(
                             "side": line_dict(side_line),
                             "front": line_dict(front),
                             "front_seen": line_dict(raw_front),
+                            **({"far_front": line_dict(far_front)} if far_front else {}),
                             "steered": steered,
                             "carried": steered and steer is not None and steer.inliers == 0,
                             "level_m": round(memory.level, 3),
@@ -626,10 +631,18 @@ def _gray(image: np.ndarray) -> np.ndarray:
     return image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
 
 
-def _front_in_range(eye: FloorEye) -> WallLine | None:
-    """The front wall's line in the bottom camera's current view (the head looking ahead),
-    when within :data:`naoloc.perception.wall_gate.FRONT_RANGE_M`."""
-    line = eye.measure(0.0, 0.4)
+def _far_front(line: WallLine | None) -> WallLine | None:
+    """A line ahead (the head looking ahead) the map may place its frame by: within
+    :data:`naoloc.perception.wall_gate.FAR_FRONT_RANGE_M` and across the robot's way
+    (:func:`naoloc.perception.wall_gate.crosses_path`)."""
+    if line is None or not in_far_front_range(line.distance) or not crosses_path(line):
+        return None
+    return line
+
+
+def _in_range(line: WallLine | None) -> WallLine | None:
+    """``line`` when within :data:`naoloc.perception.wall_gate.FRONT_RANGE_M`, the range
+    the survey steers by."""
     return line if line is not None and in_front_range(line.distance) else None
 
 

@@ -38,7 +38,12 @@ from typing import Any, Final
 import numpy as np
 
 from naoloc.geometry import Pose2D, modulo2PI
-from naoloc.perception.wall_gate import SIDE_ANGLE_ERROR_RAD, in_front_range, side_line_angle
+from naoloc.perception.wall_gate import (
+    SIDE_ANGLE_ERROR_RAD,
+    in_far_front_range,
+    in_front_range,
+    side_line_angle,
+)
 from naoloc.robot.keyframe import Keyframe
 
 SCALE_RANGE: Final = (0.7, 1.4)  # a side's metres per odometry metre outside this: not used
@@ -401,7 +406,7 @@ def _to_walls(meta: dict[str, Any], skirting: float) -> dict[str, Any]:
     vision = out.get("vision")
     if isinstance(vision, list):
         out["vision"] = [
-            {**v, "side": moved(v.get("side")), "front": moved(v.get("front"))}
+            {**v, **{k: moved(v[k]) for k in ("side", "front", "far_front") if k in v}}
             if isinstance(v, dict)
             else v
             for v in vision
@@ -507,7 +512,12 @@ def _along_sides(
     the corner (0 at 0) and, where the next side's wall says where this side ended
     (``ends``: side -> (odometry along, true along) of its last frame), that and the
     front-wall lines that agree with it; else every front-wall line. A front line puts the
-    frame it was measured at ``length - (distance - offset)`` along the side. A side's start
+    frame it was measured at ``length - (distance - offset)`` along the side. The front
+    lines are the survey's (``front``, up to :data:`~naoloc.perception.wall_gate.FRONT_RANGE_M`
+    ahead, measured before the frame's step) and its far pictures' level look ahead
+    (``far_front``, up to :data:`~naoloc.perception.wall_gate.FAR_FRONT_RANGE_M`, at the
+    frame's stop): between the corner and the first front line only the odometry places
+    the frames, and its random walk is largest in the middle of a long side. A side's start
     (odometry 0) is at ``starts[side]`` (m; default 0): where the previous side's last frame
     stood.
 
@@ -531,6 +541,15 @@ def _along_sides(
             ):
                 where = length - (float(distance) - offset)
                 fronts.append((float(along[idx[j - 1]]), where))  # measured before the step
+        for i in idx:  # the far pictures' level look ahead, at the frame's own stop
+            far = vision[i].get("far_front")
+            distance = far.get("distance_m") if isinstance(far, dict) else None
+            if (
+                isinstance(distance, (int, float))
+                and math.isfinite(distance)
+                and in_far_front_range(distance)
+            ):
+                fronts.append((float(along[i]), length - (float(distance) - offset)))
         if ends is not None and k in ends and ends[k][0] > 0:
             # The next wall placed the side's end; front lines that agree with the walk
             # between the corners (within FRONT_AGREE_M) place the frames near the end too
