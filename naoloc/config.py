@@ -537,13 +537,151 @@ class MapCheckTuning(_Model):
     )
 
 
+class WallPoseTuning(_Model):
+    """The survey keyframes' poses from the walls' floor lines (naoloc.mapping.wall_poses).
+
+    Tunes :func:`naoloc.mapping.wall_poses.wall_poses`: which side lines it believes (and
+    which see furniture before the wall), which front lines place a side's end, and how it
+    finds the survey start's heading and distance from side 0's wall. Distances in metres,
+    angles in radians.
+    """
+
+    scale_range: tuple[float, float] = Field(
+        (0.7, 1.4),
+        description="a side's metres per odometry metre outside this is not used (nor a "
+        "survey's metric_scale)",
+    )
+    turn_scale_range: tuple[float, float] = Field(
+        (0.8, 1.25), description="an odometry turn per true turn outside this is not used"
+    )
+    min_corner_fraction: float = Field(
+        0.5,
+        ge=0,
+        le=1,
+        description="least share of the sides whose corner a wall or front line must place; "
+        "fewer: the odometry poses are kept",
+    )
+    front_agree_m: float = Field(
+        0.12,
+        gt=0,
+        description="a front line within this of the walk between the corners also anchors "
+        "its side (m)",
+    )
+    front_heading_m: float = Field(
+        4.0,
+        gt=0,
+        description="a farther wall's line within this gives the start's heading (its angle, "
+        "not its distance; m)",
+    )
+    line_std_m: float = Field(
+        0.03,
+        gt=0,
+        description="a floor line's distance, one sigma (m; NAO's lens reads 2-4 cm long)",
+    )
+    line_std_rad: float = Field(0.01, gt=0, description="a floor line's angle, one sigma (rad)")
+    min_angle_gate_rad: float = Field(
+        0.12,
+        ge=0,
+        description="a side line's angle this close to the prediction is always used (rad)",
+    )
+    edge_m: float = Field(
+        0.15,
+        gt=0,
+        description="a side line that jumps more than this between frames sees another thing "
+        "(m); less than a doorway's recess: at 0.2 m the paper room's doorway was entered but "
+        "its end missed and a whole side read 0.18 m off; over 30 surveys 0.15 m made no map "
+        "pose worse (paper room 0.077 -> 0.047 m); lines err 1-4 cm, a step's sideways "
+        "odometry 1-2 cm",
+    )
+    start_heading_m: float = Field(
+        1.0,
+        ge=0,
+        description="the survey start's heading to its wall is its own line's, unless side "
+        "0's frames within this walk (m), each turned back by the odometry's turn since the "
+        "start, agree on another: one line seen past furniture once turned a map 0.2 rad; "
+        "the frames carry the odometry's turn error, so the start's own line is preferred",
+    )
+    start_gate_rad: float = Field(
+        0.06,
+        ge=0,
+        description="... their median more than this away from the start's own heading (rad)",
+    )
+    clean_rms_m: float = Field(
+        0.006,
+        gt=0,
+        description="a start view's line scattered more than this (RMS, m) does not give its "
+        "heading",
+    )
+    clean_fraction: float = Field(
+        0.4,
+        ge=0,
+        le=1,
+        description="nor one with less of its boundary on it: a view centred on the wall's "
+        "foot also shows the wall behind or furniture (0.45-0.6 on the line; 0.6 left one "
+        "start one view, 1.2 deg off); over 52 surveys the start heading's p90 error "
+        "0.76 -> 0.63 deg with 0.4",
+    )
+    start_from_wall_frames: int = Field(
+        8,
+        ge=1,
+        description="a survey start beside furniture: its distance from the wall is carried "
+        "back by the odometry's walk from side 0's frames that see the wall within this many "
+        "frames (their median), not its stretch's depth (two chests read as one put a start "
+        "9.7 cm off; the walk back errs 1-5 cm)",
+    )
+    start_agree_m: float = Field(
+        0.04,
+        ge=0,
+        description="the start's own line places it unless those frames, carried back, "
+        "disagree by more than this (m): in a corner one view can read the wall behind",
+    )
+    start_views: int = Field(
+        3,
+        ge=1,
+        description="... unless at least this many of the start's views repeat its line: "
+        "views from the standing robot measure where it stands, the frames carried back add "
+        "the odometry's sideways walk (0.01-0.06 m per 0.2 m step: 8 of 18 origins "
+        "0.05-0.11 m off); one view, or two that disagree, is a corner's or the arm's "
+        "misreading as often",
+    )
+    start_views_m: float = Field(0.015, ge=0, description="... within this of the start's line (m)")
+    end_frames: int = Field(
+        3,
+        ge=1,
+        description="a side's last frames whose wall lines place where it ended (a corner's "
+        "plant or sideboard is often all the last frame sees)",
+    )
+    wall_level_m: float = Field(
+        0.1,
+        gt=0,
+        description="stretches of a side's lines whose levels are this close see the same "
+        "thing (m)",
+    )
+    min_wall_frames: int = Field(3, ge=1, description="least frames that must see a side's wall")
+    wall_support: float = Field(
+        0.2,
+        ge=0,
+        le=1,
+        description="and the least share of the side's lines that must (the wall is the "
+        "farthest level so seen)",
+    )
+
+    @field_validator("scale_range", "turn_scale_range")
+    @classmethod
+    def _range_ok(cls, v: tuple[float, float]) -> tuple[float, float]:
+        if not 0 < v[0] <= v[1]:
+            raise ValueError("must be [low, high] with 0 < low <= high")
+        return v
+
+
 class MapTuning(_Model):
-    """Tuning of map building (landmarks, pose graph, bundle adjustment)."""
+    """Tuning of map building (landmarks, pose graph, bundle adjustment, checks, wall poses)."""
 
     landmarks: LandmarkTuning = LandmarkTuning()
     pose_graph: PoseGraphTuning = PoseGraphTuning()
     bundle: BundleTuning = BundleTuning()
     checks: MapCheckTuning = MapCheckTuning()
+    wall_poses: WallPoseTuning = WallPoseTuning()
 
 
 class MapConfig(_Model):
@@ -554,7 +692,9 @@ class MapConfig(_Model):
     epochs: int = Field(300, ge=1, le=10000, description="passes over the training images")
     seed: int = Field(0, ge=0, description="seed of vocabulary and GCS")
     vocabulary_size: int = Field(256, ge=8, le=4096, description="visual words")
-    tuning: MapTuning = Field(MapTuning(), description="landmark, pose-graph and bundle tuning")
+    tuning: MapTuning = Field(
+        MapTuning(), description="landmark, pose-graph, bundle, check and wall-pose tuning"
+    )
     akaze_threshold: float = Field(
         0.001, gt=0, le=0.1, description="A-KAZE detector threshold (lower finds more keypoints)"
     )

@@ -499,13 +499,13 @@ def _walk_laps(
                         result.far_frames += 1
                         if far_yaw == 0.0:  # the wall ahead: its line is the watch's too,
                             # and the map's where it is farther than the survey steers by
-                            ahead = eye.measure(0.0, 0.4)
-                            far_front = _far_front(ahead)
+                            seen_ahead = eye.measure(0.0, 0.4)
+                            far_front = _far_front(seen_ahead)
                             _watch_ahead(
                                 robot,
                                 eye,
                                 watch,
-                                _in_range(ahead),
+                                _in_range(seen_ahead),
                                 keyframe.pose,
                                 length - walked - length_now,
                                 length,

@@ -11,7 +11,7 @@ import dataclasses
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from naoloc.config import MapConfig
+from naoloc.config import MapConfig, WallPoseTuning
 from naoloc.errors import MapCheckFailed
 from naoloc.geometry import Pose2D
 from naoloc.mapping.builder import ProgressFn, carried, map_extractor, pinhole_features
@@ -19,7 +19,7 @@ from naoloc.mapping.checks import Check, check_survey, failed
 from naoloc.mapping.landmarks import query_camera
 from naoloc.mapping.laps import LapAgreement, lap_agreement
 from naoloc.mapping.map import VisualMap, build_map
-from naoloc.mapping.wall_poses import SCALE_RANGE, WallPoses, wall_poses
+from naoloc.mapping.wall_poses import WallPoses, wall_poses
 from naoloc.perception.features import Features
 from naoloc.robot.keyframe import Keyframe
 from naoloc.robot.lens import Lens
@@ -29,26 +29,30 @@ MIN_MAP_FRAMES = 3
 
 
 def apply_metric_scale(
-    keyframes: list[Keyframe], meta: dict[str, Any]
+    keyframes: list[Keyframe],
+    meta: dict[str, Any],
+    scale_range: tuple[float, float] | None = None,
 ) -> tuple[list[Keyframe], float | None]:
     """Scale the keyframes' odometry positions to metres, by the survey's ``metric_scale``.
 
     The survey measures it (metres per odometry metre) from the floor-wall line's
     distances, which the camera height from the kinematics makes metric
     (:func:`naoloc.behaviours.wall_follow.metric_scale`). Positions scale about the map
-    origin (the survey start); headings are unchanged. A scale outside
-    :data:`~naoloc.mapping.wall_poses.SCALE_RANGE` (the metres per odometry metre a NAO's
-    odometry can err to) is a failed measurement and is not applied.
+    origin (the survey start); headings are unchanged. A scale outside ``scale_range``
+    (``map.tuning.wall_poses.scale_range``: the metres per odometry metre a NAO's odometry
+    can err to) is a failed measurement and is not applied.
 
     Args:
         keyframes: Keyframes with odometry poses in the map frame.
         meta: The survey meta (``metric_scale`` may be missing or null).
+        scale_range: The plausible scales, (low, high) (None: the default tuning's).
 
     Returns:
         The keyframes to build from and the scale applied (None: left as they were).
     """
+    low, high = WallPoseTuning().scale_range if scale_range is None else scale_range
     scale = meta.get("metric_scale")
-    if not isinstance(scale, (int, float)) or not SCALE_RANGE[0] <= scale <= SCALE_RANGE[1]:
+    if not isinstance(scale, (int, float)) or not low <= scale <= high:
         return keyframes, None
     k = float(scale)
 
@@ -97,13 +101,21 @@ def pose_survey(
         walled = (
             None
             if offset is None
-            else wall_poses(data.keyframes, data.meta, offset=offset, skirting=skirting)
+            else wall_poses(
+                data.keyframes,
+                data.meta,
+                offset=offset,
+                skirting=skirting,
+                tuning=cfg.tuning.wall_poses,
+            )
         )
         if walled is not None:
             facts["wall_poses"] = walled.summary()
             return walled.keyframes, facts, walled
     if cfg.apply_metric_scale:
-        keyframes, facts["metric_scale"] = apply_metric_scale(data.keyframes, data.meta)
+        keyframes, facts["metric_scale"] = apply_metric_scale(
+            data.keyframes, data.meta, cfg.tuning.wall_poses.scale_range
+        )
         return keyframes, facts, None
     return list(data.keyframes), facts, None
 

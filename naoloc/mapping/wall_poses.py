@@ -23,7 +23,8 @@ front lines near a corner (furniture stands there too), which only the last side
 Frames: the wall frame W has its origin at the circuit's first corner (where the survey
 starts), x along the first side, y to the left; the result is in the map frame (the
 robot's pose at the survey start), as the odometry poses were. Distances in metres, angles
-in radians.
+in radians. The thresholds, each with its reasons, are ``map.tuning.wall_poses``
+(:class:`naoloc.config.WallPoseTuning`).
 """
 
 from __future__ import annotations
@@ -33,10 +34,11 @@ import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Final
+from typing import Any
 
 import numpy as np
 
+from naoloc.config import WallPoseTuning
 from naoloc.geometry import Pose2D, modulo2PI
 from naoloc.perception.wall_gate import (
     SIDE_ANGLE_ERROR_RAD,
@@ -45,55 +47,6 @@ from naoloc.perception.wall_gate import (
     side_line_angle,
 )
 from naoloc.robot.keyframe import Keyframe
-
-SCALE_RANGE: Final = (0.7, 1.4)  # a side's metres per odometry metre outside this: not used
-TURN_SCALE_RANGE: Final = (0.8, 1.25)  # odometry turn per true turn outside this: not used
-MIN_CORNER_FRACTION: Final = 0.5  # sides whose corner a front line must have placed
-FRONT_AGREE_M: Final = 0.12  # a front line within this of the corners' walk also anchors, m
-FRONT_HEADING_M: Final = 4.0  # a far wall's line gives the start's heading (angle, not distance)
-LINE_STD_M: Final = 0.03  # a floor line's distance, one sigma (NAO's lens reads 2-4 cm long)
-LINE_STD_RAD: Final = 0.01  # and its angle
-MIN_ANGLE_GATE_RAD: Final = 0.12  # an angle this close to the prediction is always used
-# A side line that jumps more than this between frames sees another thing, m. Less than a
-# doorway's recess (0.2 m): at 0.2 m the paper room's doorway was entered but its end missed
-# where the robot stepped 0.12 m toward the wall, and a whole side read 0.18 m off. Over 30
-# surveys 0.15 m made no map pose worse (mean of the medians 0.050 -> 0.049 m, paper room
-# 0.077 -> 0.047 m); lines err 1-4 cm and a step's sideways odometry 1-2 cm.
-EDGE_M: Final = 0.15
-# The survey start's heading to its wall is its own line's, unless side 0's frames within
-# this walk (m), each turned back by the odometry's turn since the start, agree on another
-# (their median more than START_GATE_RAD away): one line at the start, seen past a piece of
-# furniture, once turned a whole map 0.2 rad. The frames carry the odometry's turn error
-# (6 % of the survey's first steering), so the start's own line is preferred.
-START_HEADING_M: Final = 1.0
-START_GATE_RAD: Final = 0.06
-CLEAN_RMS_M: Final = 0.006  # the start's views: lines scattered more are not its heading's
-# nor those with less of their boundary on them: a start view centred on the wall's foot
-# also shows the wall behind or a piece of furniture, 0.45-0.6 of its boundary on the side
-# wall's line (0.6 left 992322877's start one view, 1.2 deg off, where five agreed within
-# 0.2 deg; over 52 surveys the start heading's p90 error 0.76 -> 0.63 deg with 0.4)
-CLEAN_FRACTION: Final = 0.4
-# A survey start beside furniture: its distance from the wall is carried back by the
-# odometry's walk inward from side 0's frames that see the wall within this many frames
-# (their median), not taken from its stretch's depth (room 1327980321: two chests 0.36 and
-# 0.45 m deep, 0.09 m apart, read as one stretch put the start, and every map pose, 9.7 cm
-# off; the walk back errs 1-5 cm).
-START_FROM_WALL_FRAMES: Final = 8
-# The start's own line places it unless those frames, carried back, disagree by more than
-# this (m): in a corner the one view that sees the wall at 0.5 m can read the wall behind.
-START_AGREE_M: Final = 0.04
-# ... unless the start's views agree with its line: at least this many within
-# START_VIEWS_M of it. Views repeated from the standing robot measure where it stands; the
-# frames carried back add the odometry's sideways walk, which another NAO's heading error
-# bends 0.01-0.06 m per 0.2 m step (with each room's own odometry, 8 of 18 origins 0.05-0.11 m
-# off). A start seen once, or by two views that disagree, is a corner's or the arm's
-# misreading as often (the 3 x 3 m room at 0.5 m: one view, 0.1 m long).
-START_VIEWS: Final = 3
-START_VIEWS_M: Final = 0.015
-END_FRAMES: Final = 3  # a side's last frames whose wall lines place where it ended
-WALL_LEVEL_M: Final = 0.1  # stretches whose levels are this close see the same thing
-MIN_WALL_FRAMES: Final = 3  # frames that must see a side's wall
-WALL_SUPPORT: Final = 0.2  # and the share of the side's lines that must
 
 
 @dataclass(frozen=True)
@@ -186,6 +139,7 @@ def wall_poses(
     *,
     offset: float,
     skirting: float = 0.0,
+    tuning: WallPoseTuning | None = None,
 ) -> WallPoses | None:
     """Keyframe poses from the survey's rectangle, its floor lines and the odometry.
 
@@ -197,12 +151,14 @@ def wall_poses(
         skirting: ``survey.skirting_m``: how far the skirting boards stand out of the walls,
             m. The floor lines see the boards' face; the room (and so the circuit) is
             measured wall to wall, so every line's distance is taken this much longer.
+        tuning: ``map.tuning.wall_poses`` (None: the defaults).
 
     Returns:
         The poses, or None when the meta lacks what this needs (no vision, a survey that
         did not follow walls) or when fewer than half of the corners were placed (by the
         next side's wall or a front line): the odometry poses are then kept.
     """
+    tun = WallPoseTuning() if tuning is None else tuning
     meta = _to_walls(meta, skirting)
     vision = meta.get("vision")
     sides_m = meta.get("sides_m")
@@ -245,7 +201,7 @@ def wall_poses(
     # Pass 1, per frame: the heading to the side wall (the filtered line angles), the
     # distance walked inward since the side began (odometry, turned by that heading) and
     # the side line's distance.
-    track = _SideTrack()
+    track = _SideTrack(tun)
     deltas: list[float] = []
     inward_m: list[float] = []
     lines: list[tuple[float, float] | None] = []  # each frame's trusted side line
@@ -281,16 +237,16 @@ def wall_poses(
         if k == 0:  # the survey's origin stands before side 0's first frame
             m = [None if start_line is None else start_line[0], *m]
             dy = [0.0, -start_inward, *dy[1:]]
-        found = side_distances(m, dy)
+        found = side_distances(m, dy, tuning=tun)
         if found is None:
             continue
         dists, on_wall = found
         if k == 0:
-            back = _start_from_wall(dists, on_wall, dy)
+            back = _start_from_wall(dists, on_wall, dy, tuning=tun)
             agrees = on_wall[0] and (
-                abs(dists[0] - back) <= START_AGREE_M
+                abs(dists[0] - back) <= tun.start_agree_m
                 or start_views_agree(
-                    meta.get("start_views"), dists[0] - skirting, offset, side_normal
+                    meta.get("start_views"), dists[0] - skirting, offset, side_normal, tuning=tun
                 )
             )
             start_dist = dists[0] if agrees else back
@@ -313,7 +269,7 @@ def wall_poses(
         if not frames_of[k]:
             continue  # a side the survey found itself at the end of: no step, no picture
         last = frames_of[k][-1]
-        starts[k + 1] = _end_lateral(frames_of[k], laterals, wall_seen, inward_m)
+        starts[k + 1] = _end_lateral(frames_of[k], laterals, wall_seen, inward_m, tun.end_frames)
         nxt = dist[last + 1] if side_of[last + 1] == k + 1 else None
         if nxt is None:
             continue
@@ -322,8 +278,10 @@ def wall_poses(
         behind = -_inward(corner, ahead, turn)
         to_go = nxt + behind  # from the last frame to side k+1's wall, m
         ends[k] = (float(along[last]), lengths[k] - (to_go - offset))
-    true_along, scales = _along_sides(along, frames_of, vision, lengths, offset, ends, starts)
-    if sum(1 for x in scales if x is not None) < MIN_CORNER_FRACTION * n_sides:
+    true_along, scales = _along_sides(
+        along, frames_of, vision, lengths, offset, ends, starts, tuning=tun
+    )
+    if sum(1 for x in scales if x is not None) < tun.min_corner_fraction * n_sides:
         # Neither the next side's wall nor a front line placed enough corners: the robot
         # may not have walked the known rectangle, which these poses assume.
         return None
@@ -338,8 +296,8 @@ def wall_poses(
         poses.append(Pose2D(float(position[0]), float(position[1]), modulo2PI(d + deltas[i])))
 
     # The survey start (the map frame's origin) in the wall frame.
-    own, clean = _own_heading(meta, offset, side_normal)
-    heading, frames_heading = _start_heading(own, keyframes, lines, frames_of[0], along, clean)
+    own, clean = _own_heading(meta, offset, side_normal, tuning=tun)
+    heading, frames_heading = _start_heading(own, keyframes, lines, frames_of[0], along, tun, clean)
     start = Pose2D(0.0, 0.0, heading or 0.0)
     if start_dist is not None:  # the origin's distance from side 0's wall, not what it saw
         start = Pose2D(0.0, (start_dist - offset) * turn, start.theta)
@@ -358,7 +316,7 @@ def wall_poses(
         out,
         scales,
         used,
-        _turn_scale(keyframes, side_of, lines, turn),
+        _turn_scale(keyframes, side_of, lines, turn, tun.turn_scale_range),
         start.inverse(),
         walls,
         sides_of=list(side_of),
@@ -376,14 +334,16 @@ def _end_lateral(
     laterals: Sequence[float],
     wall_seen: Sequence[bool],
     inward_m: Sequence[float],
+    end_frames: int,
 ) -> float:
     """Where a side's last frame stood inward of its circuit (m): the median of its last
-    :data:`END_FRAMES` frames whose lines saw the wall, each carried to the
-    last frame by the odometry's walk inward (a corner's plant or sideboard is often all
-    the last frame's line sees); the last frame's own lateral without such frames."""
+    ``end_frames`` (``map.tuning.wall_poses.end_frames``) frames whose lines saw the wall,
+    each carried to the last frame by the odometry's walk inward (a corner's plant or
+    sideboard is often all the last frame's line sees); the last frame's own lateral
+    without such frames."""
     last = idx[-1]
     votes = [
-        laterals[i] + (inward_m[last] - inward_m[i]) for i in idx[-END_FRAMES:] if wall_seen[i]
+        laterals[i] + (inward_m[last] - inward_m[i]) for i in idx[-end_frames:] if wall_seen[i]
     ]
     return float(np.median(votes)) if votes else laterals[last]
 
@@ -419,8 +379,10 @@ def _turn_scale(
     side_of: Sequence[int],
     lines: Sequence[tuple[float, float] | None],
     turn: float,
+    plausible: tuple[float, float],
 ) -> float | None:
-    """Odometry turn per true turn at the corners.
+    """Odometry turn per true turn at the corners (None outside ``plausible``:
+    ``map.tuning.wall_poses.turn_scale_range``).
 
     At each corner with a side line on both frames around it, the true turn is the quarter
     turn plus the change of the robot's heading to its wall, as the two lines read it (raw:
@@ -436,7 +398,7 @@ def _turn_scale(
         quarter = turn * math.pi / 2 * (side_of[i] - side_of[i - 1])
         true += abs(quarter + after[1] - before[1])
         odo += abs(modulo2PI(keyframes[i].pose.theta - keyframes[i - 1].pose.theta))
-    if true == 0.0 or not TURN_SCALE_RANGE[0] <= odo / true <= TURN_SCALE_RANGE[1]:
+    if true == 0.0 or not plausible[0] <= odo / true <= plausible[1]:
         return None
     return odo / true
 
@@ -446,10 +408,15 @@ class _SideTrack:
 
     The odometry's relative motion between frames predicts both; a side line that
     disagrees with the prediction by more than its gate (a chair's foot, a rug's edge) is
-    not used, unless the prediction has grown too uncertain to judge.
+    not used, unless the prediction has grown too uncertain to judge. The lines' sigmas and
+    the least angle gate are ``map.tuning.wall_poses``' ``line_std_m``, ``line_std_rad`` and
+    ``min_angle_gate_rad``.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, tuning: WallPoseTuning) -> None:
+        self.line_std_m = tuning.line_std_m
+        self.line_std_rad = tuning.line_std_rad
+        self.min_angle_gate_rad = tuning.min_angle_gate_rad
         self.reset()
 
     def reset(self) -> None:
@@ -485,14 +452,14 @@ class _SideTrack:
         if line is None:
             return False
         lateral, delta = line[0] - offset, line[1]
-        gate = 3 * math.sqrt(self.var_delta + LINE_STD_RAD**2)
-        if abs(modulo2PI(delta - self.delta)) <= max(gate, MIN_ANGLE_GATE_RAD):
-            g = self.var_delta / (self.var_delta + LINE_STD_RAD**2)
+        gate = 3 * math.sqrt(self.var_delta + self.line_std_rad**2)
+        if abs(modulo2PI(delta - self.delta)) <= max(gate, self.min_angle_gate_rad):
+            g = self.var_delta / (self.var_delta + self.line_std_rad**2)
             self.delta = modulo2PI(self.delta + g * modulo2PI(delta - self.delta))
             self.var_delta *= 1 - g
-        if abs(lateral - self.lateral) > 3 * math.sqrt(self.var_lateral + LINE_STD_M**2):
+        if abs(lateral - self.lateral) > 3 * math.sqrt(self.var_lateral + self.line_std_m**2):
             return False
-        g = self.var_lateral / (self.var_lateral + LINE_STD_M**2)
+        g = self.var_lateral / (self.var_lateral + self.line_std_m**2)
         self.lateral += g * (lateral - self.lateral)
         self.var_lateral *= 1 - g
         return True
@@ -506,6 +473,8 @@ def _along_sides(
     offset: float,
     ends: dict[int, tuple[float, float]] | None = None,
     starts: dict[int, float] | None = None,
+    *,
+    tuning: WallPoseTuning,
 ) -> tuple[np.ndarray, list[float | None]]:
     """Each frame's distance from its side's corner (m), from the odometry's distance walked
     mapped through anchors (``frames_of``: each side's frame indices, in walking order):
@@ -519,11 +488,12 @@ def _along_sides(
     frame's stop): between the corner and the first front line only the odometry places
     the frames, and its random walk is largest in the middle of a long side. A side's start
     (odometry 0) is at ``starts[side]`` (m; default 0): where the previous side's last frame
-    stood.
+    stood. ``tuning``: ``map.tuning.wall_poses`` (``scale_range``, ``front_agree_m``).
 
     Returns:
         The distances and each side's overall metres per odometry metre (None: no anchor).
     """
+    low, high = tuning.scale_range
     out = np.full_like(along, np.nan)
     scales: list[float | None] = []
     for k, (idx, length) in enumerate(zip(frames_of, lengths, strict=True)):
@@ -552,27 +522,29 @@ def _along_sides(
                 fronts.append((float(along[i]), length - (float(distance) - offset)))
         if ends is not None and k in ends and ends[k][0] > 0:
             # The next wall placed the side's end; front lines that agree with the walk
-            # between the corners (within FRONT_AGREE_M) place the frames near the end too
-            # (a front line that sees furniture before the wall does not agree).
+            # between the corners (within map.tuning.wall_poses.front_agree_m) place the
+            # frames near the end too (a front line that sees furniture before the wall
+            # does not agree).
             (o0, t0), (o1, t1) = anchors[0], ends[k]
             anchors.append(ends[k])
             anchors += [
                 (o, t) for o, t in fronts
-                if o < o1 and abs(t - (t0 + (o - o0) * (t1 - t0) / (o1 - o0))) <= FRONT_AGREE_M
+                if o < o1
+                and abs(t - (t0 + (o - o0) * (t1 - t0) / (o1 - o0))) <= tuning.front_agree_m
             ]  # fmt: skip
         else:
-            anchors += agreeing_fronts(anchors[0], fronts)
+            anchors += agreeing_fronts(anchors[0], fronts, tuning=tuning)
         anchors.sort()
         kept = [anchors[0]]
         for o, t in anchors[1:]:
             if o > kept[-1][0] + 1e-6 and t > kept[-1][1]:
                 s = (t - kept[-1][1]) / (o - kept[-1][0])
-                if SCALE_RANGE[0] <= s <= SCALE_RANGE[1] or len(kept) > 1:
+                if low <= s <= high or len(kept) > 1:
                     kept.append((o, t))
         # metres per odometry metre between the side's first and last anchors (its start
         # may stand off the corner: where the previous side's last frame stood)
         scale = (kept[-1][1] - kept[0][1]) / (kept[-1][0] - kept[0][0]) if len(kept) > 1 else None
-        scales.append(scale if scale is None or SCALE_RANGE[0] <= scale <= SCALE_RANGE[1] else None)
+        scales.append(scale if scale is None or low <= scale <= high else None)
         if len(kept) > 1:  # sides without an anchor stay NaN: scaled below
             xs, ys = np.array([a[0] for a in kept]), np.array([a[1] for a in kept])
             last = (ys[-1] - ys[-2]) / (xs[-1] - xs[-2])
@@ -589,7 +561,10 @@ def _along_sides(
 
 
 def agreeing_fronts(
-    start: tuple[float, float], fronts: Sequence[tuple[float, float]]
+    start: tuple[float, float],
+    fronts: Sequence[tuple[float, float]],
+    *,
+    tuning: WallPoseTuning | None = None,
 ) -> list[tuple[float, float]]:
     """The front lines of one side that agree with one walk along it.
 
@@ -597,17 +572,21 @@ def agreeing_fronts(
     side those places lie on one line against the odometry's distance walked (its slope the
     metres per odometry metre). A line that saw a plank's seam or a rug's edge instead of
     the wall does not. The walk taken is the line through two of the points (the side's
-    start among them) with a slope in :data:`SCALE_RANGE` that most front lines agree
-    with, within :data:`FRONT_AGREE_M` (ties: the smaller sum of residuals).
+    start among them) with a slope in ``map.tuning.wall_poses.scale_range`` that most front
+    lines agree with, within ``map.tuning.wall_poses.front_agree_m`` (ties: the smaller sum
+    of residuals).
 
     Args:
         start: The side's start: (odometry along, true along), m.
         fronts: The front lines' (odometry along, true along), m.
+        tuning: ``map.tuning.wall_poses`` (None: the defaults).
 
     Returns:
         The front lines that agree (all of them with fewer than two, or no walk with two
         agreeing).
     """
+    tun = WallPoseTuning() if tuning is None else tuning
+    low, high = tun.scale_range
     if len(fronts) < 2:
         return list(fronts)
     o = np.array([f[0] for f in fronts])
@@ -618,10 +597,10 @@ def agreeing_fronts(
         if abs(b[0] - a[0]) < 1e-6:
             continue
         slope = (b[1] - a[1]) / (b[0] - a[0])
-        if not SCALE_RANGE[0] <= slope <= SCALE_RANGE[1]:
+        if not low <= slope <= high:
             continue
         residual = np.abs(t - (a[1] + slope * (o - a[0])))
-        inliers = residual <= FRONT_AGREE_M
+        inliers = residual <= tun.front_agree_m
         count, total = int(inliers.sum()), float(residual[inliers].sum())
         if count > best[0] or (count == best[0] and count > 1 and total < best[1]):
             best = (count, total)
@@ -636,31 +615,36 @@ def _inward(step: Pose2D, delta: float, turn: float) -> float:
 
 
 def side_distances(
-    measured: Sequence[float | None], inward: Sequence[float]
+    measured: Sequence[float | None],
+    inward: Sequence[float],
+    *,
+    tuning: WallPoseTuning | None = None,
 ) -> tuple[list[float], list[bool]] | None:
     """Every frame's distance from one side's wall, from its floor lines (m).
 
     A line sees the wall or something standing in front of it (a bookcase, a sideboard):
-    where the line jumps by more than :data:`EDGE_M` between frames, beyond what the
-    robot's own walk inward explains, a new stretch begins, one level nearer or farther.
-    The wall is the farthest level that at least ``max(3, 20 %)`` of the lines see (a lone
-    far line, a doorway's or a reflection's, lacks that support); a frame's distance is
-    its line plus how far its stretch stands in front of the wall, or its own line when its
-    stretch is within :data:`WALL_LEVEL_M` of the wall's level (it sees the wall: such
-    levels differ only by the odometry's sideways error between them). Frames without a line
-    take the nearest frame's distance moved by the odometry's walk inward (only the
-    odometry's short-range motion is used: a NAO's sideways odometry drifts 0.3 m along a
-    5 m side).
+    where the line jumps by more than ``edge_m`` (of ``map.tuning.wall_poses``) between
+    frames, beyond what the robot's own walk inward explains, a new stretch begins, one
+    level nearer or farther. The wall is the farthest level that at least
+    ``max(min_wall_frames, wall_support)`` (3, 20 %) of the lines see (a lone far line, a
+    doorway's or a reflection's, lacks that support); a frame's distance is its line plus
+    how far its stretch stands in front of the wall, or its own line when its stretch is
+    within ``wall_level_m`` of the wall's level (it sees the wall: such levels differ only
+    by the odometry's sideways error between them). Frames without a line take the nearest
+    frame's distance moved by the odometry's walk inward (only the odometry's short-range
+    motion is used: a NAO's sideways odometry drifts 0.3 m along a 5 m side).
 
     Args:
         measured: Per frame in walking order: the side line's distance (m) or None.
         inward: Per frame: the odometry's walk inward (away from the wall) since the
             previous frame (m; the first is not used).
+        tuning: ``map.tuning.wall_poses`` (None: the defaults).
 
     Returns:
         ``(distances, whether each frame's line saw the wall)``; None when no level has
         that support.
     """
+    tun = WallPoseTuning() if tuning is None else tuning
     levels: list[float | None] = []
     level, last, walked = 0.0, None, 0.0
     for i, m in enumerate(measured):
@@ -670,25 +654,25 @@ def side_distances(
             continue
         if last is not None:
             jump = m - last - walked
-            if abs(jump) > EDGE_M:
+            if abs(jump) > tun.edge_m:
                 level += jump
         levels.append(level)
         last, walked = m, 0.0
     seen = [v for v in levels if v is not None]
     if not seen:
         return None
-    need = max(MIN_WALL_FRAMES, math.ceil(WALL_SUPPORT * len(seen)))
+    need = max(tun.min_wall_frames, math.ceil(tun.wall_support * len(seen)))
     wall = None
     for v in sorted(set(seen), reverse=True):
-        near = [u for u in seen if abs(u - v) < WALL_LEVEL_M]
+        near = [u for u in seen if abs(u - v) < tun.wall_level_m]
         if len(near) >= need:
             wall = max(set(near), key=near.count)  # the stretch most of its lines are on
             break
     if wall is None:
         return None
-    on_wall = [v is not None and abs(v - wall) < WALL_LEVEL_M for v in levels]
+    on_wall = [v is not None and abs(v - wall) < tun.wall_level_m for v in levels]
     # A line on the wall's level sees the wall: its own distance, not the level's (levels
-    # closer than WALL_LEVEL_M differ only by the odometry's sideways error in between).
+    # closer than wall_level_m differ only by the odometry's sideways error in between).
     out: list[float | None] = [
         m if seen else None if (m is None or v is None) else m + (wall - v)
         for m, v, seen in zip(measured, levels, on_wall, strict=True)
@@ -705,86 +689,111 @@ def side_distances(
 
 
 def _start_from_wall(
-    dists: Sequence[float], on_wall: Sequence[bool], inward: Sequence[float]
+    dists: Sequence[float],
+    on_wall: Sequence[bool],
+    inward: Sequence[float],
+    *,
+    tuning: WallPoseTuning | None = None,
 ) -> float:
     """The survey start's distance from side 0's wall from its first frames (m): when its
-    own line saw furniture, or disagrees with them by more than :data:`START_AGREE_M`
-    while its views do not repeat it (:func:`start_views_agree`).
+    own line saw furniture, or disagrees with them by more than
+    ``map.tuning.wall_poses.start_agree_m`` while its views do not repeat it
+    (:func:`start_views_agree`).
 
-    Each of the first :data:`START_FROM_WALL_FRAMES` frames whose line sees the wall gives
-    its distance less the odometry's walk inward since the start; their median. Without
-    such a frame, the start's distance from its stretch (``dists[0]``).
+    Each of the first ``map.tuning.wall_poses.start_from_wall_frames`` frames whose line
+    sees the wall gives its distance less the odometry's walk inward since the start; their
+    median. Without such a frame, the start's distance from its stretch (``dists[0]``).
 
     Args:
         dists: :func:`side_distances` of side 0, the start first.
         on_wall: Whether each line saw the wall, the start first.
         inward: The walk inward before each, the start first (m).
+        tuning: ``map.tuning.wall_poses`` (None: the defaults).
     """
+    tun = WallPoseTuning() if tuning is None else tuning
     walked = np.cumsum([0.0, *inward[1:]])
     back = [
         dists[j] - walked[j]
-        for j in range(1, min(len(dists), START_FROM_WALL_FRAMES + 1))
+        for j in range(1, min(len(dists), tun.start_from_wall_frames + 1))
         if on_wall[j]
     ]
     return float(np.median(back)) if back else float(dists[0])
 
 
-def start_views_agree(views: Any, distance: float, offset: float, side_normal: float) -> bool:
+def start_views_agree(
+    views: Any,
+    distance: float,
+    offset: float,
+    side_normal: float,
+    *,
+    tuning: WallPoseTuning | None = None,
+) -> bool:
     """Whether the survey start's views repeat its side line's distance: at least
-    :data:`START_VIEWS` trusted side lines (:func:`_line`) within :data:`START_VIEWS_M` of it.
+    ``map.tuning.wall_poses.start_views`` trusted side lines (:func:`_line`) within
+    ``map.tuning.wall_poses.start_views_m`` of it.
 
     Args:
         views: The survey meta's ``start_views`` (line dicts as the survey wrote them).
         distance: The start's side line distance, as seen (m, before the skirting).
         offset: ``survey.wall_offset_m``, m.
         side_normal: Where the side wall is, rad (FRAME_ROBOT).
+        tuning: ``map.tuning.wall_poses`` (None: the defaults).
     """
+    tun = WallPoseTuning() if tuning is None else tuning
     if not isinstance(views, list):
         return False
     lines = [_line(view, offset, side_normal) for view in views]
-    near = [ln for ln in lines if ln is not None and abs(ln[0] - distance) <= START_VIEWS_M]
-    return len(near) >= START_VIEWS
+    near = [ln for ln in lines if ln is not None and abs(ln[0] - distance) <= tun.start_views_m]
+    return len(near) >= tun.start_views
 
 
 def _own_heading(
-    meta: dict[str, Any], offset: float, side_normal: float
+    meta: dict[str, Any],
+    offset: float,
+    side_normal: float,
+    *,
+    tuning: WallPoseTuning | None = None,
 ) -> tuple[float | None, bool]:
     """The survey start's heading to side 0's direction (rad) from the lines the start
     itself saw: the median of its side wall's (``start_side`` and every view's,
     ``start_views``: one view's line can mix in a corner's other wall), else of the
     farther walls' (:func:`_far_headings`: the walls ahead and across are square and
     parallel to side 0, their lines err more). None without any; and whether it comes
-    from clean views of the side wall."""
+    from clean views of the side wall (:func:`_clean`). ``tuning``: ``map.tuning.wall_poses``
+    (None: the defaults)."""
+    tun = WallPoseTuning() if tuning is None else tuning
     votes = []
     views = meta.get("start_views")
     entries = views if isinstance(views, list) and views else [meta.get("start_side")]
-    clean = [e for e in entries if isinstance(e, dict) and _clean(e)]
+    clean = [e for e in entries if isinstance(e, dict) and _clean(e, tun)]
     for entry in clean or entries:
         line = _line(entry, offset, side_normal)
         if line is not None:
             votes.append(line[1])
     from_clean = bool(votes) and bool(clean)
     if not votes:  # the far walls' lines err more: only without the side wall's
-        votes = _far_headings(meta, side_normal)
+        votes = _far_headings(meta, side_normal, tun.front_heading_m)
     return (float(np.median(votes)) if votes else None), from_clean
 
 
-def _clean(entry: dict[str, Any]) -> bool:
+def _clean(entry: dict[str, Any], tuning: WallPoseTuning) -> bool:
     """Whether a line's fit is clean: most of its boundary on it, little scatter about it
-    (a line mixing in a corner's other wall or furniture is neither)."""
+    (a line mixing in a corner's other wall or furniture is neither): ``tuning``'s
+    ``clean_fraction`` and ``clean_rms_m``."""
     rms, fraction = entry.get("rms_m"), entry.get("fraction")
     return (
         isinstance(rms, (int, float))
         and isinstance(fraction, (int, float))
-        and rms <= CLEAN_RMS_M
-        and fraction >= CLEAN_FRACTION
+        and rms <= tuning.clean_rms_m
+        and fraction >= tuning.clean_fraction
     )
 
 
-def _far_headings(meta: dict[str, Any], side_normal: float) -> list[float]:
+def _far_headings(meta: dict[str, Any], side_normal: float, within_m: float) -> list[float]:
     """The survey start's heading to side 0's direction (rad) from each farther wall it
-    saw, within :data:`FRONT_HEADING_M`: the wall ahead (``start_front``, square to side
-    0) and the wall across (``start_across``, parallel to it)."""
+    saw, within ``within_m`` (``map.tuning.wall_poses.front_heading_m``): the wall ahead
+    (``start_front``, square to side 0) and the wall across (``start_across``, parallel to
+    it)."""
     found: list[float] = []
     for key, expected in (("start_front", 0.0), ("start_across", -side_normal)):
         entry = meta.get(key)
@@ -796,7 +805,7 @@ def _far_headings(meta: dict[str, Any], side_normal: float) -> list[float]:
         if not (math.isfinite(distance) and math.isfinite(normal)):
             continue
         delta = modulo2PI(expected - float(normal))
-        if distance <= FRONT_HEADING_M and abs(delta) <= SIDE_ANGLE_ERROR_RAD:
+        if distance <= within_m and abs(delta) <= SIDE_ANGLE_ERROR_RAD:
             found.append(delta)
     return found
 
@@ -807,6 +816,7 @@ def _start_heading(
     lines: Sequence[tuple[float, float] | None],
     side0: Sequence[int],
     along: np.ndarray,
+    tuning: WallPoseTuning,
     clean: bool = False,
 ) -> tuple[float | None, float | None]:
     """The survey start's heading to side 0's wall (rad), or None without any line, and
@@ -814,16 +824,16 @@ def _start_heading(
 
     ``own`` is what the start itself saw: its side line's angle, or (a side wall too near
     to be seen) a farther wall's (:func:`_far_headings`). That, unless side 0's frames'
-    lines within :data:`START_HEADING_M` of walk, each less the odometry's turn from the
-    start to its frame (the map frame is the start's odometry frame), have a median more
-    than :data:`START_GATE_RAD` away from it: then that median. A ``clean`` own line (the
-    side wall's, seen whole and straight from the start: :func:`_clean`) is kept: the
-    frames' lines are less the odometry's turn, and a NAO's odometry can turn 0.1 rad in
-    the first metre.
+    lines within ``start_heading_m`` (of ``map.tuning.wall_poses``) of walk, each less the
+    odometry's turn from the start to its frame (the map frame is the start's odometry
+    frame), have a median more than ``start_gate_rad`` away from it: then that median. A
+    ``clean`` own line (the side wall's, seen whole and straight from the start:
+    :func:`_clean`) is kept: the frames' lines are less the odometry's turn, and a NAO's
+    odometry can turn 0.1 rad in the first metre.
     """
     votes = []
     for i in side0:
-        if along[i] > START_HEADING_M:
+        if along[i] > tuning.start_heading_m:
             break
         if (line := lines[i]) is not None:
             votes.append(modulo2PI(line[1] - keyframes[i].pose.theta))
@@ -832,4 +842,4 @@ def _start_heading(
         return (frames if own is None else own), frames
     if clean:
         return own, frames
-    return (own if abs(modulo2PI(frames - own)) <= START_GATE_RAD else frames), frames
+    return (own if abs(modulo2PI(frames - own)) <= tuning.start_gate_rad else frames), frames

@@ -16,7 +16,9 @@ from typing import Any
 import numpy as np
 import pytest
 
+from naoloc.config import WallPoseTuning, load_config
 from naoloc.data import dataset
+from naoloc.errors import ConfigError
 from naoloc.geometry import Pose2D
 from naoloc.localization.walls import wall_map
 from naoloc.mapping.wall_poses import (
@@ -327,6 +329,37 @@ def test_a_front_line_that_saw_a_seam_does_not_place_the_side() -> None:
     # two lines that disagree with each other and with the start: none is preferred
     odd = [(1.0, 0.5), (1.2, 2.4)]
     assert agreeing_fronts((0.0, 0.0), odd) == odd
+
+
+def test_the_config_tunes_the_wall_poses() -> None:
+    """``map.tuning.wall_poses`` reaches the functions: a looser front_agree_m keeps the
+    seam's line, and a scale range the walk is outside places no corner."""
+    cfg = load_config({"map": {"tuning": {"wall_poses": {"front_agree_m": 0.4}}}})
+    tuning = cfg.map.tuning.wall_poses
+    assert tuning.front_agree_m == 0.4 and tuning.edge_m == WallPoseTuning().edge_m
+    walk = [(o, o / 0.95) for o in (1.0, 1.2, 1.4, 1.6, 1.8)]
+    seam = (0.8, 0.8 / 0.95 + 0.33)
+    assert agreeing_fronts((0.0, 0.0), [seam, *walk]) == walk
+    assert agreeing_fronts((0.0, 0.0), [seam, *walk], tuning=tuning) == [seam, *walk]
+    keyframes, _, meta = _survey()
+    assert wall_poses(keyframes, meta, offset=OFFSET, tuning=tuning) is not None
+    narrow = WallPoseTuning(scale_range=(1.2, 1.4))
+    assert wall_poses(keyframes, meta, offset=OFFSET, tuning=narrow) is None
+
+
+@pytest.mark.parametrize(
+    ("tuning", "fragment"),
+    [
+        ({"front_agree": 0.2}, "map.tuning.wall_poses.front_agree: unknown key"),
+        ({"edge_m": 0.0}, "map.tuning.wall_poses.edge_m"),
+        ({"scale_range": [1.4, 0.7]}, "map.tuning.wall_poses.scale_range"),
+    ],
+)
+def test_the_wall_pose_tuning_refuses_unknown_keys_and_bad_values(
+    tuning: dict[str, Any], fragment: str
+) -> None:
+    with pytest.raises(ConfigError, match=fragment):
+        load_config({"map": {"tuning": {"wall_poses": tuning}}})
 
 
 def test_the_start_heading_is_the_median_of_its_clean_views() -> None:
