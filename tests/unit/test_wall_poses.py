@@ -44,9 +44,15 @@ def _survey(
     outlier_at: int | None = None,
     turn_scale: float = 1.0,
     slip: tuple[float, ...] = (),
+    far_fronts: bool = False,
+    far_outlier_at: int | None = None,
+    uneven: bool = False,
 ) -> tuple[list[Keyframe], list[Pose2D], dict[str, Any]]:
     """(keyframes with odometry poses, true poses in the map frame, survey meta); ``slip``:
-    the odometry's sideways error in each of the first steps (m, to the left)."""
+    the odometry's sideways error in each of the first steps (m, to the left);
+    ``far_fronts``: every other stop's far picture reads the wall ahead (up to 3.6 m),
+    ``far_outlier_at`` one of them 0.4 m short (furniture before the wall); ``uneven``: the
+    odometry reads the first 40 % of each side's steps 10 % long, the rest 5 % short."""
     truth: list[Pose2D] = []
     vision: list[dict[str, Any]] = []
     corner = np.zeros(2)
@@ -65,15 +71,28 @@ def _survey(
             side = {"distance_m": OFFSET, "normal_rad": SIDE_NORMAL}
             if outlier_at is not None and len(vision) == outlier_at:
                 side = {"distance_m": OFFSET + 0.25, "normal_rad": SIDE_NORMAL}  # a sofa's foot
-            vision.append({"side_index": k, "side": side, "front": front})
+            entry = {"side_index": k, "side": side, "front": front}
+            ahead = length - j * STEP + OFFSET  # the far picture's, at this stop
+            if far_fronts and j % 2 == 0 and ahead <= 3.6:
+                short = 0.4 if len(vision) == far_outlier_at else 0.0
+                entry["far_front"] = {"distance_m": ahead - short, "normal_rad": 0.0}
+            vision.append(entry)
         corner = corner + length * u
+    meta_side = [entry["side_index"] for entry in vision]
+    index_in_side = [
+        sum(1 for e in vision[:i] if e["side_index"] == k) for i, k in enumerate(meta_side)
+    ]
     odometry = [Pose2D()]
     previous = Pose2D()
     for t in truth:
         step = previous.inverse() * t
         turned = math.remainder(step.theta, 2 * math.pi) * turn_scale  # the turn, scaled
         sideways = slip[len(odometry) - 1] if len(odometry) <= len(slip) else 0.0
-        noisy = Pose2D(step.x * scale, step.y * scale + sideways, turned + drift)
+        gain = scale
+        if uneven:
+            k = meta_side[len(odometry) - 1]
+            gain *= 1.1 if index_in_side[len(odometry) - 1] < 0.4 * SIDES[k % 2] / STEP else 0.95
+        noisy = Pose2D(step.x * gain, step.y * gain + sideways, turned + drift)
         odometry.append(odometry[-1] * noisy)
         previous = t
     image = np.zeros((8, 8), np.uint8)
@@ -108,6 +127,31 @@ def test_odometry_drift_and_scale_do_not_reach_the_map() -> None:
     summary = walled.summary()
     assert summary["sides_with_corner"] == 8
     assert summary["median_scale"] == pytest.approx(1 / 1.03, rel=0.01)
+
+
+def test_far_fronts_place_the_middle_of_a_side() -> None:
+    """Between the corner and the first front line (1.2 m before the wall here) only the
+    odometry places the frames; the far pictures' lines ahead (up to 3.6 m) place them
+    where the odometry's distance error is uneven along the side."""
+    keyframes, truth, meta = _survey(uneven=True)
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None
+    without, _ = _errors(walled.keyframes, truth)
+    keyframes, truth, meta = _survey(uneven=True, far_fronts=True)
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None
+    with_far, _ = _errors(walled.keyframes, truth)
+    assert without.max() > 0.04
+    assert with_far.max() < 0.02
+
+
+def test_a_far_front_on_furniture_does_not_place_its_frame() -> None:
+    keyframes, truth, meta = _survey(uneven=True, far_fronts=True, far_outlier_at=5)
+    assert "far_front" in meta["vision"][5]  # side 0, 2.8 m ahead, read 0.4 m short
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None
+    pos, _ = _errors(walled.keyframes, truth)
+    assert pos.max() < 0.03
 
 
 def test_a_line_off_the_wall_is_not_believed() -> None:
