@@ -322,13 +322,17 @@ class SideMemory:
     sideboard's foot), a doorway's recess, a corner's other wall. Its jump is kept as a
     level (``level``, m: how far nearer than the wall it stands), and the lines of that
     stretch steer as the wall behind them, so the robot walks past a sideboard on its
-    circuit, not along its face; a line back at the wall's distance ends the stretch.
+    circuit, not along its face; a line back at the wall's distance ends the stretch. A
+    line turned more than :data:`JUMP_RAD` from the carried wall keeps the wall's angle,
+    unless the next line is turned the same way: then the carried angle was the wrong one
+    (``doubt`` holds the first such line).
     """
 
     side: tuple[WallLine, Pose2D] | None = None
     front: tuple[WallLine, Pose2D] | None = None
     angle_known: bool = True  # False after a corner: the odometry's turn errs 6 %
     level: float = 0.0
+    doubt: tuple[WallLine, Pose2D] | None = None  # the last line that turned from the wall
 
     def carried(self, here: Pose2D) -> WallLine | None:
         """The wall's last line, carried to odometry pose ``here`` (None: too old)."""
@@ -348,9 +352,16 @@ class SideMemory:
         turned from it by more than :data:`JUMP_RAD`)."""
         known = self.carried(here)
         if known is None:
-            self.level = 0.0
+            self.level, self.doubt = 0.0, None
             return line
         turned = abs(modulo2PI(line.normal - known.normal)) > JUMP_RAD and self.angle_known
+        if turned and self.doubt is not None:
+            # Two lines in a row turned the same way from the carried wall: the wall's angle
+            # was wrong (a survey start in a corner reads the wall behind into its line).
+            seen, there = self.doubt
+            again = carry(seen, there.inverse() * here)
+            turned = abs(modulo2PI(line.normal - again.normal)) > JUMP_RAD
+        self.doubt = (line, here) if turned else None
         normal = known.normal if turned else line.normal
         if abs(line.distance - known.distance) <= JUMP_M:
             self.level = 0.0  # the wall itself
@@ -394,6 +405,7 @@ class SideMemory:
     def turned(self) -> None:
         """A corner: the front wall becomes the side wall; the old side is behind."""
         self.side, self.front, self.angle_known, self.level = self.front, None, False, 0.0
+        self.doubt = None
 
     def steer(self, here: Pose2D) -> WallLine | None:
         """The wall to steer by at ``here``: the last one seen or carried (None: none)."""

@@ -511,6 +511,7 @@ def _along_sides(
             ):
                 where = length - (float(distance) - offset)
                 fronts.append((float(along[idx[j - 1]]), where))  # measured before the step
+        fars = []
         for i in idx:  # the far pictures' level look ahead, at the frame's own stop
             far = vision[i].get("far_front")
             distance = far.get("distance_m") if isinstance(far, dict) else None
@@ -519,7 +520,7 @@ def _along_sides(
                 and math.isfinite(distance)
                 and in_far_front_range(distance)
             ):
-                fronts.append((float(along[i]), length - (float(distance) - offset)))
+                fars.append((float(along[i]), length - (float(distance) - offset)))
         if ends is not None and k in ends and ends[k][0] > 0:
             # The next wall placed the side's end; front lines that agree with the walk
             # between the corners (within map.tuning.wall_poses.front_agree_m) place the
@@ -528,12 +529,25 @@ def _along_sides(
             (o0, t0), (o1, t1) = anchors[0], ends[k]
             anchors.append(ends[k])
             anchors += [
-                (o, t) for o, t in fronts
+                (o, t) for o, t in fronts + fars
                 if o < o1
                 and abs(t - (t0 + (o - o0) * (t1 - t0) / (o1 - o0))) <= tuning.front_agree_m
             ]  # fmt: skip
         else:
-            anchors += agreeing_fronts(anchors[0], fronts, tuning=tuning)
+            # The survey's own front lines (near, read within a few cm) give the walk; a far
+            # picture's line places its frame where it agrees with that walk, carried back
+            # from the first of them to the side's start.
+            near = agreeing_fronts(anchors[0], fronts, tuning=tuning)
+            anchors += near
+            if near:
+                (o0, t0), (o1, t1) = anchors[0], min(near)
+                anchors += [
+                    (o, t) for o, t in fars
+                    if o0 < o < o1
+                    and abs(t - (t0 + (o - o0) * (t1 - t0) / (o1 - o0))) <= tuning.front_agree_m
+                ]  # fmt: skip
+            else:
+                anchors += agreeing_fronts(anchors[0], fars, tuning=tuning)
         anchors.sort()
         kept = [anchors[0]]
         for o, t in anchors[1:]:

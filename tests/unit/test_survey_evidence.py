@@ -147,6 +147,22 @@ def test_furniture_before_the_wall_steers_as_the_wall_behind_it() -> None:
     assert memory.level == 0.0
 
 
+def test_a_wrong_start_angle_gives_way_to_two_lines_that_agree() -> None:
+    """A survey start in a corner read the wall behind into its line (room 95028395: the
+    start's line turned 0.21 rad from the wall, every later line 0.21 rad the other way);
+    the carried wall's angle steered the robot into the wall for a whole side."""
+    left = math.pi / 2
+    memory = SideMemory()
+    memory.start(_line(0.6, left + 0.21), Pose2D(), 0.55)
+    first = memory.seen_side(_line(0.59, left - 0.2), Pose2D(0.2, 0.0, 0.0))
+    assert first is not None and first.normal == pytest.approx(left + 0.21)  # one line: doubt
+    second = memory.seen_side(_line(0.57, left - 0.2), Pose2D(0.4, 0.0, 0.0))
+    assert second is not None and second.normal == pytest.approx(left - 0.2)  # two: the wall
+    # one line turned once (the arm, a corner) still keeps the wall's angle
+    third = memory.seen_side(_line(0.57, left + 0.1), Pose2D(0.6, 0.0, 0.0))
+    assert third is not None and third.normal == pytest.approx(left - 0.2)
+
+
 def test_a_side_wall_that_ignores_the_steps_toward_it_is_a_robot_sliding() -> None:
     watch = _watch()  # the wall on the right: toward it is -y in the map frame
     right = -math.pi / 2
