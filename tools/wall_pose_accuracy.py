@@ -12,6 +12,13 @@ error (rad), and the ratio of the medians; then the survey's floor-wall lines ag
 truth (the wall the measured normal points at, the room's size): side lines, and front lines
 by distance band. Needs a simulator's dataset (true poses, ``origin_room_pose``,
 ``room_size_m``) of a rectangular room.
+
+``--along`` prints instead, pooled over the datasets that completed, each wall pose's error
+along its side (the walking direction; the error across a side is the side lines') with
+the survey's far front lines (``far_front``) and without them, as build-map would place the
+poses (the survey's skirting included)::
+
+    python tools/wall_pose_accuracy.py --along /tmp/es/survey_*.mcap
 """
 
 from __future__ import annotations
@@ -96,13 +103,75 @@ def line_errors(data: Any) -> None:
                   f"{np.median([e for _, e in band]):+.3f} m ({rel:+.1f} %)")  # fmt: skip
 
 
+def along_errors(data: Any, truth: list[Pose2D], far: bool) -> np.ndarray | None:
+    """Each wall pose's error along its side (m, + ahead of the truth), in the room frame;
+    ``far``: with the survey's far front lines. None when build-map keeps the odometry."""
+    from naoloc.mapping.from_survey import survey_skirting
+
+    meta = data.meta
+    if not far and isinstance(meta.get("vision"), list):
+        meta = {**meta, "vision": [{k: v for k, v in e.items() if k != "far_front"}
+                                   for e in meta["vision"]]}  # fmt: skip
+    offset = float(data.config.get("survey", {}).get("wall_offset_m", 1.0))
+    walled = wall_poses(data.keyframes, meta, offset=offset, skirting=survey_skirting(data))
+    if walled is None:
+        return None
+    turn = float(meta["origin_room_pose"][2])  # the map frame's heading in the room
+    out = []
+    for kf, t in zip(walled.keyframes, truth, strict=True):
+        c, s = math.cos(turn), math.sin(turn)
+        ex, ey = kf.pose.x - t.x, kf.pose.y - t.y
+        room = (c * ex - s * ey, s * ex + c * ey)
+        walk = round((t.theta + turn) / (math.pi / 2)) * math.pi / 2  # the side's direction
+        out.append(room[0] * math.cos(walk) + room[1] * math.sin(walk))
+    return np.array(out)
+
+
+def along_report(paths: list[str]) -> int:
+    """Print the pooled along-side errors with and without the far front lines."""
+    pooled: dict[bool, list[np.ndarray]] = {True: [], False: []}
+    for path in paths:
+        try:
+            data, truth = sim_survey(path)
+        except NaolocError as err:
+            print(f"wall_pose_accuracy: {err}", file=sys.stderr)
+            return 2
+        if not data.complete:
+            continue
+        runs = {far: along_errors(data, truth, far) for far in (False, True)}
+        if runs[False] is None or runs[True] is None:
+            continue
+        for far, errors in runs.items():
+            pooled[far].append(errors)
+    for far in (False, True):
+        if not pooled[far]:
+            print("no completed survey with wall poses")
+            return 2
+        every = np.abs(np.concatenate(pooled[far]))
+        rms = [float(np.sqrt(np.mean(e**2))) for e in pooled[far]]
+        print(
+            f"{'with' if far else 'without':7s} far fronts: {len(rms)} surveys, "
+            f"|along error| median {np.median(every):.3f} m, p90 {np.percentile(every, 90):.3f}"
+            f" m, p99 {np.percentile(every, 99):.3f} m; per survey RMS median "
+            f"{np.median(rms):.3f} m, max {max(rms):.3f} m"
+        )
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("datasets", nargs="+")
     parser.add_argument(
         "--map", help="a map built from the (one) dataset: also its bundle-adjusted poses"
     )
+    parser.add_argument(
+        "--along",
+        action="store_true",
+        help="pooled error along the sides, with and without the far front lines",
+    )
     args = parser.parse_args(argv)
+    if args.along:
+        return along_report(args.datasets)
     for path in args.datasets:
         try:
             data, truth = sim_survey(path)
