@@ -488,7 +488,10 @@ def _along_sides(
     frame's stop): between the corner and the first front line only the odometry places
     the frames, and its random walk is largest in the middle of a long side. A side's start
     (odometry 0) is at ``starts[side]`` (m; default 0): where the previous side's last frame
-    stood. ``tuning``: ``map.tuning.wall_poses`` (``scale_range``, ``front_agree_m``).
+    stood. A side no next wall ended (the survey's last) whose side a lap before was ended
+    takes the front lines that agree with the walk to where that side ended, or that end
+    when none does. ``tuning``: ``map.tuning.wall_poses`` (``scale_range``,
+    ``front_agree_m``).
 
     Returns:
         The distances and each side's overall metres per odometry metre (None: no anchor).
@@ -496,8 +499,16 @@ def _along_sides(
     low, high = tuning.scale_range
     out = np.full_like(along, np.nan)
     scales: list[float | None] = []
+    ends = dict(ends or {})
     for k, (idx, length) in enumerate(zip(frames_of, lengths, strict=True)):
         anchors = [(0.0, (starts or {}).get(k, 0.0))]
+        before = frames_of[k - 4] if k >= 4 else []
+        lap_end = None
+        if k not in ends and idx and before and ends.get(k - 4, (0.0, 0.0))[0] > 0:
+            # No next wall ended this side (the survey's last): it ended about where the
+            # same side a lap before did, which the next wall placed. Both stopped where the
+            # same front wall read the same distance, furniture before it and all.
+            lap_end = (float(along[idx[-1]]), float(out[before[-1]]))
         fronts = []
         for j, i in enumerate(idx):
             front = vision[i].get("front")
@@ -521,7 +532,7 @@ def _along_sides(
                 and in_far_front_range(distance)
             ):
                 fars.append((float(along[i]), length - (float(distance) - offset)))
-        if ends is not None and k in ends and ends[k][0] > 0:
+        if k in ends and ends[k][0] > 0:
             # The next wall placed the side's end; front lines that agree with the walk
             # between the corners (within map.tuning.wall_poses.front_agree_m) place the
             # frames near the end too (a front line that sees furniture before the wall
@@ -533,6 +544,17 @@ def _along_sides(
                 if o < o1
                 and abs(t - (t0 + (o - o0) * (t1 - t0) / (o1 - o0))) <= tuning.front_agree_m
             ]  # fmt: skip
+        elif lap_end is not None:
+            # The front lines that agree with the walk to where the lap before ended place
+            # the frames; that end itself only when none does (the two laps' ends differ
+            # by a few centimetres, a front line on the wall reads within 2).
+            (o0, t0), (o1, t1) = anchors[0], lap_end
+            agree = [
+                (o, t) for o, t in fronts + fars
+                if o <= o1
+                and abs(t - (t0 + (o - o0) * (t1 - t0) / (o1 - o0))) <= tuning.front_agree_m
+            ]  # fmt: skip
+            anchors += agree or [lap_end]
         else:
             # The survey's own front lines (near, read within a few cm) give the walk; a far
             # picture's line places its frame where it agrees with that walk, carried back
