@@ -105,6 +105,7 @@ def main() -> int:
             print(f"  start {[round(v, 2) for v in start]}: reached {res.get('reached')} "
                   f"error {err} m looks {res.get('tries')} path {res.get('path_m')} m "
                   f"robot {res.get('robot_s')} s (walk {res.get('walk_s')} s) "
+                  f"{'' if res.get('reached') else res.get('reason', '')} "
                   f"{res.get('failed', '')}", flush=True)  # fmt: skip
         e = np.array(errors, dtype=float)
         ok = int(np.sum(np.nan_to_num(e, nan=np.inf) <= 0.3))
