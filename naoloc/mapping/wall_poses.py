@@ -32,7 +32,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -509,67 +509,42 @@ def _along_sides(
             # same side a lap before did, which the next wall placed. Both stopped where the
             # same front wall read the same distance, furniture before it and all.
             lap_end = (float(along[idx[-1]]), float(out[before[-1]]))
-        fronts = []
-        for j, i in enumerate(idx):
-            front = vision[i].get("front")
-            if j == 0 or not isinstance(front, dict):
-                continue
-            distance = front.get("distance_m")
-            if (
-                isinstance(distance, (int, float))
-                and math.isfinite(distance)
-                and in_front_range(distance)
-            ):
-                where = length - (float(distance) - offset)
-                fronts.append((float(along[idx[j - 1]]), where))  # measured before the step
+        fronts = []  # (odometry along where measured, true along it gives), m
+        for j, i in enumerate(idx[1:], start=1):  # measured before the frame's step
+            distance = _distance(vision[i].get("front"), in_front_range)
+            if distance is not None:
+                fronts.append((float(along[idx[j - 1]]), length - (distance - offset)))
         fars = []
         for i in idx:  # the far pictures' level look ahead, at the frame's own stop
-            far = vision[i].get("far_front")
-            distance = far.get("distance_m") if isinstance(far, dict) else None
-            if (
-                isinstance(distance, (int, float))
-                and math.isfinite(distance)
-                and in_far_front_range(distance)
-            ):
-                fars.append((float(along[i]), length - (float(distance) - offset)))
+            distance = _distance(vision[i].get("far_front"), in_far_front_range)
+            if distance is not None:
+                fars.append((float(along[i]), length - (distance - offset)))
+        start, agree_m = anchors[0], tuning.front_agree_m
         if k in ends and ends[k][0] > 0:
             # The next wall placed the side's end; front lines that agree with the walk
-            # between the corners (within map.tuning.wall_poses.front_agree_m) place the
-            # frames near the end too (a front line that sees furniture before the wall
-            # does not agree).
-            (o0, t0), (o1, t1) = anchors[0], ends[k]
-            anchors.append(ends[k])
-            anchors += [
-                (o, t) for o, t in fronts + fars
-                if o < o1
-                and abs(t - (t0 + (o - o0) * (t1 - t0) / (o1 - o0))) <= tuning.front_agree_m
-            ]  # fmt: skip
+            # between the corners place the frames near the end too (a front line that
+            # sees furniture before the wall does not agree).
+            end = ends[k]
+            anchors.append(end)
+            anchors += _on_walk([f for f in fronts + fars if f[0] < end[0]], start, end, agree_m)
         elif lap_end is not None:
             # The front lines that agree with the walk to where the lap before ended place
             # the frames; that end itself only when none does (the two laps' ends differ
             # by a few centimetres, a front line on the wall reads within 2).
-            (o0, t0), (o1, t1) = anchors[0], lap_end
-            agree = [
-                (o, t) for o, t in fronts + fars
-                if o <= o1
-                and abs(t - (t0 + (o - o0) * (t1 - t0) / (o1 - o0))) <= tuning.front_agree_m
-            ]  # fmt: skip
-            anchors += agree or [lap_end]
+            lines = [f for f in fronts + fars if f[0] <= lap_end[0]]
+            anchors += _on_walk(lines, start, lap_end, agree_m) or [lap_end]
         else:
             # The survey's own front lines (near, read within a few cm) give the walk; a far
             # picture's line places its frame where it agrees with that walk, carried back
             # from the first of them to the side's start.
-            near = agreeing_fronts(anchors[0], fronts, tuning=tuning)
+            near = agreeing_fronts(start, fronts, tuning=tuning)
             anchors += near
             if near:
-                (o0, t0), (o1, t1) = anchors[0], min(near)
-                anchors += [
-                    (o, t) for o, t in fars
-                    if o0 < o < o1
-                    and abs(t - (t0 + (o - o0) * (t1 - t0) / (o1 - o0))) <= tuning.front_agree_m
-                ]  # fmt: skip
+                first = min(near)
+                lines = [f for f in fars if start[0] < f[0] < first[0]]
+                anchors += _on_walk(lines, start, first, agree_m)
             else:
-                anchors += agreeing_fronts(anchors[0], fars, tuning=tuning)
+                anchors += agreeing_fronts(start, fars, tuning=tuning)
         anchors.sort()
         kept = [anchors[0]]
         for o, t in anchors[1:]:
@@ -594,6 +569,26 @@ def _along_sides(
     for idx, length in zip(frames_of, lengths, strict=True):
         out[idx] = np.clip(out[idx], 0.0, length + 0.5)
     return out, scales
+
+
+def _distance(line: Any, in_range: Callable[[float], bool]) -> float | None:
+    """A recorded floor line's distance (m), when it is a finite one ``in_range`` accepts."""
+    distance = line.get("distance_m") if isinstance(line, dict) else None
+    if isinstance(distance, (int, float)) and math.isfinite(distance) and in_range(distance):
+        return float(distance)
+    return None
+
+
+def _on_walk(
+    lines: Sequence[tuple[float, float]],
+    a: tuple[float, float],
+    b: tuple[float, float],
+    within: float,
+) -> list[tuple[float, float]]:
+    """The front lines (odometry along, true along; m) within ``within`` m of the straight
+    walk from place ``a`` to place ``b`` (``map.tuning.wall_poses.front_agree_m``)."""
+    (o0, t0), (o1, t1) = a, b
+    return [(o, t) for o, t in lines if abs(t - (t0 + (o - o0) * (t1 - t0) / (o1 - o0))) <= within]
 
 
 def agreeing_fronts(
