@@ -567,6 +567,13 @@ class WallPoseTuning(_Model):
         description="a front line within this of the walk between the corners also anchors "
         "its side (m)",
     )
+    level_m: float = Field(
+        0.05,
+        gt=0,
+        description="the survey's last side: front lines of the lap before that read this "
+        "close to each other (m) saw one thing standing before the wall",
+    )
+    level_lines: int = Field(2, ge=1, description="... and at least this many of them saw it")
     front_heading_m: float = Field(
         4.0,
         gt=0,

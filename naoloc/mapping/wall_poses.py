@@ -509,16 +509,7 @@ def _along_sides(
             # same side a lap before did, which the next wall placed. Both stopped where the
             # same front wall read the same distance, furniture before it and all.
             lap_end = (float(along[idx[-1]]), float(out[before[-1]]))
-        fronts = []  # (odometry along where measured, true along it gives), m
-        for j, i in enumerate(idx[1:], start=1):  # measured before the frame's step
-            distance = _distance(vision[i].get("front"), in_front_range)
-            if distance is not None:
-                fronts.append((float(along[idx[j - 1]]), length - (distance - offset)))
-        fars = []
-        for i in idx:  # the far pictures' level look ahead, at the frame's own stop
-            distance = _distance(vision[i].get("far_front"), in_far_front_range)
-            if distance is not None:
-                fars.append((float(along[i]), length - (distance - offset)))
+        fronts, fars = _front_lines(idx, along, vision, length, offset)
         start, agree_m = anchors[0], tuning.front_agree_m
         if k in ends and ends[k][0] > 0:
             # The next wall placed the side's end; front lines that agree with the walk
@@ -531,8 +522,11 @@ def _along_sides(
             # The front lines that agree with the walk to where the lap before ended place
             # the frames; that end itself only when none does (the two laps' ends differ
             # by a few centimetres, a front line on the wall reads within 2).
+            # A line may see, as the lap before's did, something standing before that
+            # wall: it places its frame as far before that thing as it reads.
             lines = [f for f in fronts + fars if f[0] <= lap_end[0]]
-            anchors += _on_walk(lines, start, lap_end, agree_m) or [lap_end]
+            shifts = _front_levels(before, along, vision, lengths[k - 4], offset, out, tuning)
+            anchors += _on_walk(lines, start, lap_end, agree_m, shifts) or [lap_end]
         else:
             # The survey's own front lines (near, read within a few cm) give the walk; a far
             # picture's line places its frame where it agrees with that walk, carried back
@@ -579,16 +573,79 @@ def _distance(line: Any, in_range: Callable[[float], bool]) -> float | None:
     return None
 
 
+def _front_lines(
+    idx: Sequence[int],
+    along: np.ndarray,
+    vision: Sequence[dict[str, Any]],
+    length: float,
+    offset: float,
+) -> tuple[list[tuple[float, float]], list[tuple[float, float]]]:
+    """One side's front lines as (odometry along where measured, true along it gives if it
+    saw the wall), m: the survey's own (``front``, measured before the frame's step) and
+    the far pictures' level look ahead (``far_front``, at the frame's own stop)."""
+    fronts = []
+    for j, i in enumerate(idx[1:], start=1):
+        distance = _distance(vision[i].get("front"), in_front_range)
+        if distance is not None:
+            fronts.append((float(along[idx[j - 1]]), length - (distance - offset)))
+    fars = []
+    for i in idx:
+        distance = _distance(vision[i].get("far_front"), in_far_front_range)
+        if distance is not None:
+            fars.append((float(along[i]), length - (distance - offset)))
+    return fronts, fars
+
+
+def _front_levels(
+    idx: Sequence[int],
+    along: np.ndarray,
+    vision: Sequence[dict[str, Any]],
+    length: float,
+    offset: float,
+    placed: np.ndarray,
+    tuning: WallPoseTuning,
+) -> list[float]:
+    """Where a placed side's front lines saw something standing before its front wall: how
+    far before it their frames stood than the wall would say (m, <= 0), for each level at
+    least ``map.tuning.wall_poses.level_lines`` lines saw within
+    ``map.tuning.wall_poses.level_m`` of each other (a sideboard before the corner reads the
+    same from every frame). ``placed``: the frames' true along (NaN: not placed)."""
+    lookup = {float(along[i]): float(placed[i]) for i in idx}
+    fronts, fars = _front_lines(idx, along, vision, length, offset)
+    shifts = sorted(
+        lookup[o] - t
+        for o, t in fronts + fars
+        if math.isfinite(lookup.get(o, math.nan)) and lookup[o] - t < -tuning.level_m
+    )
+    levels: list[float] = []
+    for s in shifts:
+        near = [u for u in shifts if abs(u - s) <= tuning.level_m]
+        if len(near) >= tuning.level_lines:
+            level = float(np.median(near))
+            if not levels or abs(level - levels[-1]) > tuning.level_m:
+                levels.append(level)
+    return levels
+
+
 def _on_walk(
     lines: Sequence[tuple[float, float]],
     a: tuple[float, float],
     b: tuple[float, float],
     within: float,
+    shifts: Sequence[float] = (),
 ) -> list[tuple[float, float]]:
     """The front lines (odometry along, true along; m) within ``within`` m of the straight
-    walk from place ``a`` to place ``b`` (``map.tuning.wall_poses.front_agree_m``)."""
+    walk from place ``a`` to place ``b`` (``map.tuning.wall_poses.front_agree_m``). With
+    ``shifts`` (:func:`_front_levels`), a line may instead have seen one of those things
+    before the wall: it then places its frame that much farther back, if that agrees."""
     (o0, t0), (o1, t1) = a, b
-    return [(o, t) for o, t in lines if abs(t - (t0 + (o - o0) * (t1 - t0) / (o1 - o0))) <= within]
+    out = []
+    for o, t in lines:
+        walk = t0 + (o - o0) * (t1 - t0) / (o1 - o0)
+        best = min((t + s for s in (0.0, *shifts)), key=lambda v: abs(v - walk))
+        if abs(best - walk) <= within:
+            out.append((o, best))
+    return out
 
 
 def agreeing_fronts(

@@ -48,6 +48,7 @@ def _survey(
     far_outlier_at: int | None = None,
     uneven: bool = False,
     corner_furniture: bool = False,
+    last_short: float = 0.0,
 ) -> tuple[list[Keyframe], list[Pose2D], dict[str, Any]]:
     """(keyframes with odometry poses, true poses in the map frame, survey meta); ``slip``:
     the odometry's sideways error in each of the first steps (m, to the left);
@@ -55,7 +56,8 @@ def _survey(
     ``far_outlier_at`` one of them 0.4 m short (furniture before the wall); ``uneven``: the
     odometry reads the first 40 % of each side's steps 10 % long, the rest 5 % short;
     ``corner_furniture``: every front line of the sides toward the start's corner (3 and
-    7) reads a piece of furniture 0.3 m before the wall."""
+    7) reads a piece of furniture 0.3 m before the wall; ``last_short``: the survey's last
+    step stops this much before its corner (m: a lap's stops differ by up to half a step)."""
     truth: list[Pose2D] = []
     vision: list[dict[str, Any]] = []
     corner = np.zeros(2)
@@ -65,7 +67,8 @@ def _survey(
         u = np.array([math.cos(d), math.sin(d)])
         steps = round(length / STEP)
         for j in range(1, steps + 1):
-            p = corner + j * STEP * u
+            short_stop = last_short if k == 4 * laps - 1 and j == steps else 0.0
+            p = corner + (j * STEP - short_stop) * u
             truth.append(Pose2D(float(p[0]), float(p[1]), math.remainder(d, 2 * math.pi)))
             remaining_before = length - (j - 1) * STEP
             front = None
@@ -76,7 +79,7 @@ def _survey(
             if outlier_at is not None and len(vision) == outlier_at:
                 side = {"distance_m": OFFSET + 0.25, "normal_rad": SIDE_NORMAL}  # a sofa's foot
             entry = {"side_index": k, "side": side, "front": front}
-            ahead = length - j * STEP + OFFSET  # the far picture's, at this stop
+            ahead = length - j * STEP + short_stop + OFFSET  # the far picture's, at this stop
             if far_fronts and j % 2 == 0 and ahead <= 3.6:
                 short = 0.4 if len(vision) == far_outlier_at else 0.0
                 entry["far_front"] = {"distance_m": ahead - short, "normal_rad": 0.0}
@@ -170,6 +173,21 @@ def test_the_last_side_ends_where_the_lap_before_did() -> None:
     last = [i for i, e in enumerate(meta["vision"]) if e["side_index"] == 7]
     assert pos[last].max() < 0.05
     assert pos.max() < 0.05
+
+
+def test_the_last_side_takes_the_furniture_the_lap_before_saw() -> None:
+    """The survey's last side stops 0.1 m before where the lap before's did (a stop's
+    place varies by up to half a step). Both laps' front lines read the same furniture
+    0.3 m before the wall: the lap before's, placed by the next wall, say where it stands,
+    and the last side's lines place their frames before it (where the lap before ended
+    would be 0.1 m off)."""
+    keyframes, truth, meta = _survey(corner_furniture=True, last_short=0.1)
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None
+    pos, _ = _errors(walled.keyframes, truth)
+    last = [i for i, e in enumerate(meta["vision"]) if e["side_index"] == 7]
+    assert pos[last].max() < 0.03
+    assert pos[last[-1]] < 0.03
 
 
 def test_a_line_off_the_wall_is_not_believed() -> None:
