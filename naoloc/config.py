@@ -1102,6 +1102,16 @@ class GoHomeConfig(_Model):
         description="looks from standstill, the first one included (another when the "
         "belief is lost on the way)",
     )
+    contacts: int = Field(
+        2,
+        ge=0,
+        le=10,
+        description="contacts while walking that it backs off from and plans around (the "
+        "next one stops it: blocked)",
+    )
+    back_off_m: float = Field(
+        0.2, gt=0, le=1.0, description="how far it steps back after a contact (m)"
+    )
 
 
 class Config(_Model):

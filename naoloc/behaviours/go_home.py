@@ -7,9 +7,16 @@ map implies (:mod:`naoloc.navigation.grid`), steered by pure pursuit
 while it walks (:class:`naoloc.behaviours.track.Tracker`). It re-plans from the belief every
 :data:`REPLAN_S` seconds. It stops to look only when the belief is lost, at most
 ``go_home.max_tries`` looks in all. Within :data:`APPROACH_M` of home it stops walking and
-steps onto home with short ``moveTo`` steps, refining the belief standing between them,
-until the belief is within ``go_home.tolerance_m`` of home facing map +x as the survey
-started.
+steps onto home with short ``moveTo`` steps, refining the belief standing between them
+with the floor lines of a standstill look's head sweep (its far yaws see the walls beside
+and behind, which the walking head's swing does not: home's position along the way it
+faces), until the belief is within ``go_home.tolerance_m`` of home facing map +x as the
+survey started.
+
+A robot that touches something while walking (the simulator's contacts; a real NAO's
+bumpers are not reachable through the mirrored services) stops; up to
+``go_home.contacts`` times it then marks the floor ahead blocked, steps
+``go_home.back_off_m`` back and plans around it.
 """
 
 from __future__ import annotations
@@ -20,6 +27,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from naoloc.behaviours.localize import (
+    LINE_PITCH,
+    SCAN_HEAD_SPEED,
+    SCAN_YAWS,
     Localization,
     estimate_fields,
     localize,
@@ -34,9 +44,10 @@ from naoloc.geometry import Pose2D, modulo2PI, relative_pose
 from naoloc.localization.localizer import Localizer, PoseEstimate
 from naoloc.localization.observations import Relocalize
 from naoloc.mapping.map import VisualMap
-from naoloc.navigation.grid import NoPath, grid_of_map, path_length
+from naoloc.navigation.grid import BLOCKED, FloorGrid, NoPath, grid_of_map, path_length
 from naoloc.navigation.route import pursuit, remaining
 from naoloc.robot import Robot
+from naoloc.robot.camera import look
 
 __all__ = ["GoHomeResult", "go_home"]
 
@@ -48,9 +59,12 @@ REACHED_M = 0.15
 LOST_FRAMES = 15
 # Within this of home (by the belief) the walk ends and the final approach begins (m).
 APPROACH_M = 0.3
-# The final approach: frames taken standing before each short step, and steps at most.
-SETTLE_FRAMES = 8
+# The final approach: short steps at most.
 FINAL_STEPS = 3
+# A contact while walking: the blocked disc marked this far ahead of the belief's pose,
+# and its radius (m: the body's front edge and the thing it touched).
+CONTACT_AHEAD_M = 0.25
+CONTACT_RADIUS_M = 0.15
 # Robot time allowed per metre of the first plan, and at least (s).
 TIME_PER_M = 30.0
 MIN_TIME_S = 60.0
@@ -150,7 +164,7 @@ def go_home(
     tracker = Tracker(robot, loc, cfg)
     route: list[Pose2D] = []
     planned_at = -math.inf
-    lost = 0
+    lost = bumps = 0
     budget = MIN_TIME_S
     try:
         while True:
@@ -174,13 +188,16 @@ def go_home(
                 continue
             lost = 0
             here = est.pose()
+            now = robot_clock(robot)
+            if now - r0 > budget:
+                result.reason = f"gave up after {now - r0:.0f} s"
+                break
             if math.hypot(here.x - home.x, here.y - home.y) <= max(tol, APPROACH_M):
                 robot.motion.stopMove()
                 result.reached = _final_approach(robot, tracker, loc, home, tol, result, on_point)
-                if result.reached or not loc.pose().found:
+                if result.reached:
                     break
-                continue  # still short (the belief moved): walk on
-            now = robot_clock(robot)
+                continue  # still short, or the belief lost there: walk on, or look again
             if not route or now - planned_at > REPLAN_S:
                 try:
                     route = grid.plan(here, home)
@@ -191,16 +208,22 @@ def go_home(
                     result.path_m = path_length(here, route)
                     budget = max(MIN_TIME_S, TIME_PER_M * result.path_m)
                 planned_at = now
-            if now - r0 > budget:
-                result.reason = f"gave up after {now - r0:.0f} s"
-                break
             route = remaining(route, here, REACHED_M)
             cmd = pursuit(here, route)
             robot.motion.move(cmd.x, cmd.y, cmd.theta)
             result.trail.append(_point(tracker, on_point))
             if touching(robot):  # a robot that is blocked stops
-                result.reason = f"blocked: {TOUCHING}"
-                break
+                robot.motion.stopMove()
+                if bumps >= cfg.go_home.contacts:
+                    result.reason = f"blocked: {TOUCHING}"
+                    break
+                bumps += 1
+                if on_step is not None:
+                    on_step("touched something: backing off to go around it")
+                if not _back_off(robot, grid, loc.pose(), cfg.go_home.back_off_m):
+                    result.reason = f"blocked: {TOUCHING}, and backing off did not free it"
+                    break
+                route = []  # re-plan around it
     finally:
         robot.motion.stopMove()
         tracker.close()
@@ -214,6 +237,31 @@ def go_home(
         result.truth = truth
         result.error_m = math.hypot(truth.x - home.x, truth.y - home.y)
     return result
+
+
+def _back_off(robot: Robot, grid: FloorGrid, est: PoseEstimate, back_m: float) -> bool:
+    """After a contact ahead (the robot is stopped): mark the floor just ahead of the belief's
+    pose blocked in ``grid`` (furniture the map's landmarks did not show) and step
+    ``back_m`` m straight back, blocking.
+
+    Returns:
+        Whether the robot stands free of the contact afterwards.
+    """
+    if est.found:
+        here = est.pose()
+        ahead = CONTACT_AHEAD_M
+        grid.mark(
+            here.x + ahead * math.cos(here.theta),
+            here.y + ahead * math.sin(here.theta),
+            CONTACT_RADIUS_M,
+            BLOCKED,
+            force=True,
+        )
+    try:
+        robot.motion.moveTo(-back_m, 0.0, 0.0)
+    finally:
+        robot.motion.stopMove()
+    return not touching(robot)
 
 
 def _point(tracker: Tracker, on_point: Callable[[TrackPoint], None] | None) -> TrackPoint:
@@ -234,16 +282,26 @@ def _final_approach(
 ) -> bool:
     """Short steps onto home, facing map +x (the survey's start heading).
 
-    Standing, the tracker takes :data:`SETTLE_FRAMES` frames (the head keeps swinging, so
-    walls and art refine the belief), then one blocking ``moveTo`` to where the belief puts
-    home; at most :data:`FINAL_STEPS` steps. The filter takes every step's odometry.
+    Standing, the head sweeps as a standstill look's does (:data:`SCAN_YAWS`) and the
+    bottom camera's floor lines at each yaw go to the filter: the far yaws see the walls
+    beside and behind, so the belief knows home's position along the way the robot faces,
+    where the walking head's swing sees only landmarks. Then one blocking ``moveTo`` to
+    where the belief puts home; at most :data:`FINAL_STEPS` steps. The filter takes every
+    step's odometry.
 
     Returns:
         Whether the belief ends within ``tol`` of home, facing +x within 0.1 rad.
     """
     for step in range(FINAL_STEPS + 1):
-        for _ in range(SETTLE_FRAMES):
-            result.trail.append(_point(tracker, on_point))
+        for yaw in SCAN_YAWS:
+            look(robot, yaw, LINE_PITCH, SCAN_HEAD_SPEED)
+            scan = tracker.eyes.line_scan()
+            if scan is not None:
+                loc.update(scan)
+            point = tracker.tick()
+            result.trail.append(point)
+            if on_point is not None:
+                on_point(point)
         est = loc.pose()
         if not est.found:
             return False

@@ -288,6 +288,47 @@ def test_go_home_walks_back_to_the_origin_on_the_live_pose() -> None:
     assert result.robot_s < 2.0 * result.walk_s + 10.0
 
 
+@pytest.mark.parametrize("contacts", [2, 0])
+def test_go_home_backs_off_a_thing_the_map_does_not_show_and_goes_around(contacts: int) -> None:
+    """Something stands on the planned path that the map does not show (a chair without
+    landmarks): the robot touches it and stops; it then marks the floor ahead blocked,
+    steps back and plans around it, up to ``go_home.contacts`` times, after which a contact
+    stops it for good (blocked)."""
+    from naoloc.navigation.grid import grid_of_map
+
+    cfg = load_config({**small_cfg().model_dump(), "go_home": {"tolerance_m": 0.15,
+                                                              "contacts": contacts}})  # fmt: skip
+    touches: list[tuple[float, float]] = []
+    with connect(cfg) as robot:
+        sim = robot.sim
+        assert sim is not None
+        origin = Pose2D.from_list(sim.true_pose())
+        sim.teleport(2.2, 2.1, -2.0)
+        vmap = TruthMap(origin)
+        start = relative_pose(origin, Pose2D.from_list(sim.true_pose()))
+        path = grid_of_map(vmap).plan(start, Pose2D())
+        mid = path[len(path) // 2] if len(path) > 1 else Pose2D(start.x / 2, start.y / 2, 0.0)
+        thing = origin * Pose2D(mid.x, mid.y, 0.0)  # room frame, on the way home
+        free = sim.is_free
+
+        def is_free(x: float, y: float, clearance: float) -> bool:  # the thing's contact
+            if math.hypot(x - thing.x, y - thing.y) <= 0.12 + clearance:
+                touches.append((x, y))
+                return False
+            return free(x, y, clearance)
+
+        sim.is_free = is_free  # type: ignore[method-assign]
+        loc = TruthLocalizer(robot, vmap)
+        result = go_home(robot, vmap, cfg, localizer=loc)  # type: ignore[arg-type]
+        assert not robot.motion.moveIsActive()
+    assert touches  # it did walk into the thing
+    if contacts:
+        assert result.reached, result.reason
+        assert result.error_m is not None and result.error_m < 0.2
+    else:
+        assert not result.reached and result.reason.startswith("blocked")
+
+
 def test_go_home_stops_and_looks_when_lost_and_gives_up() -> None:
     cfg = small_cfg()
     with connect(cfg) as robot:
