@@ -574,6 +574,18 @@ class WallPoseTuning(_Model):
         "close to each other (m) saw one thing standing before the wall",
     )
     level_lines: int = Field(2, ge=1, description="... and at least this many of them saw it")
+    face_min_m: float = Field(
+        0.08,
+        ge=0,
+        description="a side line this much or more before its wall saw a piece of furniture "
+        "whose front the map keeps (m)",
+    )
+    face_frames: int = Field(
+        3, ge=1, description="... when at least this many consecutive frames saw it"
+    )
+    face_margin_m: float = Field(
+        0.15, ge=0, description="... widened by this beyond the first and last frame's foot (m)"
+    )
     front_heading_m: float = Field(
         4.0,
         gt=0,
@@ -754,6 +766,12 @@ class FilterTuning(_Model):
     Likelihoods are in nats (natural log); a decision compares evidence, not ad-hoc scores.
     """
 
+    face_reach_m: float = Field(
+        0.3,
+        ge=0,
+        description="a furniture front the survey saw explains a floor line whose foot lies "
+        "this near the stretch of it seen (m)",
+    )
     candidates: int = Field(5, ge=1, le=50, description="keyframes retrieved per picture")
     window: int = Field(
         40, ge=2, le=1000, description="observations a new hypothesis is replayed through"

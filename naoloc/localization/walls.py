@@ -13,7 +13,9 @@ random measurement.
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,22 +37,48 @@ class WallMap:
         bounds: The walls in W, ``(x_min, x_max, y_min, y_max)``, m.
         normals: ``(4,)`` outward normal angle of each wall in the map frame, rad.
         coords: ``(4,)`` each wall's coordinate along its normal, m (``n . p = c`` on it).
+        faces: ``(F, 4)`` fronts of furniture the survey saw along the walls: each one's
+            outward normal (rad) and coordinate (m) as a wall's, and the stretch of it seen,
+            ``(lo, hi)`` along ``(-sin, cos)`` of its normal (m, map frame).
     """
 
     frame: Pose2D
     bounds: tuple[float, float, float, float]
     normals: np.ndarray
     coords: np.ndarray
+    faces: np.ndarray = dataclasses.field(default_factory=lambda: np.empty((0, 4)))
 
     @classmethod
-    def of(cls, frame: Pose2D, bounds: tuple[float, float, float, float]) -> WallMap:
-        """Walls from their frame (map frame) and their bounds in it (m)."""
+    def of(
+        cls,
+        frame: Pose2D,
+        bounds: tuple[float, float, float, float],
+        faces: Sequence[Sequence[float]] = (),
+    ) -> WallMap:
+        """Walls from their frame (map frame) and their bounds in it (m).
+
+        Args:
+            frame: The wall frame W in the map frame.
+            bounds: The walls' floor lines in W, ``(x_min, x_max, y_min, y_max)``, m.
+            faces: Fronts of furniture along the walls (``wall_poses.faces``: the wall's
+                index 0-3 as in :attr:`normals`, how far before its floor line the front
+                stands (m) and the two ends of the stretch seen in W, m).
+        """
         x0, x1, y0, y1 = bounds
         local = np.array([0.0, math.pi / 2, math.pi, -math.pi / 2])
         normals = frame.theta + local
         n = np.column_stack([np.cos(normals), np.sin(normals)])
         coords = n @ np.array([frame.x, frame.y]) + np.array([x1, y1, -x0, -y0])
-        return cls(frame, (x0, x1, y0, y1), normals, coords)
+        rows = []
+        for wall, depth, xa, ya, xb, yb in faces:
+            k = int(wall)
+            normal = float(normals[k])
+            tangent = np.array([-math.sin(normal), math.cos(normal)])
+            ends = [frame * Pose2D(xa, ya, 0.0), frame * Pose2D(xb, yb, 0.0)]
+            along = sorted(float(tangent @ np.array([e.x, e.y])) for e in ends)
+            rows.append([normal, float(coords[k]) - depth, along[0], along[1]])
+        face_rows = np.array(rows, dtype=np.float64).reshape(-1, 4)
+        return cls(frame, (x0, x1, y0, y1), normals, coords, face_rows)
 
     def depth(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """How far map-frame points (m, arrays of one shape) stand inside the nearest wall
@@ -96,7 +124,20 @@ def wall_map(meta: dict[str, Any]) -> WallMap | None:
         x0, x1, y0, y1 = x0 + skirting, x1 - skirting, y0 + skirting, y1 - skirting
     if not (x0 < x1 and y0 < y1):
         return None
-    return WallMap.of(Pose2D(*(float(v) for v in frame)), (x0, x1, y0, y1))
+    faces = wp.get("faces")
+    rows = [
+        face
+        for face in (faces if isinstance(faces, list) else [])
+        if isinstance(face, list)
+        and len(face) == 6
+        and face[0] in (0, 1, 2, 3)
+        and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in face
+        )
+        and 0 < face[1] < min(x1 - x0, y1 - y0)
+    ]
+    return WallMap.of(Pose2D(*(float(v) for v in frame)), (x0, x1, y0, y1), rows)
 
 
 @dataclass(frozen=True)
@@ -104,7 +145,8 @@ class LineFit:
     """One line's best wall at a pose.
 
     Attributes:
-        wall: Index of the wall (0..3), or -1 when clutter explains it better.
+        wall: Index of the wall (0..3) or of a furniture front (4.., among those whose
+            stretch the line's foot lies on), or -1 when clutter explains it better.
         residual: ``(2,)`` observed minus expected: distance (m), direction (rad).
         jacobian: ``(2, 3)`` d residual / d pose (x, y, theta).
         sigma: ``(2,)`` the line's noise: distance (m), direction (rad).
@@ -143,6 +185,9 @@ def fit_line(
 ) -> LineFit:
     """The wall that explains ``line`` seen from ``pose`` best, and how much it explains.
 
+    A furniture front the survey saw (:attr:`WallMap.faces`) is a wall too where the
+    line's foot lies within ``face_reach_m`` of the stretch seen.
+
     Args:
         walls: The map's walls.
         line: A floor-wall line, FRAME_ROBOT.
@@ -153,13 +198,24 @@ def fit_line(
     Returns:
         The best wall (or -1) with the residual, Jacobian and the mixture's log ratio.
     """
-    dist, direction = walls.expected(pose)
+    normals, coords = walls.normals, walls.coords
+    if len(walls.faces):  # a front explains a line whose foot lies on the stretch seen
+        heading = pose[2] + line.normal
+        foot = pose[:2] + line.distance * np.array([math.cos(heading), math.sin(heading)])
+        tangent = np.column_stack([-np.sin(walls.faces[:, 0]), np.cos(walls.faces[:, 0])])
+        along = tangent @ foot
+        reach = tun.face_reach_m
+        on = (along >= walls.faces[:, 2] - reach) & (along <= walls.faces[:, 3] + reach)
+        normals = np.concatenate([normals, walls.faces[on, 0]])
+        coords = np.concatenate([coords, walls.faces[on, 1]])
+    n = np.column_stack([np.cos(normals), np.sin(normals)])
+    dist = coords - n @ pose[:2]
+    direction = np.angle(np.exp(1j * (normals - pose[2])))
     sigma = line_sigma(line, tun)
     r_d = line.distance - dist
     r_a = np.angle(np.exp(1j * (line.normal - direction)))
-    n = np.column_stack([np.cos(walls.normals), np.sin(walls.normals)])
     best, best_m, best_s = -1, math.inf, np.diag(sigma**2)
-    for k in range(4):
+    for k in range(len(normals)):
         jac = np.array([[n[k, 0], n[k, 1], 0.0], [0.0, 0.0, 1.0]])
         s = np.diag(sigma**2) + (jac @ cov @ jac.T if cov is not None else 0.0)
         r = np.array([r_d[k], r_a[k]])

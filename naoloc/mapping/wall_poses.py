@@ -77,6 +77,10 @@ class WallPoses:
             None: it saw none).
         start_frames: The same from side 0's first frames' lines, less the odometry's turn
             since the start (rad; None: none).
+        faces: The fronts of furniture standing along the walls that the side lines saw
+            (:func:`furniture_faces`): ``(wall, depth, xa, ya, xb, yb)``, the wall's index
+            (0: x_max, 1: y_max, 2: x_min, 3: y_min), how far before that wall's floor line
+            the front stands (m) and the two ends of the stretch seen, in W (m).
     """
 
     keyframes: list[Keyframe]
@@ -92,6 +96,9 @@ class WallPoses:
     skirting: float = 0.0
     start_own: float | None = None
     start_frames: float | None = None
+    faces: list[tuple[int, float, float, float, float, float]] = dataclasses.field(
+        default_factory=list
+    )
 
     def summary(self) -> dict[str, Any]:
         """JSON-able facts for the map's meta."""
@@ -113,6 +120,7 @@ class WallPoses:
                         for v in (self.wall_frame.x, self.wall_frame.y, self.wall_frame.theta)
                     ],
                     "walls_m": [round(v, 4) for v in self.walls],
+                    "faces": [[f[0], *(round(v, 4) for v in f[1:])] for f in self.faces],
                 }
             ),
         }
@@ -312,6 +320,7 @@ def wall_poses(
     walls = (
         -offset, float(sides_m[0]) + offset, min(-turn * offset, far_y), max(-turn * offset, far_y)
     )  # fmt: skip
+    faces = furniture_faces(poses, side_of, lines, dist, wall_seen, turn, walls, tun)
     return WallPoses(
         out,
         scales,
@@ -326,7 +335,106 @@ def wall_poses(
         skirting=skirting,
         start_own=own,
         start_frames=frames_heading,
+        faces=faces,
     )
+
+
+@dataclasses.dataclass
+class _Run:
+    """Consecutive frames whose side lines saw one front before a wall."""
+
+    wall: int
+    frame: int
+    depths: list[float]
+    feet: list[tuple[float, float]]
+
+
+def furniture_faces(
+    poses: Sequence[Pose2D],
+    side_of: Sequence[int],
+    lines: Sequence[tuple[float, float] | None],
+    dist: Sequence[float | None],
+    wall_seen: Sequence[bool],
+    turn: float,
+    walls: tuple[float, float, float, float],
+    tuning: WallPoseTuning,
+) -> list[tuple[int, float, float, float, float, float]]:
+    """The fronts of furniture along the walls, as the survey's side lines saw them (W).
+
+    A side line that saw something standing before its wall (:func:`side_distances`) puts
+    that thing's front ``depth`` = the frame's distance from the wall less the line's
+    before the wall's floor line. Consecutive frames of a side whose depths agree within
+    ``map.tuning.wall_poses.level_m``, at least ``face_frames`` of them and at least
+    ``face_min_m`` deep, are one front: from the first frame's foot on it to the last's,
+    widened by ``face_margin_m``. Fronts of the same wall (both laps) that overlap and agree
+    merge. The floor-line sensor model (:mod:`naoloc.localization.walls`) then explains a
+    line on such a front as the front, not as the wall seen from a wrong pose.
+
+    Args:
+        poses: The keyframes' poses in W.
+        side_of: Each frame's side.
+        lines: Each frame's side line (distance, angle) as measured (skirting included).
+        dist: Each frame's distance from its side's wall (m), None when unknown.
+        wall_seen: Whether each frame's line saw its wall.
+        turn: +1 when the corners turn left (the wall on the right), -1 otherwise.
+        walls: The walls in W, ``(x_min, x_max, y_min, y_max)``.
+        tuning: ``map.tuning.wall_poses``.
+
+    Returns:
+        ``(wall, depth, xa, ya, xb, yb)`` per front (see :class:`WallPoses`).
+    """
+    runs: list[_Run] = []
+    for i, (pose, k) in enumerate(zip(poses, side_of, strict=True)):
+        line, d = lines[i], dist[i]
+        if line is None or d is None or wall_seen[i] or d - line[0] < tuning.face_min_m:
+            continue
+        out = k * turn * math.pi / 2 - turn * math.pi / 2  # the wall's outward normal
+        wall = round(out / (math.pi / 2)) % 4  # 0: +x, 1: +y, 2: -x, 3: -y
+        foot = (pose.x + line[0] * math.cos(out), pose.y + line[0] * math.sin(out))
+        depth = d - line[0]
+        last = runs[-1] if runs else None
+        if (
+            last is not None
+            and last.wall == wall
+            and last.frame == i - 1
+            and abs(float(np.median(last.depths)) - depth) <= tuning.level_m
+        ):
+            last.depths.append(depth)
+            last.feet.append(foot)
+            last.frame = i
+        else:
+            runs.append(_Run(wall, i, [depth], [foot]))
+    faces: list[list[Any]] = []
+    for run in runs:
+        if len(run.depths) < tuning.face_frames:
+            continue
+        wall = run.wall
+        axis = 1 if wall in (0, 2) else 0  # the coordinate along the wall
+        along = [f[axis] for f in run.feet]
+        lo, hi = min(along) - tuning.face_margin_m, max(along) + tuning.face_margin_m
+        depth = float(np.median(run.depths))
+        for face in faces:  # the same front seen on another lap
+            if (
+                face[0] == wall
+                and face[2] <= hi
+                and lo <= face[3]
+                and abs(face[1] - depth) <= tuning.level_m
+            ):
+                face[1] = (face[1] + depth) / 2
+                face[2], face[3] = min(face[2], lo), max(face[3], hi)
+                break
+        else:
+            faces.append([wall, depth, lo, hi])
+    x0, x1, y0, y1 = walls
+    out_faces = []
+    for wall, depth, lo, hi in faces:
+        if wall in (0, 2):
+            x = x1 if wall == 0 else x0
+            out_faces.append((wall, depth, x, lo, x, hi))
+        else:
+            y = y1 if wall == 1 else y0
+            out_faces.append((wall, depth, lo, y, hi, y))
+    return out_faces
 
 
 def _end_lateral(

@@ -59,6 +59,30 @@ def test_a_seen_wall_explains_its_line_and_clutter_explains_a_stray_one() -> Non
     assert fit_line(WALLS, stray, pose, TUN, None).wall == -1
 
 
+def test_a_furniture_front_the_survey_saw_explains_its_line_where_it_stands() -> None:
+    """A front 0.35 m before the +y wall, seen over x 1-3 m of W: a line on it, from a pose
+    that sees it, is the front's (no residual), not the wall's seen from a pose 0.35 m off;
+    beyond the stretch seen the same line is not the front's; the meta's malformed fronts
+    are dropped."""
+    faces = [[1, 0.35, 1.0, 3.0, 3.0, 3.0]]
+    meta = {"wall_poses": {"wall_frame": [1.0, -0.5, 0.3], "walls_m": [-1.0, 5.0, -1.0, 3.0],
+                           "faces": [*faces, [1, 0.35, 1.0], [7, 0.3, 0, 0, 1, 0],
+                                     [1, -0.2, 0, 0, 1, 0], [1, True, 0, 0, 1, 0]]}}  # fmt: skip
+    walls = wall_map(meta)
+    assert walls is not None and walls.faces.shape == (1, 4)
+    assert walls.faces[0, 1] == pytest.approx(WALLS.coords[1] - 0.35)
+    frame = Pose2D(1.0, -0.5, 0.3)
+    here = frame * Pose2D(2.0, 1.5, math.pi / 2)  # in W: 1.5 m from the +y wall, facing it
+    pose = np.array([here.x, here.y, here.theta])
+    line = WallLine(1.5 - 0.35, 0.0, 200, 0.9, 0.01, 1.0)  # the front, straight ahead
+    fit = fit_line(walls, line, pose, TUN, None)
+    assert fit.wall >= 4 and np.allclose(fit.residual, 0.0, atol=1e-9)
+    assert fit_line(WALLS, line, pose, TUN, None).wall in (-1, 1)  # no front: the wall, 0.35 off
+    beyond = frame * Pose2D(4.6, 1.5, math.pi / 2)  # the same line where no front was seen
+    far = fit_line(walls, line, np.array([beyond.x, beyond.y, beyond.theta]), TUN, None)
+    assert far.wall < 4
+
+
 def test_the_motion_model_moves_and_grows_uncertainty_with_the_walk() -> None:
     pose, cov = np.array([1.0, 2.0, math.pi / 2]), np.zeros((3, 3))
     new, grown = motion_step(pose, cov, np.array([1.0, 0.0, 0.0]), TUN)

@@ -263,6 +263,29 @@ def test_furniture_along_a_wall_is_not_the_wall() -> None:
     assert pos.max() < 0.05  # 0.35 m off everywhere had the start's line been the wall
 
 
+def test_the_map_keeps_the_fronts_of_the_furniture_the_side_lines_saw() -> None:
+    """A sideboard 0.35 m deep before the first metre of side 0 in both laps: the map keeps
+    its front (wall 3, y_min in W; depth from the wall's floor line; the stretch seen), one
+    front for both laps; a lone nearer line is no front."""
+    keyframes, _, meta = _survey()
+    laps = [i for i, e in enumerate(meta["vision"]) if e["side_index"] in (0, 4)]
+    for i in laps[:5] + laps[15:20]:  # the first metre of side 0 in each lap
+        meta["vision"][i]["side"] = {"distance_m": OFFSET - 0.35, "normal_rad": SIDE_NORMAL}
+    meta["vision"][laps[10]]["side"] = {"distance_m": OFFSET - 0.5, "normal_rad": SIDE_NORMAL}
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None
+    assert len(walled.faces) == 1
+    wall, depth, xa, ya, xb, yb = walled.faces[0]
+    assert wall == 3 and depth == pytest.approx(0.35, abs=0.02)
+    assert ya == yb == pytest.approx(-OFFSET)  # on side 0's wall, y_min of W
+    margin = WallPoseTuning().face_margin_m
+    assert xa == pytest.approx(0.2 - margin, abs=0.03) and xb == pytest.approx(
+        1.0 + margin, abs=0.03
+    )
+    faces = walled.summary()["faces"]
+    assert faces == [[3, *(round(v, 4) for v in walled.faces[0][1:])]]
+
+
 def test_side_distances_see_through_furniture_without_trusting_the_sideways_odometry() -> None:
     """Room 327010903's first side: a sideboard and a bookcase (0.45 m deep) along the first
     half, a sideboard at the end; the robot follows them out to 1.46 m and back. Its
