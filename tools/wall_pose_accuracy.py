@@ -16,7 +16,8 @@ by distance band. Needs a simulator's dataset (true poses, ``origin_room_pose``,
 ``--along`` prints instead, pooled over the datasets that completed, each wall pose's error
 along its side (the walking direction; the error across a side is the side lines') with
 the survey's far front lines (``far_front``) and without them, as build-map would place the
-poses (the survey's skirting included)::
+poses (the survey's skirting included), then the survey's last side (which no next wall
+ends): its RMS and its last frame's error (the survey's start, where go-home ends)::
 
     python tools/wall_pose_accuracy.py --along /tmp/es/survey_*.mcap
 """
@@ -130,6 +131,8 @@ def along_errors(data: Any, truth: list[Pose2D], far: bool) -> np.ndarray | None
 def along_report(paths: list[str]) -> int:
     """Print the pooled along-side errors with and without the far front lines."""
     pooled: dict[bool, list[np.ndarray]] = {True: [], False: []}
+    last_side: list[float] = []  # per survey: its last side's RMS, and its last frame's error
+    home: list[float] = []
     for path in paths:
         try:
             data, truth = sim_survey(path)
@@ -143,6 +146,10 @@ def along_report(paths: list[str]) -> int:
             continue
         for far, errors in runs.items():
             pooled[far].append(errors)
+        sides = [entry.get("side_index") for entry in data.meta["vision"]]
+        last = runs[True][[i for i, k in enumerate(sides) if k == sides[-1]]]
+        last_side.append(float(np.sqrt(np.mean(last**2))))
+        home.append(abs(float(runs[True][-1])))
     for far in (False, True):
         if not pooled[far]:
             print("no completed survey with wall poses")
@@ -155,6 +162,12 @@ def along_report(paths: list[str]) -> int:
             f" m, p99 {np.percentile(every, 99):.3f} m; per survey RMS median "
             f"{np.median(rms):.3f} m, max {max(rms):.3f} m"
         )
+    print(
+        f"the last side (no next wall ends it): RMS median {np.median(last_side):.3f} m, p90 "
+        f"{np.percentile(last_side, 90):.3f} m; its last frame (at the start, home) |error| "
+        f"median {np.median(home):.3f} m, p90 {np.percentile(home, 90):.3f} m, max "
+        f"{max(home):.3f} m, more than 0.05 m in {sum(h > 0.05 for h in home)} of {len(home)}"
+    )
     return 0
 
 
