@@ -1080,8 +1080,9 @@ class LocalizeConfig(_Model):
     settle_sigma_m: float = Field(
         0.03,
         gt=0,
-        description="scan strategy: stop looking once the tracked pose's position std is "
-        "at most this (m); otherwise look until the sweep ends",
+        description="scan strategy: stop looking once the tracked pose's position std, less "
+        "the map's own error the filter adds to it (localize.filter.map_floor_m or the map's "
+        "keyframe_sigma_m), is at most this (m); otherwise look until the sweep ends",
     )
     filter: FilterTuning = Field(
         FilterTuning(), description="the localization filter's models and decisions"

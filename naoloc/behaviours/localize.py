@@ -217,6 +217,14 @@ class Eyes:
         self.top.close()
 
 
+def own_sigma(est: PoseEstimate, floor_m: float) -> float:
+    """The belief's position std along its wider axis less the map's own error (m): the
+    floor the filter adds to every covariance (``localize.filter.map_floor_m``, or the
+    map's ``keyframe_sigma_m``), which no number of looks removes."""
+    sigma = est.sigmas()[0]
+    return math.sqrt(max(0.0, sigma**2 - floor_m**2))
+
+
 def look_once(
     eyes: Eyes, loc: Localizer, yaw: float, pitch: float, line_pitch: float, lines_first: bool
 ) -> tuple[int, int]:
@@ -311,7 +319,7 @@ def localize(
                     p, s = look_once(eyes, loc, yaw, pitch, LINE_PITCH, k % 2 == 1)
                     pictures, scans = pictures + p, scans + s
                     now = loc.pose()
-                    if now.found and now.sigmas()[0] <= settle:
+                    if now.found and own_sigma(now, loc.filter.map_floor_m) <= settle:
                         break
                 if loc.pose().found or turned >= extra_turns:
                     break

@@ -87,7 +87,7 @@ class TruthLocalizer:
         self.robot, self.vmap, self.offset, self.needed = robot, vmap, offset, needed
         self.log: list[Any] = []
         self.cpu_s = 0.0
-        self.filter = SimpleNamespace(walls=None, pictures=0)
+        self.filter = SimpleNamespace(walls=None, pictures=0, map_floor_m=0.0)
 
     def update(self, obs: Any) -> None:
         self.log.append(obs)

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from naoloc.behaviours import circuit, count_halves, frames_per_lap, nearest_wall
+from naoloc.behaviours.localize import own_sigma
 from naoloc.behaviours.track import TrackPoint, walk_route
 from naoloc.geometry import Pose2D
 from naoloc.localization.localizer import PoseEstimate, Status
@@ -185,3 +186,18 @@ def test_a_walk_that_touches_something_stops(touch_at: int, why: str) -> None:
     assert robot.motion.calls[-1] == "stopMove"
     if why == "blocked":
         assert robot.sim.checks == touch_at  # no step after the contact
+
+
+def test_a_look_settles_on_the_beliefs_own_spread_not_the_maps_floor() -> None:
+    """The filter adds the map's own error to every covariance; a look that waited for the
+    whole std to fall below ``localize.settle_sigma_m`` would never stop early on a map whose
+    floor is above it. The settle test takes the floor off."""
+
+    def estimate(std_m: float) -> PoseEstimate:
+        cov = np.diag([std_m**2, (0.5 * std_m) ** 2, 1e-4])
+        return PoseEstimate(0.0, 0.0, 0.0, cov, 1.0, Status.TRACKING)
+
+    assert own_sigma(estimate(0.05), 0.04) == pytest.approx(0.03)
+    assert own_sigma(estimate(0.04), 0.04) == pytest.approx(0.0)
+    assert own_sigma(estimate(0.03), 0.04) == 0.0  # never negative
+    assert own_sigma(estimate(0.05), 0.0) == pytest.approx(0.05)
