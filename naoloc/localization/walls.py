@@ -94,10 +94,17 @@ class WallMap:
 
     def expected(self, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Each wall's distance (m) and direction (rad, FRAME_ROBOT) seen from ``pose``."""
-        n = np.column_stack([np.cos(self.normals), np.sin(self.normals)])
-        dist = self.coords - n @ pose[:2]
-        direction = np.angle(np.exp(1j * (self.normals - pose[2])))
+        _n, dist, direction = _seen(self.normals, self.coords, pose)
         return dist, direction
+
+
+def _seen(
+    normals: np.ndarray, coords: np.ndarray, pose: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lines of outward ``normals`` (rad) at ``coords`` (m) seen from ``pose`` (map frame):
+    their unit normals ``(k, 2)``, distances (m) and directions (rad, FRAME_ROBOT)."""
+    n = np.column_stack([np.cos(normals), np.sin(normals)])
+    return n, coords - n @ pose[:2], np.angle(np.exp(1j * (normals - pose[2])))
 
 
 def wall_map(meta: dict[str, Any]) -> WallMap | None:
@@ -208,9 +215,7 @@ def fit_line(
         on = (along >= walls.faces[:, 2] - reach) & (along <= walls.faces[:, 3] + reach)
         normals = np.concatenate([normals, walls.faces[on, 0]])
         coords = np.concatenate([coords, walls.faces[on, 1]])
-    n = np.column_stack([np.cos(normals), np.sin(normals)])
-    dist = coords - n @ pose[:2]
-    direction = np.angle(np.exp(1j * (normals - pose[2])))
+    n, dist, direction = _seen(normals, coords, pose)
     sigma = line_sigma(line, tun)
     r_d = line.distance - dist
     r_a = np.angle(np.exp(1j * (line.normal - direction)))

@@ -633,7 +633,7 @@ def _along_sides(
             # A line may see, as the lap before's did, something standing before that
             # wall: it places its frame as far before that thing as it reads.
             lines = [f for f in fronts + fars if f[0] <= lap_end[0]]
-            shifts = _front_levels(before, along, vision, lengths[k - 4], offset, out, tuning)
+            shifts = _front_levels(before, vision, lengths[k - 4], offset, out, tuning)
             anchors += _on_walk(lines, start, lap_end, agree_m, shifts) or [lap_end]
         else:
             # The survey's own front lines (near, read within a few cm) give the walk; a far
@@ -681,6 +681,25 @@ def _distance(line: Any, in_range: Callable[[float], bool]) -> float | None:
     return None
 
 
+def _front_readings(
+    idx: Sequence[int], vision: Sequence[dict[str, Any]]
+) -> tuple[list[tuple[int, float]], list[tuple[int, float]]]:
+    """One side's front lines as (the frame where measured, distance m): the survey's own
+    (``front``, measured at the frame before its step) and the far pictures' level look
+    ahead (``far_front``, at the frame's own stop)."""
+    fronts = []
+    for j, i in enumerate(idx[1:], start=1):
+        distance = _distance(vision[i].get("front"), in_front_range)
+        if distance is not None:
+            fronts.append((idx[j - 1], distance))
+    fars = []
+    for i in idx:
+        distance = _distance(vision[i].get("far_front"), in_far_front_range)
+        if distance is not None:
+            fars.append((i, distance))
+    return fronts, fars
+
+
 def _front_lines(
     idx: Sequence[int],
     along: np.ndarray,
@@ -688,25 +707,17 @@ def _front_lines(
     length: float,
     offset: float,
 ) -> tuple[list[tuple[float, float]], list[tuple[float, float]]]:
-    """One side's front lines as (odometry along where measured, true along it gives if it
-    saw the wall), m: the survey's own (``front``, measured before the frame's step) and
-    the far pictures' level look ahead (``far_front``, at the frame's own stop)."""
-    fronts = []
-    for j, i in enumerate(idx[1:], start=1):
-        distance = _distance(vision[i].get("front"), in_front_range)
-        if distance is not None:
-            fronts.append((float(along[idx[j - 1]]), length - (distance - offset)))
-    fars = []
-    for i in idx:
-        distance = _distance(vision[i].get("far_front"), in_far_front_range)
-        if distance is not None:
-            fars.append((float(along[i]), length - (distance - offset)))
-    return fronts, fars
+    """One side's front lines (:func:`_front_readings`) as (odometry along where measured,
+    true along it gives if it saw the wall), m."""
+    fronts, fars = _front_readings(idx, vision)
+    return (
+        [(float(along[i]), length - (d - offset)) for i, d in fronts],
+        [(float(along[i]), length - (d - offset)) for i, d in fars],
+    )
 
 
 def _front_levels(
     idx: Sequence[int],
-    along: np.ndarray,
     vision: Sequence[dict[str, Any]],
     length: float,
     offset: float,
@@ -718,12 +729,12 @@ def _front_levels(
     least ``map.tuning.wall_poses.level_lines`` lines saw within
     ``map.tuning.wall_poses.level_m`` of each other (a sideboard before the corner reads the
     same from every frame). ``placed``: the frames' true along (NaN: not placed)."""
-    lookup = {float(along[i]): float(placed[i]) for i in idx}
-    fronts, fars = _front_lines(idx, along, vision, length, offset)
+    fronts, fars = _front_readings(idx, vision)
     shifts = sorted(
-        lookup[o] - t
-        for o, t in fronts + fars
-        if math.isfinite(lookup.get(o, math.nan)) and lookup[o] - t < -tuning.level_m
+        shift
+        for i, d in fronts + fars
+        if math.isfinite(shift := float(placed[i]) - (length - (d - offset)))
+        and shift < -tuning.level_m
     )
     levels: list[float] = []
     for s in shifts:
