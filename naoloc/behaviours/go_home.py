@@ -27,12 +27,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from naoloc.behaviours.localize import (
-    LINE_PITCH,
-    SCAN_HEAD_SPEED,
     SCAN_YAWS,
     Localization,
     estimate_fields,
     localize,
+    look_lines,
     robot_clock,
     truth_in_map,
 )
@@ -47,7 +46,6 @@ from naoloc.mapping.map import VisualMap
 from naoloc.navigation.grid import BLOCKED, FloorGrid, NoPath, grid_of_map, path_length
 from naoloc.navigation.route import pursuit, remaining
 from naoloc.robot import Robot
-from naoloc.robot.camera import look
 
 __all__ = ["GoHomeResult", "go_home"]
 
@@ -249,10 +247,9 @@ def _back_off(robot: Robot, grid: FloorGrid, est: PoseEstimate, back_m: float) -
     """
     if est.found:
         here = est.pose()
-        ahead = CONTACT_AHEAD_M
         grid.mark(
-            here.x + ahead * math.cos(here.theta),
-            here.y + ahead * math.sin(here.theta),
+            here.x + CONTACT_AHEAD_M * math.cos(here.theta),
+            here.y + CONTACT_AHEAD_M * math.sin(here.theta),
             CONTACT_RADIUS_M,
             BLOCKED,
             force=True,
@@ -264,8 +261,11 @@ def _back_off(robot: Robot, grid: FloorGrid, est: PoseEstimate, back_m: float) -
     return not touching(robot)
 
 
-def _point(tracker: Tracker, on_point: Callable[[TrackPoint], None] | None) -> TrackPoint:
-    point = tracker.step()
+def _point(
+    tracker: Tracker, on_point: Callable[[TrackPoint], None] | None, frame: bool = True
+) -> TrackPoint:
+    """The tracker's next pose (``frame``: a camera frame, else the odometry alone), shown."""
+    point = tracker.step() if frame else tracker.tick()
     if on_point is not None:
         on_point(point)
     return point
@@ -294,14 +294,8 @@ def _final_approach(
     """
     for step in range(FINAL_STEPS + 1):
         for yaw in SCAN_YAWS:
-            look(robot, yaw, LINE_PITCH, SCAN_HEAD_SPEED)
-            scan = tracker.eyes.line_scan()
-            if scan is not None:
-                loc.update(scan)
-            point = tracker.tick()
-            result.trail.append(point)
-            if on_point is not None:
-                on_point(point)
+            look_lines(tracker.eyes, loc, yaw)
+            result.trail.append(_point(tracker, on_point, frame=False))
         est = loc.pose()
         if not est.found:
             return False

@@ -246,12 +246,23 @@ def look_once(
             loc.update(eyes.picture())
             pictures += 1
         else:
-            look(eyes.robot, yaw, line_pitch, SCAN_HEAD_SPEED)
-            scan = eyes.line_scan()
-            if scan is not None:
-                loc.update(scan)
-                scans += 1
+            scans += look_lines(eyes, loc, yaw, line_pitch)
     return pictures, scans
+
+
+def look_lines(eyes: Eyes, loc: Localizer, yaw: float, pitch: float = LINE_PITCH) -> int:
+    """Turn the head to ``(yaw, pitch)`` (rad) and give the bottom camera's floor lines to
+    the filter.
+
+    Returns:
+        1 when a scan was taken, else 0 (no usable picture).
+    """
+    look(eyes.robot, yaw, pitch, SCAN_HEAD_SPEED)
+    scan = eyes.line_scan()
+    if scan is None:
+        return 0
+    loc.update(scan)
+    return 1
 
 
 def localize(
