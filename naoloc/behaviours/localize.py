@@ -192,17 +192,27 @@ class Eyes:
             self.top.close()
             raise
 
-    def picture(self) -> Picture:
-        """A top-camera picture with the robot's odometry (raw FRAME_WORLD) at capture."""
-        return Picture(self.top.keyframe()[0])
+    def picture(self, still: bool = False) -> Picture:
+        """A top-camera picture with the robot's odometry (raw FRAME_WORLD) at capture.
 
-    def line_scan(self) -> LineScan | None:
-        """The floor-wall lines the bottom camera sees now (None: no usable picture)."""
+        Args:
+            still: The robot stands and the head rests: its state is read once
+                (:meth:`Camera.keyframe`).
+        """
+        return Picture(self.top.keyframe(still=still)[0])
+
+    def line_scan(self, still: bool = False) -> LineScan | None:
+        """The floor-wall lines the bottom camera sees now (None: no usable picture).
+
+        Args:
+            still: The robot stands and the head rests: the odometry and the camera's
+                pose are read once, before the image, instead of around it.
+        """
         if self.floor is None:
             return None
         before = pose_of(self.robot.motion, True)  # bracketing the view's own readings
-        view = self.floor.view()
-        odometry = midpose(before, pose_of(self.robot.motion, True))
+        view = self.floor.view(still)
+        odometry = before if still else midpose(before, pose_of(self.robot.motion, True))
         if view is None:
             return None
         t0 = time.process_time()
@@ -243,7 +253,7 @@ def look_once(
     for what in steps:
         if what == "picture":
             look(eyes.robot, yaw, pitch, SCAN_HEAD_SPEED)
-            loc.update(eyes.picture())
+            loc.update(eyes.picture(still=True))
             pictures += 1
         else:
             scans += look_lines(eyes, loc, yaw, line_pitch)
@@ -252,13 +262,13 @@ def look_once(
 
 def look_lines(eyes: Eyes, loc: Localizer, yaw: float, pitch: float = LINE_PITCH) -> int:
     """Turn the head to ``(yaw, pitch)`` (rad) and give the bottom camera's floor lines to
-    the filter.
+    the filter. The robot stands (the readings are taken once: :meth:`Eyes.line_scan`).
 
     Returns:
         1 when a scan was taken, else 0 (no usable picture).
     """
     look(eyes.robot, yaw, pitch, SCAN_HEAD_SPEED)
-    scan = eyes.line_scan()
+    scan = eyes.line_scan(still=True)
     if scan is None:
         return 0
     loc.update(scan)

@@ -133,15 +133,20 @@ class FloorEye:
         image, hfov, vfov, pose = view
         return detect_wall_lines(image, hfov, vfov, pose, lens=self.lens)
 
-    def view(self) -> tuple[np.ndarray, float, float, np.ndarray] | None:
+    def view(self, still: bool = False) -> tuple[np.ndarray, float, float, np.ndarray] | None:
         """A picture (BGR), its fields of view (rad) and the camera's pose in FRAME_ROBOT;
-        None when the robot reports no usable camera pose."""
+        None when the robot reports no usable camera pose.
+
+        Args:
+            still: The head rests (after a blocking head move): the camera's pose is read
+                once, before the image.
+        """
         motion = self.robot.motion
         # The camera's pose read just before and after the image, halfway between (the
         # head may be moving: see Camera.keyframe).
         before = motion.getTransform("CameraBottom", FRAME_ROBOT, True)
         frame = self.camera.frame()
-        after = motion.getTransform("CameraBottom", FRAME_ROBOT, True)
+        after = before if still else motion.getTransform("CameraBottom", FRAME_ROBOT, True)
         info = self.camera.info(frame)
         if len(before) != 16 or len(after) != 16:
             return None

@@ -122,3 +122,62 @@ def test_keyframes_keep_the_camera_pose_the_robot_reported(tmp_path: Path) -> No
     back = read_dataset(path).keyframes
     assert back[0].camera_pose == pytest.approx(with_pose.camera_pose)
     assert back[1].camera_pose is None
+
+
+class _Counting:
+    """ALMotion with a count of the remote calls made through it."""
+
+    def __init__(self, inner: object) -> None:
+        self.inner, self.calls = inner, 0
+
+    def __getattr__(self, name: str) -> object:
+        attr = getattr(self.inner, name)
+        if not callable(attr):
+            return attr
+
+        def call(*args: object, **kwargs: object) -> object:
+            self.calls += 1
+            return attr(*args, **kwargs)
+
+        return call
+
+
+@pytest.mark.parametrize("backend", _backends())
+def test_a_still_picture_reads_the_state_once_and_keeps_its_pose(backend: str) -> None:
+    from naoloc.behaviours.wall_follow import FloorEye
+    from naoloc.config import CameraConfig
+    from naoloc.robot.camera import Camera
+
+    cfg = {"robot": {"backend": backend}, "world": {"start_pose": [1.5, 2.0, 0.7]}}
+    with naoloc.connect(cfg) as robot:
+        assert robot.sim is not None
+        robot.posture.goToPosture("StandInit", 1.0)
+        robot.motion.angleInterpolationWithSpeed(["HeadYaw", "HeadPitch"], [0.9, -0.3], 0.6)
+        counting = _Counting(robot.motion)
+        robot.motion = counting  # type: ignore[assignment]
+        with Camera(robot, CameraConfig()) as camera:
+            counting.calls = 0
+            moving, _ = camera.keyframe()
+            bracketed = counting.calls
+            counting.calls = 0
+            still, _ = camera.keyframe(still=True)
+            assert (bracketed, counting.calls) == (7, 3)  # + the image: 8 and 4 remote calls
+        assert still.command_pose is None and moving.command_pose is not None
+        assert still.pose == pytest.approx(moving.pose, abs=1e-3)
+        assert still.head_yaw == pytest.approx(moving.head_yaw, abs=1e-3)
+        assert np.allclose(still.camera_pose, moving.camera_pose, atol=1e-3)
+        true_room = kin.transform_from_6d(robot.sim.true_camera_pose(0))
+        true = np.linalg.inv(kin.world_to_robot(robot.sim.true_pose())) @ true_room
+        got = np.asarray(still.camera_pose).reshape(4, 4)
+        assert np.abs(got[:3, 3] - true[:3, 3]).max() < 0.005
+        eye = FloorEye(robot, CameraConfig())
+        try:
+            counting.calls = 0
+            view = eye.view(still=True)
+            assert view is not None and counting.calls == 1
+            counting.calls = 0
+            moving_view = eye.view()
+            assert moving_view is not None and counting.calls == 2
+            assert np.allclose(view[3], moving_view[3], atol=1e-3)
+        finally:
+            eye.close()
