@@ -1131,6 +1131,13 @@ class GoHomeConfig(_Model):
     back_off_m: float = Field(
         0.2, gt=0, le=1.0, description="how far it steps back after a contact (m)"
     )
+    align_m: float = Field(
+        1.0,
+        ge=0,
+        le=5.0,
+        description="within this of home (along the path) it turns to home's heading while "
+        "it walks, so it arrives facing map +x (m; 0: it turns there)",
+    )
 
 
 class Config(_Model):

@@ -43,8 +43,8 @@ from naoloc.geometry import Pose2D, modulo2PI, relative_pose
 from naoloc.localization.localizer import Localizer, PoseEstimate
 from naoloc.localization.observations import Relocalize
 from naoloc.mapping.map import VisualMap
-from naoloc.navigation.grid import BLOCKED, FloorGrid, NoPath, grid_of_map, path_length
-from naoloc.navigation.route import pursuit, remaining
+from naoloc.navigation.grid import BLOCKED, FloorGrid, NoPath, grid_of_map
+from naoloc.navigation.route import path_length, pursuit, remaining
 from naoloc.robot import Robot
 
 __all__ = ["GoHomeResult", "go_home"]
@@ -207,7 +207,7 @@ def go_home(
                     budget = max(MIN_TIME_S, TIME_PER_M * result.path_m)
                 planned_at = now
             route = remaining(route, here, REACHED_M)
-            cmd = pursuit(here, route)
+            cmd = pursuit(here, route, goal_theta=home.theta, align_m=cfg.go_home.align_m)
             robot.motion.move(cmd.x, cmd.y, cmd.theta)
             result.trail.append(_point(tracker, on_point))
             if touching(robot):  # a robot that is blocked stops

@@ -310,15 +310,6 @@ def _shortcut(
     return out
 
 
-def path_length(start: Pose2D, waypoints: list[Pose2D]) -> float:
-    """Length of the polyline from ``start`` through ``waypoints``, m."""
-    total, prev = 0.0, start
-    for p in waypoints:
-        total += math.hypot(p.x - prev.x, p.y - prev.y)
-        prev = p
-    return total
-
-
 def grid_from_map(
     keyframe_poses: np.ndarray,
     landmarks: np.ndarray,

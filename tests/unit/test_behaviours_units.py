@@ -124,6 +124,47 @@ def test_pursuit_walks_toward_the_route(here: tuple[float, float, float], expect
     assert pursuit(Pose2D(*here), []).x == 0.0
 
 
+@pytest.mark.parametrize(
+    ("here", "moves", "turns"),
+    [
+        # Goal 0.6 m ahead along -x, to be reached facing +x: from facing it (pi), the robot
+        # walks on toward it and turns (either way) at once instead of in place there.
+        ((0.6, 0.0, math.pi), (1.0, 0.0), "any"),
+        # Facing +x already: it steps back toward the goal and does not turn.
+        ((0.6, 0.0, 0.0), (-1.0, 0.0), "none"),
+        # Facing +y with the goal along -x: it steps sideways to its left and turns right,
+        # toward +x.
+        ((0.6, 0.0, math.pi / 2), (0.0, 1.0), "right"),
+    ],
+)
+def test_pursuit_near_the_goal_turns_to_its_heading_while_it_walks(
+    here: tuple[float, float, float], moves: tuple[float, float], turns: str
+) -> None:
+    from naoloc.constants import WALK_SPEED, WALK_SPEED_Y
+    from naoloc.geometry import Pose2D
+    from naoloc.navigation.route import pursuit
+
+    route = [Pose2D(0.0, 0.0)]
+    cmd = pursuit(Pose2D(*here), route, goal_theta=0.0, align_m=1.0)
+    assert abs(cmd.x) <= WALK_SPEED + 1e-12 and abs(cmd.y) <= WALK_SPEED_Y + 1e-12
+    norm = math.hypot(cmd.x, cmd.y)
+    assert norm > 0.05  # it walks while it turns
+    assert (cmd.x / norm, cmd.y / norm) == pytest.approx(moves, abs=1e-9)
+    if turns == "none":
+        assert cmd.theta == pytest.approx(0.0)
+    elif turns == "right":
+        assert cmd.theta < 0
+    else:
+        assert abs(cmd.theta) > 0.3
+    # Beyond align_m, or without a goal heading, the pursuit of before: a goal behind is
+    # turned to in place first.
+    far = pursuit(Pose2D(*here), route, goal_theta=0.0, align_m=0.5)
+    plain = pursuit(Pose2D(*here), route)
+    assert far == plain
+    if here[2] == 0.0:
+        assert (plain.x, plain.y) == (0.0, 0.0) and plain.theta != 0.0
+
+
 class _Motion:
     """ALMotion's walk calls, recorded."""
 

@@ -16,8 +16,8 @@ from naoloc.navigation.grid import (
     block_outside,
     grid_from_map,
     grid_of_map,
-    path_length,
 )
+from naoloc.navigation.route import path_length
 
 
 def _clear(grid: FloorGrid, path: list[Pose2D], start: Pose2D) -> bool:
