@@ -1131,6 +1131,19 @@ class GoHomeConfig(_Model):
     back_off_m: float = Field(
         0.2, gt=0, le=1.0, description="how far it steps back after a contact (m)"
     )
+    step_away_m: float = Field(
+        0.3,
+        ge=0,
+        le=1.0,
+        description="after a look that found no pose it steps this far away from the walls "
+        "that look saw near (m; 0: it looks again where it stands)",
+    )
+    near_wall_m: float = Field(
+        1.0,
+        gt=0,
+        le=3.0,
+        description="walls nearer than this push the step away (m)",
+    )
     align_m: float = Field(
         1.0,
         ge=0,

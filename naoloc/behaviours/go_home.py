@@ -6,7 +6,10 @@ map implies (:mod:`naoloc.navigation.grid`), steered by pure pursuit
 (:mod:`naoloc.navigation.route`) from the belief's pose, which every camera frame updates
 while it walks (:class:`naoloc.behaviours.track.Tracker`). It re-plans from the belief every
 :data:`REPLAN_S` seconds. It stops to look only when the belief is lost, at most
-``go_home.max_tries`` looks in all. Within :data:`APPROACH_M` of home it stops walking and
+``go_home.max_tries`` looks in all; after a look that found no pose it first steps
+``go_home.step_away_m`` away from the walls that look saw near (a robot pressed into a
+corner sees too little of the room). Within ``go_home.align_m`` of home it turns to home's
+heading as it walks (omnidirectionally). Within :data:`APPROACH_M` of home it stops walking and
 steps onto home with short ``moveTo`` steps, refining the belief standing between them
 with the floor lines of a standstill look's head sweep (its far yaws see the walls beside
 and behind, which the walking head's swing does not: home's position along the way it
@@ -41,11 +44,12 @@ from naoloc.config import Config
 from naoloc.constants import WALK_SPEED
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
 from naoloc.localization.localizer import Localizer, PoseEstimate
-from naoloc.localization.observations import Relocalize
+from naoloc.localization.observations import LineScan, Relocalize
 from naoloc.mapping.map import VisualMap
+from naoloc.navigation.clearance import away_from_walls
 from naoloc.navigation.grid import BLOCKED, FloorGrid, NoPath, grid_of_map
 from naoloc.navigation.route import path_length, pursuit, remaining
-from naoloc.robot import Robot
+from naoloc.robot import Robot, pose_of
 
 __all__ = ["GoHomeResult", "go_home"]
 
@@ -154,6 +158,7 @@ def go_home(
     tol = cfg.go_home.tolerance_m
     loc = localizer if localizer is not None else Localizer(vmap, cfg.localize.filter)
     first = localize(robot, vmap, cfg, localizer=loc)
+    last = first
     looks = 1
     result = GoHomeResult(first.estimate, looks, False, first)
     result.stops.append(first.estimate)
@@ -178,9 +183,13 @@ def go_home(
                     break
                 if on_step is not None:
                     on_step("lost: stopping to look")
+                if not last.estimate.found and not _step_away(robot, last, cfg):
+                    result.reason = f"blocked: {TOUCHING}, stepping away from a wall"
+                    break
                 # Lost: the belief is worth nothing; look from standstill, globally.
                 loc.update(Relocalize(robot_clock(robot)))
-                result.stops.append(localize(robot, vmap, cfg, localizer=loc).estimate)
+                last = localize(robot, vmap, cfg, localizer=loc)
+                result.stops.append(last.estimate)
                 looks += 1
                 route, lost = [], 0
                 continue
@@ -235,6 +244,27 @@ def go_home(
         result.truth = truth
         result.error_m = math.hypot(truth.x - home.x, truth.y - home.y)
     return result
+
+
+def _step_away(robot: Robot, look: Localization, cfg: Config) -> bool:
+    """After a look that found no pose: step ``go_home.step_away_m`` away from the walls
+    that look's floor lines saw within ``go_home.near_wall_m`` (pressed into a corner or
+    facing a wall from a few decimetres the cameras see too little of the room), blocking.
+    No step when no wall was near or the walls around cancel out.
+
+    Returns:
+        Whether the robot stands free afterwards (the simulator's contacts).
+    """
+    step = cfg.go_home.step_away_m
+    scans = [o for o in look.observations if isinstance(o, LineScan)]
+    way = away_from_walls(scans, pose_of(robot.motion, True), cfg.go_home.near_wall_m)
+    if step <= 0.0 or way is None:
+        return True
+    try:
+        robot.motion.moveTo(step * way[0], step * way[1], 0.0)
+    finally:
+        robot.motion.stopMove()
+    return not touching(robot)
 
 
 def _back_off(robot: Robot, grid: FloorGrid, est: PoseEstimate, back_m: float) -> bool:
