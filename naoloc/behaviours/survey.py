@@ -279,7 +279,7 @@ def survey(
                 }
             if on_start is not None:
                 on_start(result.meta)
-            eye = FloorEye(robot, cfg.camera, lens=lens_of(cfg), still=True)
+            eye = FloorEye(robot, cfg.camera, lens=lens_of(cfg))
             try:
                 _walk_laps(robot, cfg, camera, eye, origin, command_origin, yaw, pitch, turn,
                            result, on_frame, progress, on_far, probe.fx)  # fmt: skip
@@ -312,7 +312,7 @@ def _detect_side(robot: Robot, cfg: Config, head_pitch: float, result: SurveyRes
     Raises:
         SurveyError: No side can be told from the lines seen (before any step).
     """
-    eye = FloorEye(robot, cfg.camera, "naoloc_side", lens=lens_of(cfg), still=True)
+    eye = FloorEye(robot, cfg.camera, "naoloc_side", lens=lens_of(cfg))
     offset = cfg.survey.wall_offset_m
     try:
         seen = detect_wall_by_floorline(robot, eye, head_pitch, offset=offset)
@@ -488,14 +488,14 @@ def _walk_laps(
                         raise watch.blocked(f"moveTo failed; {_ahead(robot, eye)}")
                     watch.stepped(length_now)
                     look(robot, picture_yaw, pitch)
-                    keyframe, odometry = camera.keyframe(origin, command_origin, still=True)
+                    keyframe, odometry = camera.keyframe(origin, command_origin)
                     motion = watch.picture(_gray(keyframe.image), here.distance(keyframe.pose))
                     far: list[tuple[Keyframe, Pose2D]] = []
                     far_front: WallLine | None = None
                     for _ in range(cfg.survey.far_per_stop if fars else 0):
                         far_yaw = fars[result.far_frames % len(fars)]
                         look(robot, far_yaw, cfg.survey.far_pitch_rad)
-                        far.append(camera.keyframe(origin, command_origin, still=True))
+                        far.append(camera.keyframe(origin, command_origin))
                         result.far_frames += 1
                         if far_yaw == 0.0:  # the wall ahead: its line is the watch's too,
                             # and the map's where it is farther than the survey steers by

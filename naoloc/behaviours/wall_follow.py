@@ -72,8 +72,6 @@ class FloorEye:
         like: The survey's camera config (resolution and colorspace are reused).
         name: Subscriber name.
         lens: The camera's lens, undone by the floor-line detector (None: a pinhole).
-        still: The robot stands whenever it looks (a survey between its steps): each
-            view reads the camera's pose once (:meth:`view`).
     """
 
     def __init__(
@@ -82,11 +80,9 @@ class FloorEye:
         like: CameraConfig,
         name: str = "naoloc_floor",
         lens: Lens | None = None,
-        still: bool = False,
     ) -> None:
         self.robot = robot
         self.lens = lens
-        self.still = still
         self.last_pitch: float | None = None  # the pitch of measure_front's last line
         cfg = CameraConfig(
             index=BOTTOM_CAMERA,
@@ -137,15 +133,14 @@ class FloorEye:
         image, hfov, vfov, pose = view
         return detect_wall_lines(image, hfov, vfov, pose, lens=self.lens)
 
-    def view(self, still: bool | None = None) -> tuple[np.ndarray, float, float, np.ndarray] | None:
+    def view(self, still: bool = False) -> tuple[np.ndarray, float, float, np.ndarray] | None:
         """A picture (BGR), its fields of view (rad) and the camera's pose in FRAME_ROBOT;
         None when the robot reports no usable camera pose.
 
         Args:
             still: The head rests (after a blocking head move): the camera's pose is read
-                once, before the image (None: as the eye was made).
+                once, before the image.
         """
-        still = self.still if still is None else still
         motion = self.robot.motion
         # The camera's pose read just before and after the image, halfway between (the
         # head may be moving: see Camera.keyframe).
