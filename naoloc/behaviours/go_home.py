@@ -256,9 +256,11 @@ def _step_away(robot: Robot, look: Localization, cfg: Config) -> bool:
         Whether the robot stands free afterwards (the simulator's contacts).
     """
     step = cfg.go_home.step_away_m
+    if step <= 0.0:
+        return True
     scans = [o for o in look.observations if isinstance(o, LineScan)]
     way = away_from_walls(scans, pose_of(robot.motion, True), cfg.go_home.near_wall_m)
-    if step <= 0.0 or way is None:
+    if way is None:
         return True
     try:
         robot.motion.moveTo(step * way[0], step * way[1], 0.0)

@@ -43,9 +43,9 @@ def away_from_walls(
         for line in scan.lines:
             normal = rel.theta + line.normal
             nx, ny = math.cos(normal), math.sin(normal)
-            foot_x = rel.x + line.distance * math.cos(rel.theta + line.normal)
-            foot_y = rel.y + line.distance * math.sin(rel.theta + line.normal)
-            distance = foot_x * nx + foot_y * ny  # from the origin now, along the normal
+            # The line's foot is rel + line.distance * n: its distance from the origin now,
+            # along the normal.
+            distance = rel.x * nx + rel.y * ny + line.distance
             if distance < 0.0:  # the robot has passed to the line's other side
                 nx, ny, distance = -nx, -ny, -distance
             if distance >= near_m:
