@@ -828,8 +828,17 @@ class FilterTuning(_Model):
     informative_features: int = Field(
         40,
         ge=0,
-        description="a picture with fewer features says too little to judge the leading "
-        "hypothesis by",
+        description="a picture with fewer features says too little to prefer another place "
+        "to the leading one, or to judge a place unless the map expects its landmarks in view",
+    )
+    expected_landmarks: int = Field(
+        300,
+        ge=0,
+        description="landmarks the map must put in a picture's view from a place (within "
+        "expect_range_m) for the picture to judge that place even without a match (0: off)",
+    )
+    expect_range_m: float = Field(
+        4.0, gt=0, description="farthest landmark a picture is expected to show (m)"
     )
     line_evidence_cap_nats: float = Field(
         4.0,

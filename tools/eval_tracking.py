@@ -267,15 +267,18 @@ def _figures(points: list[dict[str, Any]]) -> dict[str, Any]:
     conf = np.array([p["confidence"] for p in points if p["found"] and p["error_m"] is not None])
     frames = [p for p in points if p.get("frame", True)]
     cpu = np.array([p["cpu_s"] for p in frames]) * 1e3
-    span = points[-1]["t"] - points[0]["t"]
+    # Robot time tracked: the steps between consecutive poses (a gap of a second or more, or
+    # a clock that went back, starts another walk or room).
+    steps = np.diff([p["t"] for p in points])
+    span = float(steps[(steps > 0) & (steps < 1.0)].sum())
     return {
         "frames": len(points),
         "no_pose": round(1.0 - len(errs) / len(points), 3),
         "median_m": round(float(np.median(errs)), 4) if errs.size else None,
         "p90_m": round(float(np.quantile(errs, 0.9)), 4) if errs.size else None,
         "confident_wrong": int(np.sum((errs > 0.3) & (conf >= 0.5))),
-        "rate_hz": round((len(points) - 1) / span, 1) if span > 0 else None,
-        "frame_hz": round((len(frames) - 1) / span, 1) if span > 0 else None,
+        "rate_hz": round(len(points) / span, 1) if span > 0 else None,
+        "frame_hz": round(len(frames) / span, 1) if span > 0 else None,
         "cpu_ms_median": round(float(np.median(cpu)), 1),
         "cpu_ms_p90": round(float(np.quantile(cpu, 0.9)), 1),
     }

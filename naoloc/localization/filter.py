@@ -33,7 +33,12 @@ from naoloc.localization.hypothesis import (
     motion_step,
 )
 from naoloc.localization.line_poses import line_poses
-from naoloc.localization.pictures import PictureMatches, distinct_only, picture_log_ratio
+from naoloc.localization.pictures import (
+    PictureMatches,
+    distinct_only,
+    landmarks_in_view,
+    picture_log_ratio,
+)
 from naoloc.localization.walls import WallMap, fit_line
 from naoloc.mapping.planar_ransac import planar_hypotheses
 from naoloc.perception.floorline import WallLine
@@ -88,6 +93,9 @@ class MultiHypothesisFilter:
         turn_scale: The robot's odometry turn per true turn, as the survey measured it.
         map_floor_m: The map's own position error (std, m), added to the reported
             covariance; None: ``tun.map_floor_m``. The larger of the two is used.
+        landmarks: ``(n, 3)`` the map's landmarks (map frame, m): a picture taken where
+            the map puts many of them in view judges a place even when it matches none
+            (None: only pictures the map explains somewhere judge).
     """
 
     def __init__(
@@ -96,8 +104,10 @@ class MultiHypothesisFilter:
         tun: FilterTuning,
         turn_scale: float = 1.0,
         map_floor_m: float | None = None,
+        landmarks: np.ndarray | None = None,
     ) -> None:
         self.walls = walls
+        self.landmarks = np.zeros((0, 3)) if landmarks is None else landmarks
         self.tun = tun
         self.map_floor_m = max(tun.map_floor_m, map_floor_m or 0.0)
         self.turn_scale = turn_scale if turn_scale > 0 else 1.0
@@ -144,7 +154,7 @@ class MultiHypothesisFilter:
             if evidence.features > 0:
                 self.pictures += 1
             self._propose(evidence)
-            if leader is not None and evidence.features >= self.tun.informative_features:
+            if leader is not None:
                 self._watch(leader, evidence, gains)
         elif evidence and self.walls is not None:
             self._shift_to_lines(evidence)
@@ -240,14 +250,19 @@ class MultiHypothesisFilter:
         watches its likelihood's short- against its long-term average the same way).
 
         The leader is contradicted (the robot was carried, or the leader is wrong) when two
-        informative pictures in a row are explained clearly (``2 * contradiction_nats``) and
-        ``contradiction_nats`` better by another hypothesis, or a new one a picture proposed;
-        or when the evidence its informative pictures gave lately (``recent_rate``'s fast
-        average) fell below ``fade_share`` of what they usually gave (``usual_rate``'s slow
-        average, which stops following while the fast one is below ``usual_hold_share`` of
-        it). A picture is informative when the map could explain it somewhere (its PnP
-        found a pose, or it has ``min_inliers`` distinctive matches): a blurred or unmapped
-        view says nothing.
+        pictures in a row with ``informative_features`` are explained clearly (``2 *
+        contradiction_nats``) and ``contradiction_nats`` better by another hypothesis, or a
+        new one a picture proposed; or when the evidence its informative pictures gave
+        lately (``recent_rate``'s fast average) fell below ``fade_share`` of what they
+        usually gave (``usual_rate``'s slow average, which stops following while the fast
+        one is below ``usual_hold_share`` of it). A picture is informative when it has
+        ``informative_features`` and the map could explain it somewhere (its PnP found a
+        pose, or it has ``min_inliers`` distinctive matches); and, whatever its features,
+        for a place from which the map puts ``expected_landmarks`` of its landmarks in the
+        picture's view (negative information: the place should have shown them, even a view
+        with no features). A blurred or unmapped view, seen from a place that expects
+        little, says nothing. When the leader fades, so do the places this picture did not
+        explain better: their past, too, no longer speaks for them.
         While contradicted, the window keeps only the latest observations: what was seen
         before may be of another place (a carried robot's odometry did not move).
         """
@@ -255,32 +270,52 @@ class MultiHypothesisFilter:
         gain = gains.get(id(leader), 0.0)
         fresh = [picture_log_ratio(m, h.pose, tun) for h in self.hypotheses if id(h) not in gains]
         best = max([*gains.values(), *fresh], default=0.0)
+        rich = m.features >= tun.informative_features
         behind = best > 2 * tun.contradiction_nats and best - gain > tun.contradiction_nats
-        self._behind = self._behind + 1 if behind else 0
-        if m.proposal is not None or m.distinct.shape[0] >= tun.min_inliers:
-            for h in self.hypotheses:
-                if id(h) not in gains:
-                    continue
-                # The more distinctive matches (or its own PnP pose), the more a picture
-                # says on its own: recent_rate at min_pnp_inliers of them, all at once at
-                # min_pnp_inliers / recent_rate.
-                rate = (
-                    1.0
-                    if m.proposal is not None
-                    else min(1.0, tun.recent_rate * m.distinct.shape[0] / tun.min_pnp_inliers)
-                )
-                h.recent += rate * (gains[id(h)] - h.recent)
-                if h.recent >= tun.usual_hold_share * h.usual:  # not while it is fading
-                    h.usual += tun.usual_rate * (gains[id(h)] - h.usual)
+        if rich:
+            self._behind = self._behind + 1 if behind else 0
+        explained = rich and (m.proposal is not None or m.distinct.shape[0] >= tun.min_inliers)
+        for h in self.hypotheses:
+            if id(h) not in gains:
+                continue
+            # The more distinctive matches (or its own PnP pose), the more a picture says
+            # on its own: recent_rate at min_pnp_inliers of them, all at once at
+            # min_pnp_inliers / recent_rate; a picture the map explains nowhere, recent_rate
+            # where the map expects its landmarks in view.
+            if m.proposal is not None:
+                rate = 1.0
+            elif explained:
+                rate = min(1.0, tun.recent_rate * m.distinct.shape[0] / tun.min_pnp_inliers)
+            elif self._expects(h, m):
+                rate = tun.recent_rate
+            else:
+                continue
+            h.recent += rate * (gains[id(h)] - h.recent)
+            if h.recent >= tun.usual_hold_share * h.usual:  # not while it is fading
+                h.usual += tun.usual_rate * (gains[id(h)] - h.usual)
         faded = (
             leader.usual > tun.contradiction_nats and leader.recent < tun.fade_share * leader.usual
         )
-        if faded:  # its past no longer speaks for it: it competes on what is seen now
-            leader.score = min(leader.score, 0.0)
+        if faded:
+            # Its past no longer speaks for it, nor for the places that explain what is seen
+            # now no better: they compete on what is seen now (places this picture proposed
+            # have no past).
+            low = tun.fade_share * leader.usual
+            for h in self.hypotheses:
+                if h is leader or (id(h) in gains and h.recent < low):
+                    h.score = min(h.score, 0.0)
         self.contradicted = self._behind >= 2 or faded
         if self.contradicted:
             while len(self.window) > 2:
                 self.window.popleft()
+
+    def _expects(self, h: Hypothesis, m: PictureMatches) -> bool:
+        """Whether the map puts ``expected_landmarks`` of its landmarks in the picture's
+        view from ``h`` (so that a picture matching none of them speaks against it)."""
+        need = self.tun.expected_landmarks
+        if need <= 0:
+            return False
+        return landmarks_in_view(self.landmarks, m, h.pose, self.tun.expect_range_m) >= need
 
     def _shift_to_lines(self, lines: tuple[WallLine, ...]) -> None:
         """Siblings of the leading hypotheses moved so that a line they leave unexplained

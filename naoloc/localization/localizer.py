@@ -111,8 +111,10 @@ def decide(belief: Belief, tun: FilterTuning) -> tuple[Status, str]:
       ``verdict_pictures`` pictures with features were seen: not the mapped room, unless a
       probable place has shown the room before (``room_seen`` of ``null_nats`` or more: the
       robot was carried, or lost its place, in the mapped room): lost;
-    - the best place is probable (``confident``), its spread narrow (``max_sigma_*``) and
-      the latest picture does not contradict it: tracking;
+    - the best place is probable (``confident``), its spread narrow (``max_sigma_*``),
+      its own pictures showed it (``null_nats`` of their evidence: floor lines alone fit
+      every corner of a rectangle alike) and the latest picture does not contradict it:
+      tracking;
     - otherwise lost (with why).
     """
     enough = belief.pictures >= tun.verdict_pictures
@@ -127,6 +129,8 @@ def decide(belief: Belief, tun: FilterTuning) -> tuple[Status, str]:
         return Status.NOT_MAPPED, "the observations fit no place of the map"
     if belief.contradicted:
         return Status.LOST, "the latest picture puts the robot elsewhere"
+    if belief.seen_score < tun.null_nats:
+        return Status.LOST, "no picture has shown this place yet"
     if belief.probability < tun.confident:
         return Status.LOST, f"unsure between places (best {belief.probability:.2f})"
     pos, head = MultiHypothesisFilter.sigma(belief.cov)
@@ -148,8 +152,8 @@ class Localizer:
         self.vmap = vmap
         self.tuning = tuning if tuning is not None else FilterTuning()
         self.seed = seed
-        self.filter = self._new_filter()
         self.landmarks = LandmarkIndex(vmap)
+        self.filter = self._new_filter()
         self.log: list[Observation] = []
         self.cpu_s = 0.0
         self._pictures = 0
@@ -157,7 +161,7 @@ class Localizer:
     def _new_filter(self) -> MultiHypothesisFilter:
         return MultiHypothesisFilter(
             wall_map(self.vmap.meta), self.tuning, turn_scale_of(self.vmap.meta),
-            keyframe_sigma_of(self.vmap.meta),
+            keyframe_sigma_of(self.vmap.meta), self.landmarks.points,
         )  # fmt: skip
 
     def update(self, obs: Observation) -> None:

@@ -34,6 +34,7 @@ __all__ = [
     "LandmarkIndex",
     "PictureMatches",
     "distinct_only",
+    "landmarks_in_view",
     "match_picture",
     "mixture",
     "picture_log_ratio",
@@ -63,6 +64,7 @@ class PictureMatches:
         distinct: ``(d, 3)`` the nearest landmark of each feature that passes Lowe's ratio
             test over the whole map (:meth:`LandmarkIndex.candidates`).
         distinct_pixels: ``(d, 2)`` those features' pixels.
+        size_px: The image's width and height, px (the map's pinhole model).
     """
 
     points: np.ndarray
@@ -79,6 +81,7 @@ class PictureMatches:
     proposal_inliers: int
     distinct: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     distinct_pixels: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    size_px: tuple[int, int] = (0, 0)
 
     def __len__(self) -> int:
         """Features with landmark candidates."""
@@ -171,8 +174,9 @@ def match_picture(
     none3, none2, none1 = np.zeros((0, 3)), np.zeros((0, 2)), np.zeros(0, np.int64)
     if len(feats) == 0:
         return PictureMatches(
-            none3, none2, none1, 1, none3, none2, projection, area, 0, (), None, 0
-        )
+            none3, none2, none1, 1, none3, none2, projection, area, 0, (), None, 0,
+            size_px=(cam.width, cam.height),
+        )  # fmt: skip
     cands = retrieve(vmap, feats.descriptors, tun.candidates)
     idx, obj = _landmark_matches(vmap, hamming_matcher(vmap.vocabulary.binary), feats, cands)
     pixels = feats.xy[idx].astype(np.float64)
@@ -183,7 +187,7 @@ def match_picture(
     first = np.flatnonzero(distinct) * tun.neighbours  # each distinctive feature's nearest
     return PictureMatches(
         points, px, group, tun.neighbours, obj, pixels, projection, area, len(feats),
-        tuple(cands), proposal, inliers, points[first], px[first],
+        tuple(cands), proposal, inliers, points[first], px[first], (cam.width, cam.height),
     )  # fmt: skip
 
 
@@ -313,7 +317,7 @@ def distinct_only(m: PictureMatches) -> PictureMatches:
     return PictureMatches(
         m.distinct, m.distinct_pixels, np.arange(n), 1, m.matched, m.matched_pixels,
         m.projection, m.area_px, n, m.retrieved, m.proposal, m.proposal_inliers,
-        m.distinct, m.distinct_pixels,
+        m.distinct, m.distinct_pixels, m.size_px,
     )  # fmt: skip
 
 
@@ -325,3 +329,37 @@ def picture_log_ratio(m: PictureMatches, pose: np.ndarray, tun: FilterTuning) ->
     res, front, _ = reprojection(m, pose)
     _, ratios = mixture(m, res, front, tun.pixel_sigma_px**2 * np.eye(2), tun)
     return min(tun.picture_evidence_cap_nats, float(tun.match_weight * ratios.sum()))
+
+
+def landmarks_in_view(
+    points: np.ndarray, m: PictureMatches, pose: np.ndarray, range_m: float
+) -> int:
+    """How many of the map's landmarks the picture would show from ``pose``: within
+    ``range_m`` of the robot, in front of the camera and inside the image.
+
+    Where the map expects many, a picture that matches none of them speaks against the pose
+    (negative information); where it expects few (an unmapped view), it says nothing.
+
+    Args:
+        points: ``(n, 3)`` the map's landmarks (map frame, m).
+        m: The picture (its projection and size; the matches are not used).
+        pose: ``(x, y, theta)`` of the robot at capture, map frame.
+        range_m: The farthest landmark counted (m).
+    """
+    width, height = m.size_px
+    if points.shape[0] == 0 or width <= 0 or height <= 0:
+        return 0
+    dx, dy = points[:, 0] - pose[0], points[:, 1] - pose[1]
+    near = dx * dx + dy * dy < range_m * range_m
+    if not near.any():
+        return 0
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    dx, dy = dx[near], dy[near]
+    pr = np.column_stack([c * dx + s * dy, -s * dx + c * dy, points[near, 2]])
+    h = pr @ m.projection[:, :3].T + m.projection[:, 3]
+    z = h[:, 2]
+    front = z > 0.1
+    zs = np.where(front, z, 1.0)
+    u, v = h[:, 0] / zs, h[:, 1] / zs
+    inside = front & (u >= 0) & (u < width) & (v >= 0) & (v < height)
+    return int(np.count_nonzero(inside))

@@ -15,7 +15,13 @@ from naoloc.localization.filter import Belief, MultiHypothesisFilter
 from naoloc.localization.hypothesis import Hypothesis, motion_step
 from naoloc.localization.line_poses import line_poses
 from naoloc.localization.localizer import Status, decide
-from naoloc.localization.pictures import PictureMatches, mixture, picture_log_ratio, reprojection
+from naoloc.localization.pictures import (
+    PictureMatches,
+    landmarks_in_view,
+    mixture,
+    picture_log_ratio,
+    reprojection,
+)
 from naoloc.localization.walls import WallMap, fit_line, wall_map
 from naoloc.perception.floorline import WallLine
 
@@ -176,6 +182,7 @@ def _belief(**kw: object) -> Belief:
         ({"probability": 0.6}, Status.LOST),  # two places share the belief
         ({"cov": np.diag([0.3**2, 0.02**2, 0.01**2])}, Status.LOST),  # too wide
         ({"contradicted": True}, Status.LOST),  # the latest picture says elsewhere
+        ({"seen_score": 10.0}, Status.LOST),  # floor lines alone: any corner fits them
         ({"probability": 0.2, "other_room": 0.8}, Status.NOT_MAPPED),
         ({"probability": 0.2, "other_room": 0.8, "pictures": 2}, Status.LOST),  # too early
         ({"pose": None, "cov": None, "pictures": 9}, Status.NOT_MAPPED),
@@ -324,3 +331,64 @@ def test_a_recognised_room_stays_recognised_when_the_place_is_lost() -> None:
     for seed in range(10, 30):
         g.observe(_picture(truth + np.array([1.3, 0.9, 2.0]), seed=seed, wrong=1.0), odo)
     assert decide(g.belief(), TUN)[0] is Status.NOT_MAPPED
+
+
+def _empty(pose: np.ndarray) -> PictureMatches:
+    """A picture from ``pose`` with no features at all (a blank view), 320 x 240 px."""
+    m = _picture(pose, n=1)
+    none3, none2 = np.zeros((0, 3)), np.zeros((0, 2))
+    return PictureMatches(none3, none2, np.zeros(0, np.int64), 1, none3, none2, m.projection,
+                          320 * 240.0, 0, (), None, 0, size_px=(320, 240))  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("local", "counted"),
+    [
+        ((2.0, 0.0, 0.45), True),  # ahead, at the camera's height
+        ((2.0, 0.3, 1.0), True),
+        ((-2.0, 0.0, 0.45), False),  # behind
+        ((2.0, 3.0, 0.45), False),  # beside: outside the image
+        ((5.0, 0.0, 0.45), False),  # beyond the range
+        ((2.0, 0.0, 6.0), False),  # above the image
+    ],
+)
+def test_the_landmarks_a_picture_should_show_from_a_pose(local: tuple, counted: bool) -> None:
+    pose = np.array([1.0, -0.5, 0.8])
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    point = np.array([[pose[0] + c * local[0] - s * local[1],
+                       pose[1] + s * local[0] + c * local[1], local[2]]])  # fmt: skip
+    m = _empty(pose)
+    assert landmarks_in_view(point, m, pose, 4.0) == int(counted)
+    assert landmarks_in_view(point, dataclasses.replace(m, size_px=(0, 0)), pose, 4.0) == 0
+
+
+def test_a_blank_view_where_the_map_expects_landmarks_fades_the_place() -> None:
+    """Negative information: a carried robot facing a blank wall, where the leading place's
+    map shows many landmarks in view, explains none of them; within a few pictures the
+    place gives no pose, and a place beside it that explains the view no better loses its
+    past too. With no landmarks in view from the place, the same pictures say nothing."""
+    truth = np.array([2.0, 0.5, 0.7])
+    rng = np.random.default_rng(7)
+    n = TUN.expected_landmarks + 20
+    local = np.column_stack([rng.uniform(2, 3, n), rng.uniform(-0.5, 0.5, n),
+                             rng.uniform(0.3, 0.6, n)])  # fmt: skip
+    c, s = math.cos(truth[2]), math.sin(truth[2])
+    expected = np.column_stack([truth[0] + c * local[:, 0] - s * local[:, 1],
+                                truth[1] + s * local[:, 0] + c * local[:, 1],
+                                local[:, 2]])  # fmt: skip
+    assert landmarks_in_view(expected, _empty(truth), truth, TUN.expect_range_m) == n
+    for landmarks, fades in ((expected, True), (None, False), (expected[:10], False)):
+        f = MultiHypothesisFilter(WALLS, TUN, landmarks=landmarks)
+        odo = Pose2D(0.0, 0.0, 0.0)
+        f.observe(None, odo)
+        f.set_pose(truth, np.diag([0.01**2, 0.01**2, 0.005**2]), 80.0)
+        beside = Hypothesis(truth + np.array([0.3, 0.0, 0.0]), np.eye(3) * 1e-4, TUN, 70.0)
+        f.hypotheses.append(beside)
+        for h in f.hypotheses:
+            h.usual = h.recent = 3 * TUN.contradiction_nats
+            h.seen_score = 2 * TUN.null_nats  # its pictures showed the room
+        for _ in range(5):
+            f.observe(_empty(truth), odo)
+        assert f.contradicted is fades
+        assert (decide(f.belief(), TUN)[0] is Status.TRACKING) is not fades
+        assert all(h.score <= 0.0 for h in f.hypotheses) is fades
