@@ -20,7 +20,10 @@ floor grid for ``--walk-m`` metres with the pose tracked at every camera frame
 carries the robot to a random free pose without telling its odometry, and it walks on. A
 walk has recovered when the pose is tracked within 0.45 m of the truth for 10 s of robot
 time after the carry; the time to recover and the confident wrong poses in between
-(more than 0.3 m off at confidence >= 0.5) are reported.
+(more than 0.3 m off at confidence >= 0.5) are reported. With ``--recover-by look`` a
+carried robot that has been lost for 20 frames stops and looks from standstill with the
+same filter (:func:`naoloc.behaviours.localize.localize`, as go-home does), then walks on
+from the pose it found; by default it walks on blind (the protocol of stops 37-45).
 
 The maps are built as ``naoloc build-map --keep-unchecked`` would: a room whose map fails a
 check is said so, and the kidnap figures are given again over the maps that pass.
@@ -115,6 +118,7 @@ def one_walk(
     tracker = Tracker(robot, loc, cfg)
     points: list[TrackPoint] = []
     ends: list[str] = []  # why each walk_route ended
+    looks: list[tuple[float, float]] = []  # (start, robot s) of each look after the carry
     carried_at = None
     try:
         if args.kidnap:
@@ -131,9 +135,22 @@ def one_walk(
             est = loc.pose()
             here = est.pose() if est.found else first.estimate.pose()
             rest = random_route(grid, here, args.walk_m / 2, rng)
-            pts, why = walk_route(robot, tracker, rest, max_s=args.walk_m / 0.1, lost_steps=10**6)
-            points += pts
-            ends.append(why)
+            t_walk = carried_at + args.walk_m / 0.1
+            while True:
+                left_s = t_walk - robot_clock(robot)
+                if args.recover_by == "look":
+                    pts, why = walk_route(robot, tracker, rest, max_s=left_s)
+                else:
+                    pts, why = walk_route(robot, tracker, rest, max_s=left_s, lost_steps=10**6)
+                points += pts
+                ends.append(why)
+                if why != "lost" or robot_clock(robot) >= t_walk:
+                    break
+                # Lost: stop and look, as go-home does (the same filter), then walk on.
+                look = localize(robot, vmap, cfg, localizer=loc)
+                looks.append((robot_clock(robot) - look.robot_s, look.robot_s))
+                if look.estimate.found:
+                    rest = random_route(grid, look.estimate.pose(), args.walk_m / 4, rng)
             if why == "blocked":  # stopped at a contact: it tracks standing, head sweeping
                 t_end = robot_clock(robot) + RECOVERED_S + 5.0
                 while robot_clock(robot) < t_end:
@@ -158,6 +175,7 @@ def one_walk(
     ]
     out["carried_at"] = carried_at
     out["ends"] = ends
+    out["looks"] = looks
     return out
 
 
@@ -195,6 +213,13 @@ def main() -> int:
     parser.add_argument("--walk-m", type=float, default=10.0, help="length of a walk (m)")
     parser.add_argument("--kidnap", action="store_true", help="carry the robot halfway")
     parser.add_argument("--mixed", action="store_true", help="rooms of every kind")
+    parser.add_argument(
+        "--recover-by",
+        choices=("walk", "look"),
+        default="walk",
+        help="after a carry, a lost robot walks on (walk) or stops to look after 20 frames "
+        "without a pose, as go-home does (look)",
+    )
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args()
     cv2.setNumThreads(1)
