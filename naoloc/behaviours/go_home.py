@@ -51,7 +51,7 @@ from naoloc.navigation.grid import BLOCKED, FloorGrid, NoPath, grid_of_map
 from naoloc.navigation.route import path_length, pursuit, remaining
 from naoloc.robot import Robot, pose_of
 
-__all__ = ["GoHomeResult", "go_home"]
+__all__ = ["GoHomeResult", "go_home", "next_sweep"]
 
 # Re-plan the path from the belief this often while walking (s of robot time).
 REPLAN_S = 3.0
@@ -303,6 +303,20 @@ def _point(
     return point
 
 
+def next_sweep(yaws: tuple[float, ...], head_yaw: float) -> tuple[float, ...]:
+    """The head yaws of a sweep (rad) in the order that moves the head least from
+    ``head_yaw``: from the nearer end of the range to the other.
+
+    A floor-line sweep's order does not matter to the filter, the head's travel does: after
+    a sweep that ended at -2 rad, the next goes up from there (4 rad) rather than back
+    through the middle (8 rad).
+    """
+    ascending = tuple(sorted(yaws))
+    if abs(head_yaw - ascending[-1]) < abs(head_yaw - ascending[0]):
+        return ascending[::-1]
+    return ascending
+
+
 def _final_approach(
     robot: Robot,
     tracker: Tracker,
@@ -314,7 +328,8 @@ def _final_approach(
 ) -> bool:
     """Short steps onto home, facing map +x (the survey's start heading).
 
-    Standing, the head sweeps as a standstill look's does (:data:`SCAN_YAWS`) and the
+    Standing, the head sweeps as a standstill look's does (:data:`SCAN_YAWS`; each later
+    sweep from where the last one ended, :func:`next_sweep`) and the
     bottom camera's floor lines at each yaw go to the filter: the far yaws see the walls
     beside and behind, so the belief knows home's position along the way the robot faces,
     where the walking head's swing sees only landmarks. Then one blocking ``moveTo`` to
@@ -324,10 +339,12 @@ def _final_approach(
     Returns:
         Whether the belief ends within ``tol`` of home, facing +x within 0.1 rad.
     """
+    yaws: tuple[float, ...] = SCAN_YAWS
     for step in range(FINAL_STEPS + 1):
-        for yaw in SCAN_YAWS:
+        for yaw in yaws:
             look_lines(tracker.eyes, loc, yaw)
             result.trail.append(_point(tracker, on_point, frame=False))
+        yaws = next_sweep(SCAN_YAWS, yaws[-1])
         est = loc.pose()
         if not est.found:
             return False

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -242,3 +243,24 @@ def test_a_look_settles_on_the_beliefs_own_spread_not_the_maps_floor() -> None:
     assert own_sigma(estimate(0.04), 0.04) == pytest.approx(0.0)
     assert own_sigma(estimate(0.03), 0.04) == 0.0  # never negative
     assert own_sigma(estimate(0.05), 0.0) == pytest.approx(0.05)
+
+
+@pytest.mark.parametrize(
+    ("head_yaw", "first", "travel"),
+    [
+        (-2.0, -2.0, 4.0),  # the last sweep ended on the right: up from there
+        (2.0, 2.0, 4.0),  # ... on the left: down from there
+        (0.3, 2.0, 5.7),  # nearer the left end
+        (0.0, -2.0, 6.0),  # in the middle: one end, then the other
+    ],
+)
+def test_a_final_approach_sweep_starts_where_the_head_is(
+    head_yaw: float, first: float, travel: float
+) -> None:
+    from naoloc.behaviours.go_home import next_sweep
+    from naoloc.behaviours.localize import SCAN_YAWS
+
+    order = next_sweep(SCAN_YAWS, head_yaw)
+    assert sorted(order) == sorted(SCAN_YAWS) and order[0] == first
+    path = [head_yaw, *order]
+    assert sum(abs(b - a) for a, b in itertools.pairwise(path)) == pytest.approx(travel)
