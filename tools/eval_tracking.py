@@ -21,9 +21,10 @@ carries the robot to a random free pose without telling its odometry, and it wal
 walk has recovered when the pose is tracked within 0.45 m of the truth for 10 s of robot
 time after the carry; the time to recover and the confident wrong poses in between
 (more than 0.3 m off at confidence >= 0.5) are reported. With ``--recover-by look`` a
-carried robot that has been lost for 20 frames stops and looks from standstill with the
-same filter (:func:`naoloc.behaviours.localize.localize`, as go-home does), then walks on
-from the pose it found; by default it walks on blind (the protocol of stops 37-45).
+carried robot that has been lost for 20 frames, or is lost when a contact stopped it, stops
+and looks from standstill with the same filter (:func:`naoloc.behaviours.localize.localize`,
+as go-home does), then walks on from the pose it found; by default it walks on blind (the
+protocol of stops 37-45).
 
 The maps are built as ``naoloc build-map --keep-unchecked`` would: a room whose map fails a
 check is said so, and the kidnap figures are given again over the maps that pass.
@@ -152,6 +153,9 @@ def one_walk(
                 if look.estimate.found:
                     rest = random_route(grid, look.estimate.pose(), args.walk_m / 4, rng)
             if why == "blocked":  # stopped at a contact: it tracks standing, head sweeping
+                if args.recover_by == "look" and not loc.pose().found:  # lost: look first
+                    look = localize(robot, vmap, cfg, localizer=loc)
+                    looks.append((robot_clock(robot) - look.robot_s, look.robot_s))
                 t_end = robot_clock(robot) + RECOVERED_S + 5.0
                 while robot_clock(robot) < t_end:
                     points.append(tracker.step())
