@@ -977,6 +977,12 @@ class FilterTuning(_Model):
     trans_per_m: float = Field(0.12, ge=0, description="odometry distance noise per metre")
     rot_per_rad: float = Field(0.2, ge=0, description="odometry turn noise per radian")
     rot_per_m: float = Field(0.1, ge=0, description="odometry heading noise per metre (rad/m)")
+    slip_per_sqrt_rad: float = Field(
+        0.02,
+        ge=0,
+        description="odometry position noise per square root of the radians turned (m): a "
+        "NAO's feet slip as it turns, in place too",
+    )
     floor_m: float = Field(0.002, ge=0, description="odometry noise of any step (m)")
     floor_rad: float = Field(0.002, ge=0, description="odometry noise of any step (rad)")
     max_hypotheses: int = Field(12, ge=1, le=100, description="hypotheses kept at most")

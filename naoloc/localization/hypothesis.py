@@ -58,7 +58,8 @@ def _step_matrices(
     f = np.array([[1.0, 0.0, -s * dx - c * dy], [0.0, 1.0, c * dx - s * dy], [0.0, 0.0, 1.0]])
     if dist < 1e-5 and abs(dt) < 1e-5:
         return new, f, np.zeros((3, 3)), 0.0
-    st = tun.trans_per_m * dist + tun.floor_m
+    # The distance's error, and the feet's slip while turning (a random walk per radian).
+    st = math.sqrt((tun.trans_per_m * dist + tun.floor_m) ** 2 + tun.slip_per_sqrt_rad**2 * abs(dt))
     sr = tun.rot_per_rad * abs(dt) + tun.rot_per_m * dist + tun.floor_rad
     g = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
     q = g @ np.diag([st**2, st**2, sr**2]) @ g.T
@@ -72,7 +73,8 @@ def motion_step(
     dtheta rad).
 
     The step's noise grows with the distance and the turn (a NAO's odometry: about 12 %
-    of the distance, 20 % of the turn, 0.1 rad per metre of heading); a step of no motion
+    of the distance, 20 % of the turn, 0.1 rad per metre of heading, and 2 cm of position
+    per square root of a radian turned: the feet slip, in place too); a step of no motion
     adds none.
     """
     new, f, q, _ = _step_matrices(pose, step, tun)

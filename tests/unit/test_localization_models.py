@@ -96,6 +96,12 @@ def test_the_motion_model_moves_and_grows_uncertainty_with_the_walk() -> None:
     assert math.sqrt(grown[1, 1]) == pytest.approx(TUN.trans_per_m + TUN.floor_m)
     same, still = motion_step(pose, cov, np.zeros(3), TUN)
     assert np.array_equal(same, pose) and not still.any()  # standing adds no noise
+    # A quarter turn in place: the feet slip, so the position is less sure too.
+    turned, slipped = motion_step(pose, cov, np.array([0.0, 0.0, math.pi / 2]), TUN)
+    assert turned[:2] == pytest.approx(pose[:2])
+    sigma = math.hypot(TUN.floor_m, TUN.slip_per_sqrt_rad * math.sqrt(math.pi / 2))
+    assert math.sqrt(slipped[0, 0]) == pytest.approx(sigma)
+    assert math.sqrt(slipped[1, 1]) == pytest.approx(sigma)
 
 
 def _picture(pose: np.ndarray, n: int = 60, seed: int = 0, wrong: float = 0.0) -> PictureMatches:
