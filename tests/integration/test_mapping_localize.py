@@ -327,12 +327,18 @@ def test_the_pose_is_tracked_while_walking(carried: tuple[list[Any], list[Any]])
 
 @pytest.mark.slow
 def test_a_carried_robot_notices_and_is_found_again(carried: tuple[list[Any], list[Any]]) -> None:
-    """Fox et al.'s kidnapping: the frames after the first one that disagrees give no pose
-    (the pictures stopped fitting), and the pose is tracked again, right, by the end."""
+    """Fox et al.'s kidnapping: the frame after the first one that disagrees gives no pose
+    (the pictures stopped fitting), none after the carry is more than 0.3 m off, and the
+    pose is tracked again, right, by the end.
+
+    Since the motion model has the feet's slip when turning (stop 45), the frame after that
+    one already gives the new place, 0.23 m off (its first picture's pose); before, it
+    waited a frame longer."""
     _, after = carried
     # The picture taken just after the carry is the first to disagree: the frame after it
     # gives no pose.
-    assert not after[1].estimate.found and not after[2].estimate.found
+    assert not after[1].estimate.found
+    assert all((p.error_m or 0.0) <= 0.3 for p in after if p.estimate.found)
     last = [p for p in after[-10:] if p.estimate.found]
     assert len(last) >= 5 and all((p.error_m or 1.0) < 0.15 for p in last)
 
