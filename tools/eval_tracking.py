@@ -137,25 +137,29 @@ def one_walk(
             here = est.pose() if est.found else first.estimate.pose()
             rest = random_route(grid, here, args.walk_m / 2, rng)
             t_walk = carried_at + args.walk_m / 0.1
+            looking = args.recover_by == "look"
+            # Walking on blind: never stop for being lost (walk_route's default stops).
+            blind = {} if looking else {"lost_steps": 10**6}
+
+            def look_again() -> Any:
+                """Stop and look, as go-home does (the same filter)."""
+                look = localize(robot, vmap, cfg, localizer=loc)
+                looks.append((robot_clock(robot) - look.robot_s, look.robot_s))
+                return look
+
             while True:
                 left_s = t_walk - robot_clock(robot)
-                if args.recover_by == "look":
-                    pts, why = walk_route(robot, tracker, rest, max_s=left_s)
-                else:
-                    pts, why = walk_route(robot, tracker, rest, max_s=left_s, lost_steps=10**6)
+                pts, why = walk_route(robot, tracker, rest, max_s=left_s, **blind)
                 points += pts
                 ends.append(why)
                 if why != "lost" or robot_clock(robot) >= t_walk:
                     break
-                # Lost: stop and look, as go-home does (the same filter), then walk on.
-                look = localize(robot, vmap, cfg, localizer=loc)
-                looks.append((robot_clock(robot) - look.robot_s, look.robot_s))
+                look = look_again()  # lost: look, then walk on from where it found itself
                 if look.estimate.found:
                     rest = random_route(grid, look.estimate.pose(), args.walk_m / 4, rng)
             if why == "blocked":  # stopped at a contact: it tracks standing, head sweeping
-                if args.recover_by == "look" and not loc.pose().found:  # lost: look first
-                    look = localize(robot, vmap, cfg, localizer=loc)
-                    looks.append((robot_clock(robot) - look.robot_s, look.robot_s))
+                if looking and not loc.pose().found:  # lost: look first
+                    look_again()
                 t_end = robot_clock(robot) + RECOVERED_S + 5.0
                 while robot_clock(robot) < t_end:
                     points.append(tracker.step())

@@ -231,6 +231,17 @@ class LandmarkIndex:
         return pts.reshape(-1, 3), feats.xy[group].astype(np.float64), group, distinct
 
 
+def _to_camera(
+    points: np.ndarray, projection: np.ndarray, pose: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Map-frame points in FRAME_ROBOT at ``pose`` (``(n, 3)``, m) and their homogeneous
+    pixels through ``projection`` (``(n, 3)``)."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    dx, dy = points[:, 0] - pose[0], points[:, 1] - pose[1]
+    pr = np.column_stack([c * dx + s * dy, -s * dx + c * dy, points[:, 2]])
+    return pr, pr @ projection[:, :3].T + projection[:, 3]
+
+
 def reprojection(
     m: PictureMatches, pose: np.ndarray, jacobian: bool = False
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
@@ -246,9 +257,7 @@ def reprojection(
         in front of the camera, and ``(n, 2, 3)`` Jacobians (or None).
     """
     c, s = math.cos(pose[2]), math.sin(pose[2])
-    dx, dy = m.points[:, 0] - pose[0], m.points[:, 1] - pose[1]
-    pr = np.column_stack([c * dx + s * dy, -s * dx + c * dy, m.points[:, 2]])
-    h = pr @ m.projection[:, :3].T + m.projection[:, 3]
+    pr, h = _to_camera(m.points, m.projection, pose)
     z = h[:, 2]
     front = z > 0.05
     zs = np.where(front, z, 1.0)
@@ -353,10 +362,7 @@ def landmarks_in_view(
     near = dx * dx + dy * dy < range_m * range_m
     if not near.any():
         return 0
-    c, s = math.cos(pose[2]), math.sin(pose[2])
-    dx, dy = dx[near], dy[near]
-    pr = np.column_stack([c * dx + s * dy, -s * dx + c * dy, points[near, 2]])
-    h = pr @ m.projection[:, :3].T + m.projection[:, 3]
+    _, h = _to_camera(points[near], m.projection, pose)
     z = h[:, 2]
     front = z > 0.1
     zs = np.where(front, z, 1.0)
