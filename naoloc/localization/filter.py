@@ -516,9 +516,13 @@ class MultiHypothesisFilter:
         best = int(np.argmax(scores))
         # The room's evidence is the places' by their weight (log of the weighted mean of
         # exp(seen)): a new place the window spawned knows less of the room than an old one.
+        # What probable places showed of the room before (room_seen) still speaks for it: a
+        # robot that lost its place, or was carried, is still in the room it recognised
+        # (decide still wants the place's own pictures to have shown it).
         seens = np.array([h.seen_score for h in self.hypotheses])
         top = float(seens.max())
         seen = top + math.log(max(1e-300, float(np.sum(weights * np.exp(seens - top)))))
+        seen = max(seen, self.room_seen)
         other = 1.0 / (1.0 + math.exp(min(700.0, max(-700.0, seen - null))))
         weights = np.append(weights * (1.0 - other), other)
         h = self.hypotheses[best]

@@ -257,6 +257,27 @@ def test_the_room_evidence_is_the_places_by_their_weight() -> None:
     assert f.belief().other_room > 0.99
 
 
+@pytest.mark.parametrize(
+    ("seen", "room_seen", "status"),
+    [
+        (21.0, 0.0, Status.LOST),  # only this place showed the room: "another room" weighs
+        (21.0, 30.0, Status.TRACKING),  # the room was recognised before: the place suffices
+        (5.0, 30.0, Status.LOST),  # the room is known, but no picture has shown this place
+    ],
+)
+def test_a_recognised_room_speaks_for_a_new_place(
+    seen: float, room_seen: float, status: Status
+) -> None:
+    """A place found again after the robot lost it (or was carried) needs its own pictures
+    to show it (``null_nats``), not to prove the room once more."""
+    f = MultiHypothesisFilter(WALLS, TUN)
+    h = Hypothesis(np.array([2.0, 0.5, 0.7]), np.eye(3) * 1e-4, TUN, 50.0)
+    h.seen_score = seen
+    f.hypotheses = [h]
+    f.room_seen = room_seen
+    assert decide(f.belief(), TUN)[0] is status
+
+
 def test_a_picture_no_place_explains_does_not_contradict_the_leader() -> None:
     """A blurred view (no distinctive match, no PnP pose) explains nothing of the leader,
     nor of anywhere else: it says nothing, and the leader keeps tracking."""
