@@ -81,6 +81,8 @@ class WallPoses:
             (:func:`furniture_faces`): ``(wall, depth, xa, ya, xb, yb)``, the wall's index
             (0: x_max, 1: y_max, 2: x_min, 3: y_min), how far before that wall's floor line
             the front stands (m) and the two ends of the stretch seen, in W (m).
+        hidden: The sides that followed a front hiding their wall all along
+            (:func:`_hidden_front`): (side, the front's depth before the wall, m).
     """
 
     keyframes: list[Keyframe]
@@ -99,6 +101,7 @@ class WallPoses:
     faces: list[tuple[int, float, float, float, float, float]] = dataclasses.field(
         default_factory=list
     )
+    hidden: list[tuple[int, float]] = dataclasses.field(default_factory=list)
 
     def summary(self) -> dict[str, Any]:
         """JSON-able facts for the map's meta."""
@@ -111,6 +114,7 @@ class WallPoses:
             "lines_used": self.lines_used,
             "frames": len(self.keyframes),
             "turn_scale": None if self.turn_scale is None else round(self.turn_scale, 4),
+            "hidden": [[k, round(d, 4)] for k, d in self.hidden],
             **(
                 {}
                 if self.wall_frame is None or self.walls is None
@@ -273,6 +277,8 @@ def wall_poses(
     laterals = [fallback[i] if (di := dist[i]) is None else di - offset for i in range(len(dist))]
     ends: dict[int, tuple[float, float]] = {}
     starts: dict[int, float] = {}
+    hidden: list[tuple[int, float]] = []  # (side whose wall furniture hid, its depth)
+    hidden_at: dict[int, float] = {}  # the same per wall (side mod 4), as first found
     for k in range(n_sides - 1):
         if not frames_of[k]:
             continue  # a side the survey found itself at the end of: no step, no picture
@@ -285,6 +291,20 @@ def wall_poses(
         corner = keyframes[last].pose.inverse() * keyframes[last + 1].pose  # the turn's step
         behind = -_inward(corner, ahead, turn)
         to_go = nxt + behind  # from the last frame to side k+1's wall, m
+        depth = _hidden_front(
+            frames_of[k], frames_of[k + 1], along, vision, lines, wall_seen, to_go,
+            lengths[k] + offset - starts.get(k, 0.0), tun, known=hidden_at.get((k + 1) % 4),
+        )  # fmt: skip
+        if depth is not None:
+            hidden_at.setdefault((k + 1) % 4, depth)
+            # Side k+1 followed a front standing `depth` before its wall all along: its
+            # frames stood that much farther from the wall, and side k ended that early.
+            hidden.append((k + 1, depth))
+            for i in frames_of[k + 1]:
+                if (di := dist[i]) is not None:
+                    dist[i], wall_seen[i] = di + depth, False
+                    laterals[i] = di + depth - offset
+            to_go += depth
         ends[k] = (float(along[last]), lengths[k] - (to_go - offset))
     true_along, scales = _along_sides(
         along, frames_of, vision, lengths, offset, ends, starts, tuning=tun
@@ -336,6 +356,7 @@ def wall_poses(
         start_own=own,
         start_frames=frames_heading,
         faces=faces,
+        hidden=hidden,
     )
 
 
@@ -435,6 +456,70 @@ def furniture_faces(
             y = y1 if wall == 1 else y0
             out_faces.append((wall, depth, lo, y, hi, y))
     return out_faces
+
+
+def _hidden_front(
+    idx: Sequence[int],
+    nxt: Sequence[int],
+    along: np.ndarray,
+    vision: Sequence[dict[str, Any]],
+    lines: Sequence[tuple[float, float] | None],
+    wall_seen: Sequence[bool],
+    to_go: float,
+    wall_ahead: float,
+    tuning: WallPoseTuning,
+    *,
+    known: float | None = None,
+) -> float | None:
+    """How far before its wall a front stood that the next side followed all along (m), or
+    None.
+
+    The next side's lines saw one level only, so :func:`side_distances` took it for the
+    wall. It was not when side ``idx``'s first lines ahead (the far pictures' and the
+    front lines within ``hidden_early_m`` of its start, where the odometry is good to a
+    few centimetres) all put what it walked towards ``hidden_min_m`` or more nearer than
+    the room's wall (``wall_ahead``: the wall's distance from the side's start, m), and the
+    line ahead at its end read nearer the distance the next side's line then did than that
+    plus the depth (the robot turned before what it then followed, not before a chest in
+    the corner with the wall beside it). A wardrobe or a bed along a whole wall does this; the
+    room's size would otherwise stretch the circuit's sides by its depth.
+
+    Args:
+        idx: Side k's frame indices; ``nxt``: side k+1's.
+        along: Each frame's odometry distance from its side's start (m).
+        vision: The survey's per-frame lines.
+        lines: Each frame's side line (distance, angle) or None.
+        wall_seen: Whether each frame's side line saw its wall.
+        to_go: From side k's last frame to what side k+1 followed (m).
+        wall_ahead: Side k's wall ahead from its start, by the room's size (m).
+        tuning: ``map.tuning.wall_poses``.
+        known: The depth a lap before found before the same wall: taken again unless this
+            side's own lines ahead (at least one) read otherwise.
+    """
+    seen = [i for i in nxt if lines[i] is not None]
+    if len(seen) < tuning.min_wall_frames or not all(wall_seen[i] for i in seen):
+        return None  # the next side saw its wall behind something, or too little
+    fronts, fars = _front_readings(idx, vision)
+    early = [float(along[i]) + d for i, d in fronts + fars if along[i] <= tuning.hidden_early_m]
+    if known is not None:
+        if any(abs(wall_ahead - e - known) > tuning.front_agree_m for e in early):
+            return None  # this lap's lines ahead read another depth
+        depth = known
+    else:
+        if len(early) < tuning.level_lines:
+            return None
+        reach = float(np.median(early))
+        if any(abs(e - reach) > tuning.front_agree_m for e in early):
+            return None  # the lines ahead disagree: one of them saw something else
+        depth = wall_ahead - reach
+        if not tuning.hidden_min_m <= depth <= tuning.hidden_max_m:
+            return None
+    if not fronts:
+        return None
+    i, d = max(fronts, key=lambda f: along[f[0]])
+    if abs(d - (along[idx[-1]] - along[i]) - to_go) > depth / 2:
+        return None  # it turned before something the next side did not follow
+    return depth
 
 
 def _end_lateral(

@@ -49,6 +49,7 @@ def _survey(
     uneven: bool = False,
     corner_furniture: bool = False,
     last_short: float = 0.0,
+    hidden: float = 0.0,
 ) -> tuple[list[Keyframe], list[Pose2D], dict[str, Any]]:
     """(keyframes with odometry poses, true poses in the map frame, survey meta); ``slip``:
     the odometry's sideways error in each of the first steps (m, to the left);
@@ -57,12 +58,16 @@ def _survey(
     odometry reads the first 40 % of each side's steps 10 % long, the rest 5 % short;
     ``corner_furniture``: every front line of the sides toward the start's corner (3 and
     7) reads a piece of furniture 0.3 m before the wall; ``last_short``: the survey's last
-    step stops this much before its corner (m: a lap's stops differ by up to half a step)."""
+    step stops this much before its corner (m: a lap's stops differ by up to half a step);
+    ``hidden``: a front this deep (m) stands before the whole wall beside sides 1 and 5 (a
+    wardrobe along it): the robot follows it, so sides 0, 2, 4 and 6 are that much shorter
+    than the room's size says, and the far pictures look ahead from the first stop on, as
+    the survey takes them."""
     truth: list[Pose2D] = []
     vision: list[dict[str, Any]] = []
     corner = np.zeros(2)
     for k in range(4 * laps):
-        length = SIDES[k % 2]
+        length = SIDES[k % 2] - (hidden if k % 2 == 0 else 0.0)
         d = k * math.pi / 2
         u = np.array([math.cos(d), math.sin(d)])
         steps = round(length / STEP)
@@ -80,7 +85,7 @@ def _survey(
                 side = {"distance_m": OFFSET + 0.25, "normal_rad": SIDE_NORMAL}  # a sofa's foot
             entry = {"side_index": k, "side": side, "front": front}
             ahead = length - j * STEP + short_stop + OFFSET  # the far picture's, at this stop
-            if far_fronts and j % 2 == 0 and ahead <= 3.6:
+            if far_fronts and j % 2 == (1 if hidden else 0) and ahead <= 3.6:
                 short = 0.4 if len(vision) == far_outlier_at else 0.0
                 entry["far_front"] = {"distance_m": ahead - short, "normal_rad": 0.0}
             vision.append(entry)
@@ -236,6 +241,45 @@ def test_the_next_sides_wall_places_a_corner_no_front_line_saw() -> None:
         entry["front"] = None  # the first five sides found no front wall
     walled = wall_poses(keyframes, meta, offset=OFFSET)
     assert walled is not None
+    pos, _ = _errors(walled.keyframes, truth)
+    assert pos.max() < 0.05
+
+
+def test_a_wall_hidden_all_along_by_furniture_shortens_the_sides_toward_it() -> None:
+    """A wardrobe 0.3 m deep stands before the whole wall beside sides 1 and 5: their
+    lines read it at the offset on one level, as they would the wall, and the room's size
+    would put the corners 0.3 m too far (room 1885168969's accepted map: stretched 10 %
+    along x, tracked 0.19 m off). Side 0's far lines from its start read the wardrobe
+    0.3 m nearer than the wall, and its last front line what side 1 then followed: the
+    sides toward it end 0.3 m early, and the map keeps its front."""
+    keyframes, truth, meta = _survey(far_fronts=True, hidden=0.3)
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None
+    pos, _ = _errors(walled.keyframes, truth)
+    assert pos.max() < 0.05  # 0.3 m off at side 1 with the room's size alone
+    assert [k for k, _ in walled.hidden] == [1, 5]
+    assert all(d == pytest.approx(0.3, abs=0.03) for _, d in walled.hidden)
+    assert [f[0] for f in walled.faces] == [0]  # x_max in W, the wall beside sides 1 and 5
+    assert walled.faces[0][1] == pytest.approx(0.3, abs=0.03)
+    # the same survey without its far pictures cannot tell the wardrobe from the wall
+    keyframes, truth, meta = _survey(far_fronts=False, hidden=0.3)
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None and walled.hidden == []
+    pos, _ = _errors(walled.keyframes, truth)
+    assert pos.max() > 0.25
+
+
+def test_a_chest_in_the_corner_with_the_wall_beside_it_hides_no_wall() -> None:
+    """The far lines read something 0.3 m before side 1's wall, but side 0's last front
+    line read the wall side 1 then followed, 0.3 m farther: a chest in the corner, not a
+    front along the wall; the corners stay where the room's size puts them."""
+    keyframes, truth, meta = _survey(far_fronts=True)
+    for entry in meta["vision"]:
+        if entry["side_index"] in (0, 4) and "far_front" in entry:
+            entry["far_front"] = {**entry["far_front"],
+                                  "distance_m": entry["far_front"]["distance_m"] - 0.3}  # fmt: skip
+    walled = wall_poses(keyframes, meta, offset=OFFSET)
+    assert walled is not None and walled.hidden == []
     pos, _ = _errors(walled.keyframes, truth)
     assert pos.max() < 0.05
 
