@@ -144,6 +144,15 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
         keep_unchecked=bool(getattr(args, "keep_unchecked", False)),
         on_checks=show,
     )
+    hidden: dict[int, list[tuple[int, float]]] = {}
+    for side, depth in (summary.get("wall_poses") or {}).get("hidden") or []:
+        hidden.setdefault(side % 4, []).append((side // 4 + 1, depth))
+    for side, laps in sorted(hidden.items()):
+        print(
+            f"build-map: side {side + 1} followed a front {laps[0][1]:.2f} m before its wall "
+            f"all along (a wardrobe, a bed; lap {', '.join(str(lap) for lap, _ in laps)}): "
+            "the sides toward it end that much early"
+        )
     partial = ""
     if not summary["dataset_complete"]:
         partial = f" (partial dataset: {summary.get('dataset_reason') or 'incomplete'})"
