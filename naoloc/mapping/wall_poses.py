@@ -291,7 +291,8 @@ def wall_poses(
         corner = keyframes[last].pose.inverse() * keyframes[last + 1].pose  # the turn's step
         behind = -_inward(corner, ahead, turn)
         to_go = nxt + behind  # from the last frame to side k+1's wall, m
-        depth = _hidden_front(
+        # (not side 0's wall: the start stands beside it and places the map frame by it)
+        depth = None if (k + 1) % 4 == 0 else _hidden_front(
             frames_of[k], frames_of[k + 1], along, vision, lines, wall_seen, to_go,
             lengths[k] + offset - starts.get(k, 0.0), tun, known=hidden_at.get((k + 1) % 4),
         )  # fmt: skip
