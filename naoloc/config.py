@@ -1115,6 +1115,16 @@ class LocalizeConfig(_Model):
         "the map's own error the filter adds to it (localize.filter.map_floor_m or the map's "
         "keyframe_sigma_m), is at most this (m); otherwise look until the sweep ends",
     )
+    extra_turns: int = Field(
+        3,
+        ge=0,
+        le=8,
+        description="scan strategy: turns in place, each followed by a sweep, while the "
+        "belief is not concentrated (0: never)",
+    )
+    extra_turn_rad: float = Field(
+        math.pi / 2, gt=0, le=math.pi, description="... each this far (rad)"
+    )
     filter: FilterTuning = Field(
         FilterTuning(), description="the localization filter's models and decisions"
     )
@@ -1182,6 +1192,35 @@ class GoHomeConfig(_Model):
         description="within this of home (along the path) it turns to home's heading while "
         "it walks, so it arrives facing map +x (m; 0: it turns there)",
     )
+    replan_s: float = Field(
+        3.0, gt=0, description="re-plan the path from the belief this often while walking (s)"
+    )
+    reached_m: float = Field(
+        0.15, gt=0, description="a waypoint this near the belief's pose counts as passed (m)"
+    )
+    lost_frames: int = Field(
+        15, ge=1, description="frames without a pose while walking before it stops to look"
+    )
+    approach_m: float = Field(
+        0.3,
+        gt=0,
+        description="within this of home (by the belief) the walk ends and the final approach "
+        "of short steps begins (m)",
+    )
+    final_steps: int = Field(3, ge=0, le=20, description="the final approach's steps, at most")
+    contact_ahead_m: float = Field(
+        0.25,
+        ge=0,
+        description="a contact while walking: the floor this far ahead of the belief's pose "
+        "is marked blocked (m; the body's front edge) ...",
+    )
+    contact_radius_m: float = Field(
+        0.15, gt=0, description="... in a disc this wide (m; the thing it touched)"
+    )
+    time_per_m_s: float = Field(
+        30.0, gt=0, description="robot time allowed per metre of the first plan (s)"
+    )
+    min_time_s: float = Field(60.0, gt=0, description="... and at least this (s)")
 
 
 class Config(_Model):

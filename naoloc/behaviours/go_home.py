@@ -5,11 +5,11 @@ then the robot walks continuously toward home along a path planned over the floo
 map implies (:mod:`naoloc.navigation.grid`), steered by pure pursuit
 (:mod:`naoloc.navigation.route`) from the belief's pose, which every camera frame updates
 while it walks (:class:`naoloc.behaviours.track.Tracker`). It re-plans from the belief every
-:data:`REPLAN_S` seconds. It stops to look only when the belief is lost, at most
+``go_home.replan_s`` seconds. It stops to look only when the belief is lost, at most
 ``go_home.max_tries`` looks in all; after a look that found no pose it first steps
 ``go_home.step_away_m`` away from the walls that look saw near (a robot pressed into a
 corner sees too little of the room). Within ``go_home.align_m`` of home it turns to home's
-heading as it walks (omnidirectionally). Within :data:`APPROACH_M` of home it stops walking and
+heading as it walks (omnidirectionally). Within ``go_home.approach_m`` of home it stops walking and
 steps onto home with short ``moveTo`` steps, refining the belief standing between them
 with the floor lines of a standstill look's head sweep (its far yaws see the walls beside
 and behind, which the walking head's swing does not: home's position along the way it
@@ -40,7 +40,7 @@ from naoloc.behaviours.localize import (
 )
 from naoloc.behaviours.track import Tracker, TrackPoint
 from naoloc.behaviours.walk_watch import TOUCHING, touching
-from naoloc.config import Config
+from naoloc.config import Config, GoHomeConfig
 from naoloc.constants import WALK_SPEED
 from naoloc.geometry import Pose2D, modulo2PI, relative_pose
 from naoloc.localization.localizer import Localizer, PoseEstimate
@@ -52,24 +52,6 @@ from naoloc.navigation.route import path_length, pursuit, remaining
 from naoloc.robot import Robot, pose_of
 
 __all__ = ["GoHomeResult", "go_home", "next_sweep"]
-
-# Re-plan the path from the belief this often while walking (s of robot time).
-REPLAN_S = 3.0
-# A waypoint this near the belief's pose counts as passed (m).
-REACHED_M = 0.15
-# Frames without a pose before the robot stops to look.
-LOST_FRAMES = 15
-# Within this of home (by the belief) the walk ends and the final approach begins (m).
-APPROACH_M = 0.3
-# The final approach: short steps at most.
-FINAL_STEPS = 3
-# A contact while walking: the blocked disc marked this far ahead of the belief's pose,
-# and its radius (m: the body's front edge and the thing it touched).
-CONTACT_AHEAD_M = 0.25
-CONTACT_RADIUS_M = 0.15
-# Robot time allowed per metre of the first plan, and at least (s).
-TIME_PER_M = 30.0
-MIN_TIME_S = 60.0
 
 
 @dataclass
@@ -156,6 +138,7 @@ def go_home(
     r0 = robot_clock(robot)
     home = Pose2D(0.0, 0.0, 0.0)
     tol = cfg.go_home.tolerance_m
+    gh = cfg.go_home
     loc = localizer if localizer is not None else Localizer(vmap, cfg.localize.filter)
     first = localize(robot, vmap, cfg, localizer=loc)
     last = first
@@ -168,13 +151,13 @@ def go_home(
     route: list[Pose2D] = []
     planned_at = -math.inf
     lost = bumps = 0
-    budget = MIN_TIME_S
+    budget = gh.min_time_s
     try:
         while True:
             est = loc.pose()
             if not est.found:
                 lost += 1
-                if lost < LOST_FRAMES and route:
+                if lost < gh.lost_frames and route:
                     result.trail.append(_point(tracker, on_point))
                     continue
                 robot.motion.stopMove()
@@ -199,13 +182,13 @@ def go_home(
             if now - r0 > budget:
                 result.reason = f"gave up after {now - r0:.0f} s"
                 break
-            if math.hypot(here.x - home.x, here.y - home.y) <= max(tol, APPROACH_M):
+            if math.hypot(here.x - home.x, here.y - home.y) <= max(tol, gh.approach_m):
                 robot.motion.stopMove()
-                result.reached = _final_approach(robot, tracker, loc, home, tol, result, on_point)
+                result.reached = _final_approach(robot, tracker, loc, home, gh, result, on_point)
                 if result.reached:
                     break
                 continue  # still short, or the belief lost there: walk on, or look again
-            if not route or now - planned_at > REPLAN_S:
+            if not route or now - planned_at > gh.replan_s:
                 try:
                     route = grid.plan(here, home)
                 except NoPath as err:
@@ -213,9 +196,9 @@ def go_home(
                     break
                 if planned_at == -math.inf:
                     result.path_m = path_length(here, route)
-                    budget = max(MIN_TIME_S, TIME_PER_M * result.path_m)
+                    budget = max(gh.min_time_s, gh.time_per_m_s * result.path_m)
                 planned_at = now
-            route = remaining(route, here, REACHED_M)
+            route = remaining(route, here, gh.reached_m)
             cmd = pursuit(here, route, goal_theta=home.theta, align_m=cfg.go_home.align_m)
             robot.motion.move(cmd.x, cmd.y, cmd.theta)
             result.trail.append(_point(tracker, on_point))
@@ -227,7 +210,7 @@ def go_home(
                 bumps += 1
                 if on_step is not None:
                     on_step("touched something: backing off to go around it")
-                if not _back_off(robot, grid, loc.pose(), cfg.go_home.back_off_m):
+                if not _back_off(robot, grid, loc.pose(), gh):
                     result.reason = f"blocked: {TOUCHING}, and backing off did not free it"
                     break
                 route = []  # re-plan around it
@@ -269,10 +252,11 @@ def _step_away(robot: Robot, look: Localization, cfg: Config) -> bool:
     return not touching(robot)
 
 
-def _back_off(robot: Robot, grid: FloorGrid, est: PoseEstimate, back_m: float) -> bool:
+def _back_off(robot: Robot, grid: FloorGrid, est: PoseEstimate, gh: GoHomeConfig) -> bool:
     """After a contact ahead (the robot is stopped): mark the floor just ahead of the belief's
-    pose blocked in ``grid`` (furniture the map's landmarks did not show) and step
-    ``back_m`` m straight back, blocking.
+    pose blocked in ``grid`` (furniture the map's landmarks did not show: a disc of
+    ``gh.contact_radius_m`` ``gh.contact_ahead_m`` ahead) and step ``gh.back_off_m`` straight
+    back, blocking.
 
     Returns:
         Whether the robot stands free of the contact afterwards.
@@ -280,14 +264,14 @@ def _back_off(robot: Robot, grid: FloorGrid, est: PoseEstimate, back_m: float) -
     if est.found:
         here = est.pose()
         grid.mark(
-            here.x + CONTACT_AHEAD_M * math.cos(here.theta),
-            here.y + CONTACT_AHEAD_M * math.sin(here.theta),
-            CONTACT_RADIUS_M,
+            here.x + gh.contact_ahead_m * math.cos(here.theta),
+            here.y + gh.contact_ahead_m * math.sin(here.theta),
+            gh.contact_radius_m,
             BLOCKED,
             force=True,
         )
     try:
-        robot.motion.moveTo(-back_m, 0.0, 0.0)
+        robot.motion.moveTo(-gh.back_off_m, 0.0, 0.0)
     finally:
         robot.motion.stopMove()
     return not touching(robot)
@@ -322,7 +306,7 @@ def _final_approach(
     tracker: Tracker,
     loc: Localizer,
     home: Pose2D,
-    tol: float,
+    gh: GoHomeConfig,
     result: GoHomeResult,
     on_point: Callable[[TrackPoint], None] | None,
 ) -> bool:
@@ -333,14 +317,15 @@ def _final_approach(
     bottom camera's floor lines at each yaw go to the filter: the far yaws see the walls
     beside and behind, so the belief knows home's position along the way the robot faces,
     where the walking head's swing sees only landmarks. Then one blocking ``moveTo`` to
-    where the belief puts home; at most :data:`FINAL_STEPS` steps. The filter takes every
+    where the belief puts home; at most ``gh.final_steps`` steps. The filter takes every
     step's odometry.
 
     Returns:
-        Whether the belief ends within ``tol`` of home, facing +x within 0.1 rad.
+        Whether the belief ends within ``gh.tolerance_m`` of home, facing +x within 0.1 rad.
     """
+    tol = gh.tolerance_m
     yaws: tuple[float, ...] = SCAN_YAWS
-    for step in range(FINAL_STEPS + 1):
+    for step in range(gh.final_steps + 1):
         for yaw in yaws:
             look_lines(tracker.eyes, loc, yaw)
             result.trail.append(_point(tracker, on_point, frame=False))
@@ -354,7 +339,7 @@ def _final_approach(
         near = dist <= tol
         if near and abs(modulo2PI(home.theta - here.theta)) <= 0.1:
             return True
-        if step == FINAL_STEPS or dist > 2 * APPROACH_M:
+        if step == gh.final_steps or dist > 2 * gh.approach_m:
             return near
         try:
             if near:  # only the heading is left

@@ -64,9 +64,6 @@ SCAN_HEAD_SPEED = 0.6
 LINE_PITCH = -0.35
 # Offset of the paper's second picture from the first, rad (toward the wall's normal).
 PAPER_SECOND_OFFSET = 0.1
-# Turns in place (and sweeps) while the belief is not concentrated, and their angle, rad.
-EXTRA_TURNS = 3
-EXTRA_TURN_RAD = math.pi / 2
 
 
 def estimate_fields(est: PoseEstimate) -> dict[str, Any]:
@@ -283,7 +280,7 @@ def localize(
     mode: str | None = None,
     strategy: str | None = None,
     yaws: Sequence[float] = SCAN_YAWS,
-    extra_turns: int = EXTRA_TURNS,
+    extra_turns: int | None = None,
     localizer: Localizer | None = None,
     on_step: Callable[[str], None] | None = None,
 ) -> Localization:
@@ -296,8 +293,9 @@ def localize(
         mode: "verified" (the filter) or "paper"; default ``cfg.localize.mode``.
         strategy: "scan" or "paper"; default "paper" for mode paper, else "scan".
         yaws: Head yaws of a sweep, rad, in the order they are looked at.
-        extra_turns: Quarter turns in place (each followed by a sweep) while the belief is
-            not concentrated (0 = never).
+        extra_turns: Turns in place of ``localize.extra_turn_rad`` (each followed by a
+            sweep) while the belief is not concentrated (0 = never); default
+            ``localize.extra_turns``.
         localizer: A filter to feed (e.g. one that is tracking already); a new one
             otherwise.
         on_step: Called with a short note as the work advances (progress display).
@@ -311,6 +309,7 @@ def localize(
     """
     t0, r0 = time.monotonic(), robot_clock(robot)
     mode = mode or cfg.localize.mode
+    turns = cfg.localize.extra_turns if extra_turns is None else extra_turns
     strategy = strategy or ("paper" if mode == "paper" else "scan")
     pitch = cfg.localize.head_pitch_rad
     loc = localizer if localizer is not None else Localizer(vmap, cfg.localize.filter)
@@ -342,12 +341,12 @@ def localize(
                     now = loc.pose()
                     if now.found and own_sigma(now, loc.filter.map_floor_m) <= settle:
                         break
-                if loc.pose().found or turned >= extra_turns:
+                if loc.pose().found or turned >= turns:
                     break
                 if loc.pose().status is Status.NOT_MAPPED and loc.filter.pictures >= 2 * len(yaws):
                     break  # two sweeps fit no place: looking more will not change that
                 try:
-                    if not robot.motion.moveTo(0.0, 0.0, EXTRA_TURN_RAD):
+                    if not robot.motion.moveTo(0.0, 0.0, cfg.localize.extra_turn_rad):
                         raise MotionError("turning in place failed during the localization scan")
                 finally:
                     robot.motion.stopMove()

@@ -33,8 +33,6 @@ __all__ = ["WALK_YAWS", "TrackPoint", "TrackResult", "Tracker", "track", "walk_r
 WALK_YAWS: tuple[float, ...] = (0.9, 0.0, -0.9, 0.0)
 WALK_PITCH = -0.45
 WALK_HEAD_SPEED = 0.2
-# A waypoint this near the belief's pose counts as passed (m).
-REACHED_M = 0.15
 
 
 @dataclass(frozen=True)
@@ -87,13 +85,14 @@ class Tracker:
     Args:
         robot: The robot.
         loc: The filter to feed.
-        cfg: Config (cameras, lens).
+        cfg: Config (cameras, lens; ``go_home.reached_m`` for :func:`walk_route`).
         eyes: Open cameras to use (closed by the caller); opened here otherwise.
     """
 
     def __init__(self, robot: Robot, loc: Localizer, cfg: Config, eyes: Eyes | None = None) -> None:
         self.robot = robot
         self.loc = loc
+        self.reached_m = cfg.go_home.reached_m
         self.meta = loc.vmap.meta
         self._own = eyes is None
         self.eyes = (
@@ -166,7 +165,9 @@ def walk_route(
 ) -> tuple[list[TrackPoint], str]:
     """Walk along ``route`` (map frame) steering by the belief, tracking at every frame.
 
-    The robot stops when the belief's pose reaches the last waypoint, when ``max_s`` of
+    A waypoint within ``go_home.reached_m`` of the belief's pose counts as passed
+    (:attr:`Tracker.reached_m`). The robot stops when the belief's pose reaches the last
+    waypoint, when ``max_s`` of
     robot time have passed, or when the belief has been lost for ``lost_steps`` frames
     (it is then stopped for the caller to look), or when the body touches a wall or
     furniture (:func:`naoloc.behaviours.walk_watch.touching`). It is stopped on every
@@ -207,8 +208,9 @@ def walk_route(
                 continue  # keep the last command: the odometry carries the belief
             unsure = 0
             here = est.pose()
-            left = remaining(left, here, REACHED_M)
-            if len(left) == 1 and math.hypot(left[0].x - here.x, left[0].y - here.y) < REACHED_M:
+            reach = tracker.reached_m
+            left = remaining(left, here, reach)
+            if len(left) == 1 and math.hypot(left[0].x - here.x, left[0].y - here.y) < reach:
                 why = "arrived"
                 break
             steer = pursuit(here, left)

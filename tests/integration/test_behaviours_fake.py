@@ -268,6 +268,37 @@ def test_localize_gives_up_lost_after_its_turns() -> None:
     assert result.summary()["x"] is None and result.summary()["reason"]
 
 
+def test_the_config_sets_the_looks_turns_in_place() -> None:
+    """``localize.extra_turns`` and ``localize.extra_turn_rad`` (the tuning record, not
+    module constants) decide how a lost look turns."""
+    cfg = small_cfg().with_overrides({"localize": {"extra_turns": 2, "extra_turn_rad": 1.0}})
+    with connect(cfg) as robot:
+        sim = robot.sim
+        assert sim is not None
+        origin = Pose2D.from_list(sim.true_pose())
+        sim.teleport(1.5, 1.5, 0.0)
+        loc = TruthLocalizer(robot, TruthMap(origin), needed=10**6)
+        result = localize(robot, TruthMap(origin), cfg, localizer=loc)  # type: ignore[arg-type]
+        after = Pose2D.from_list(sim.true_pose())
+    assert not result.estimate.found and result.extra_turns == 2
+    assert abs(math.remainder(after.theta - 2.0, 2 * math.pi)) < 0.1  # two turns of 1 rad
+
+
+def test_the_config_bounds_go_homes_robot_time() -> None:
+    """``go_home.min_time_s`` and ``go_home.time_per_m_s`` (the tuning record) bound the
+    walk: with 2 s allowed, it gives up on the way and stops."""
+    cfg = small_cfg().with_overrides({"go_home": {"min_time_s": 2.0, "time_per_m_s": 0.1}})
+    with connect(cfg) as robot:
+        sim = robot.sim
+        assert sim is not None
+        origin = Pose2D.from_list(sim.true_pose())
+        sim.teleport(2.2, 2.1, -2.0)
+        vmap = TruthMap(origin)
+        result = go_home(robot, vmap, cfg, localizer=TruthLocalizer(robot, vmap))  # type: ignore[arg-type]
+        assert not robot.motion.moveIsActive()
+    assert not result.reached and result.reason.startswith("gave up after")
+
+
 def test_go_home_walks_back_to_the_origin_on_the_live_pose() -> None:
     cfg = small_cfg()
     with connect(cfg) as robot:
