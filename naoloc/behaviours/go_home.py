@@ -9,11 +9,11 @@ while it walks (:class:`naoloc.behaviours.track.Tracker`). It re-plans from the 
 ``go_home.max_tries`` looks in all; after a look that found no pose it first steps
 ``go_home.step_away_m`` away from the walls that look saw near (a robot pressed into a
 corner sees too little of the room). Within ``go_home.align_m`` of home it turns to home's
-heading as it walks (omnidirectionally). Within ``go_home.approach_m`` of home it stops walking and
-steps onto home with short ``moveTo`` steps, refining the belief standing between them
-with the floor lines of a standstill look's head sweep (its far yaws see the walls beside
-and behind, which the walking head's swing does not: home's position along the way it
-faces), until the belief is within ``go_home.tolerance_m`` of home facing map +x as the
+heading as it walks (omnidirectionally). Within ``go_home.approach_m`` of home it stops
+walking and steps onto home with short ``moveTo`` steps, refining the belief standing
+between them with the floor lines of a standstill look's head sweep (its far yaws see the
+walls beside and behind, which the walking head's swing does not: home's position along
+the way it faces), until the belief is within ``go_home.tolerance_m`` of home facing map +x as the
 survey started.
 
 A robot that touches something while walking (the simulator's contacts; a real NAO's
@@ -137,8 +137,8 @@ def go_home(
     """
     r0 = robot_clock(robot)
     home = Pose2D(0.0, 0.0, 0.0)
-    tol = cfg.go_home.tolerance_m
     gh = cfg.go_home
+    tol = gh.tolerance_m
     loc = localizer if localizer is not None else Localizer(vmap, cfg.localize.filter)
     first = localize(robot, vmap, cfg, localizer=loc)
     last = first
@@ -161,7 +161,7 @@ def go_home(
                     result.trail.append(_point(tracker, on_point))
                     continue
                 robot.motion.stopMove()
-                if looks >= cfg.go_home.max_tries:
+                if looks >= gh.max_tries:
                     result.reason = f"lost, and {looks} looks found no pose"
                     break
                 if on_step is not None:
@@ -199,12 +199,12 @@ def go_home(
                     budget = max(gh.min_time_s, gh.time_per_m_s * result.path_m)
                 planned_at = now
             route = remaining(route, here, gh.reached_m)
-            cmd = pursuit(here, route, goal_theta=home.theta, align_m=cfg.go_home.align_m)
+            cmd = pursuit(here, route, goal_theta=home.theta, align_m=gh.align_m)
             robot.motion.move(cmd.x, cmd.y, cmd.theta)
             result.trail.append(_point(tracker, on_point))
             if touching(robot):  # a robot that is blocked stops
                 robot.motion.stopMove()
-                if bumps >= cfg.go_home.contacts:
+                if bumps >= gh.contacts:
                     result.reason = f"blocked: {TOUCHING}"
                     break
                 bumps += 1

@@ -167,12 +167,11 @@ def walk_route(
 
     A waypoint within ``go_home.reached_m`` of the belief's pose counts as passed
     (:attr:`Tracker.reached_m`). The robot stops when the belief's pose reaches the last
-    waypoint, when ``max_s`` of
-    robot time have passed, or when the belief has been lost for ``lost_steps`` frames
-    (it is then stopped for the caller to look), or when the body touches a wall or
-    furniture (:func:`naoloc.behaviours.walk_watch.touching`). It is stopped on every
-    exit. Between frames, ``ticks`` odometry-only poses keep the pose live at the
-    odometry's rate.
+    waypoint, when ``max_s`` of robot time have passed, or when the belief has been lost
+    for ``lost_steps`` frames (it is then stopped for the caller to look), or when the body
+    touches a wall or furniture (:func:`naoloc.behaviours.walk_watch.touching`). It is
+    stopped on every exit. Between frames, ``ticks`` odometry-only poses keep the pose live
+    at the odometry's rate.
 
     Returns:
         The track's points and why it stopped (``arrived``, ``time``, ``lost``,
@@ -184,6 +183,7 @@ def walk_route(
     unsure = 0
     why = "time"
     steer = None
+    reach = tracker.reached_m
     try:
         while robot_clock(robot) - start < max_s:
             point = tracker.step()
@@ -208,7 +208,6 @@ def walk_route(
                 continue  # keep the last command: the odometry carries the belief
             unsure = 0
             here = est.pose()
-            reach = tracker.reached_m
             left = remaining(left, here, reach)
             if len(left) == 1 and math.hypot(left[0].x - here.x, left[0].y - here.y) < reach:
                 why = "arrived"

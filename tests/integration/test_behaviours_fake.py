@@ -52,6 +52,16 @@ def small_cfg(**survey: Any) -> Config:
     )
 
 
+def _start_at(robot: Any, x: float, y: float, theta: float) -> tuple[Any, Pose2D]:
+    """The simulator and the map origin (where the robot stood, room frame), the robot
+    then moved to ``(x, y, theta)`` (room frame)."""
+    sim = robot.sim
+    assert sim is not None
+    origin = Pose2D.from_list(sim.true_pose())
+    sim.teleport(x, y, theta)
+    return sim, origin
+
+
 # The survey circuit of small_cfg in the map frame (a 1.5 m square from the origin).
 _SIDE = [0.5, 1.0, 1.5]
 CIRCUIT = np.array(
@@ -214,10 +224,7 @@ def test_parallax_finds_the_nearer_wall(start: tuple[float, float, float], side:
 def test_localize_never_translates_and_reports_error(strategy: str) -> None:
     cfg = small_cfg()
     with connect(cfg) as robot:
-        sim = robot.sim
-        assert sim is not None
-        origin = Pose2D.from_list(sim.true_pose())
-        sim.teleport(2.0, 1.2, 2.5)
+        sim, origin = _start_at(robot, 2.0, 1.2, 2.5)
         vmap = TruthMap(origin)
         loc = TruthLocalizer(robot, vmap, (0.3, -0.4), needed=3)
         before = Pose2D.from_list(sim.true_pose())
@@ -245,10 +252,7 @@ def test_localize_never_translates_and_reports_error(strategy: str) -> None:
 def test_localize_turns_in_place_while_lost() -> None:
     cfg = small_cfg()
     with connect(cfg) as robot:
-        sim = robot.sim
-        assert sim is not None
-        origin = Pose2D.from_list(sim.true_pose())
-        sim.teleport(1.5, 1.5, 0.0)
+        sim, origin = _start_at(robot, 1.5, 1.5, 0.0)
         loc = TruthLocalizer(robot, TruthMap(origin), needed=len(SCAN_YAWS) + 2)
         result = localize(robot, TruthMap(origin), cfg, localizer=loc)  # type: ignore[arg-type]
         after = Pose2D.from_list(sim.true_pose())
@@ -273,10 +277,7 @@ def test_the_config_sets_the_looks_turns_in_place() -> None:
     module constants) decide how a lost look turns."""
     cfg = small_cfg().with_overrides({"localize": {"extra_turns": 2, "extra_turn_rad": 1.0}})
     with connect(cfg) as robot:
-        sim = robot.sim
-        assert sim is not None
-        origin = Pose2D.from_list(sim.true_pose())
-        sim.teleport(1.5, 1.5, 0.0)
+        sim, origin = _start_at(robot, 1.5, 1.5, 0.0)
         loc = TruthLocalizer(robot, TruthMap(origin), needed=10**6)
         result = localize(robot, TruthMap(origin), cfg, localizer=loc)  # type: ignore[arg-type]
         after = Pose2D.from_list(sim.true_pose())
@@ -289,10 +290,7 @@ def test_the_config_bounds_go_homes_robot_time() -> None:
     walk: with 2 s allowed, it gives up on the way and stops."""
     cfg = small_cfg().with_overrides({"go_home": {"min_time_s": 2.0, "time_per_m_s": 0.1}})
     with connect(cfg) as robot:
-        sim = robot.sim
-        assert sim is not None
-        origin = Pose2D.from_list(sim.true_pose())
-        sim.teleport(2.2, 2.1, -2.0)
+        _sim, origin = _start_at(robot, 2.2, 2.1, -2.0)
         vmap = TruthMap(origin)
         result = go_home(robot, vmap, cfg, localizer=TruthLocalizer(robot, vmap))  # type: ignore[arg-type]
         assert not robot.motion.moveIsActive()
@@ -302,10 +300,7 @@ def test_the_config_bounds_go_homes_robot_time() -> None:
 def test_go_home_walks_back_to_the_origin_on_the_live_pose() -> None:
     cfg = small_cfg()
     with connect(cfg) as robot:
-        sim = robot.sim
-        assert sim is not None
-        origin = Pose2D.from_list(sim.true_pose())
-        sim.teleport(2.2, 2.1, -2.0)
+        _sim, origin = _start_at(robot, 2.2, 2.1, -2.0)
         vmap = TruthMap(origin)
         loc = TruthLocalizer(robot, vmap, (0.03, -0.03))  # a biased but honest filter
         result = go_home(robot, vmap, cfg, localizer=loc)  # type: ignore[arg-type]
@@ -331,10 +326,7 @@ def test_go_home_backs_off_a_thing_the_map_does_not_show_and_goes_around(contact
                                                               "contacts": contacts}})  # fmt: skip
     touches: list[tuple[float, float]] = []
     with connect(cfg) as robot:
-        sim = robot.sim
-        assert sim is not None
-        origin = Pose2D.from_list(sim.true_pose())
-        sim.teleport(2.2, 2.1, -2.0)
+        sim, origin = _start_at(robot, 2.2, 2.1, -2.0)
         vmap = TruthMap(origin)
         start = relative_pose(origin, Pose2D.from_list(sim.true_pose()))
         path = grid_of_map(vmap).plan(start, Pose2D())
