@@ -139,6 +139,11 @@ def main() -> int:
     )  # fmt: skip
     add_set_option(parser, "config override for every room, e.g. world.sim.light=0.3")
     parser.add_argument(
+        "--record", action="store_true",
+        help="record each localization's observations (room_SEED/recordings/main_INDEX.mcap; "
+        "naoloc replay re-runs one without a robot)",
+    )  # fmt: skip
+    parser.add_argument(
         "--pool", type=Path, nargs="+", default=None, metavar="OUT",
         help="pool earlier outputs' rooms (every room_* folder) instead of running",
     )  # fmt: skip
@@ -163,7 +168,7 @@ def main() -> int:
                 seed, args.backend, small=args.small, mixed=args.mixed, overrides=overrides
             )
             try:
-                room = _room(cfg, seed, args.protocol, args.n, out, args.workers)
+                room = _room(cfg, seed, args.protocol, args.n, out, args.workers, args.record)
             except NaolocError as err:  # the survey or the map failed: no localization there
                 print(f"room seed {seed}: no map: {err}", flush=True)
                 failed.append({"seed": seed, "error": str(err)})
@@ -190,13 +195,16 @@ def main() -> int:
     return 0
 
 
-def _room(cfg: Config, seed: int, protocol: str, n: int, out: Path, workers: int) -> dict[str, Any]:
-    """One room: survey, map, localize; its records and figures (printed on one line)."""
+def _room(
+    cfg: Config, seed: int, protocol: str, n: int, out: Path, workers: int, record: bool = False
+) -> dict[str, Any]:
+    """One room: survey, map, localize; its records and figures (printed on one line);
+    ``record``: each localization's observations kept (``room_SEED/recordings``)."""
     from naoloc.mapping import load_map
     from naoloc.mapping.checks import map_checked
 
     folder = out / f"room_{seed}"
-    line = evaluate(cfg, protocol, n, seed, folder, workers=workers)
+    line = evaluate(cfg, protocol, n, seed, folder, workers=workers, record=record)
     recs = json.loads((folder / "estimates.json").read_text(encoding="utf-8"))
     main = [r for r in recs if r["variant"] == "main"]
     full = json.loads(Path(line["summary"]).read_text(encoding="utf-8"))

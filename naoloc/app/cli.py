@@ -178,6 +178,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="extra studies: none, all, or a comma list of compare,robustness",
     )  # fmt: skip
     p.add_argument(
+        "--record", action="store_true",
+        help="record each localization's observations in OUTDIR/recordings "
+        "(VARIANT_INDEX.mcap; naoloc replay re-runs one without a robot)",
+    )  # fmt: skip
+    p.add_argument(
         "--executor", choices=("local", "ray"), default="local",
         help="local: a process pool on this machine; ray: tasks on a Ray cluster (extra 'ray')",
     )  # fmt: skip

@@ -95,6 +95,7 @@ def evaluate(
     chunk_size: int | None = None,
     progress: bool | None = None,
     executor: Executor | None = None,
+    record: bool = False,
 ) -> dict[str, Any]:
     """Run an evaluation and write its outputs.
 
@@ -109,6 +110,8 @@ def evaluate(
         chunk_size: Poses per localization task; default: spread over 3 tasks per worker.
         progress: Force progress bars on or off; default: on when stderr is a terminal.
         executor: Where the tasks run (default: the local process pool); same results.
+        record: Record each filter localization's observations in ``outdir/recordings``
+            (``VARIANT_INDEX.mcap``; ``naoloc replay`` re-runs one without a robot).
 
     Returns:
         The JSON line: protocol, n, median_error_m, p90_error_m, max_error_m,
@@ -130,7 +133,7 @@ def evaluate(
     with folder_lock(outdir, "naoloc evaluate"):
         return _evaluate(
             cfg, protocol, n, seed, outdir, workers=workers, studies=studies,
-            chunk_size=chunk_size, progress=progress, executor=executor,
+            chunk_size=chunk_size, progress=progress, executor=executor, record=record,
         )  # fmt: skip
 
 
@@ -146,6 +149,7 @@ def _evaluate(
     chunk_size: int | None,
     progress: bool | None,
     executor: Executor | None,
+    record: bool = False,
 ) -> dict[str, Any]:
     """:func:`evaluate` with ``outdir`` held."""
     from naoloc.data.outputs import write_resolved_config
@@ -199,7 +203,10 @@ def _evaluate(
                if plan.maps[v.map_name][0] in failed}  # fmt: skip
     runnable = Plan(plan.surveys, plan.maps, [v for v in plan.variants if v.name not in skipped],
                     plan.robots)  # fmt: skip
-    chunks = _chunks(runnable, cfg, base_dict, poses, origin, map_paths, workers, chunk_size)
+    record_dir = str(outdir / "recordings") if record else None
+    chunks = _chunks(
+        runnable, cfg, base_dict, poses, origin, map_paths, workers, chunk_size, record_dir
+    )
     results = run_tasks(
         localize_chunk, chunks, workers, "localize", progress=progress, executor=executor
     )
@@ -267,6 +274,7 @@ def _chunks(
     map_paths: dict[str, str],
     workers: int,
     chunk_size: int | None,
+    record_dir: str | None = None,
 ) -> list[LocalizeChunk]:
     size = chunk_size or max(1, math.ceil(len(poses) / (3 * workers)))
     chunks: list[LocalizeChunk] = []
@@ -280,7 +288,9 @@ def _chunks(
         )
         config = cfg.with_overrides(robot.overrides).to_dict() if robot.overrides else base_dict
         for part in chunked(list(poses), size):
-            chunks.append(LocalizeChunk(config, origin, part, scorers, robot.world_changes))
+            chunks.append(
+                LocalizeChunk(config, origin, part, scorers, robot.world_changes, record_dir)
+            )
     return chunks
 
 

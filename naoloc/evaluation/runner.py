@@ -117,6 +117,8 @@ class LocalizeChunk:
         world_changes: ``(SimControl method, args)`` applied once after the robot is created,
             e.g. ``("remove_poster", ("y0",))``; a wall id as a poster method's first
             argument stands for the middle poster on that wall.
+        record_dir: Where each filter localization's observations are recorded
+            (``VARIANT_INDEX.mcap``, replayed by ``naoloc replay``); None: not recorded.
     """
 
     config: dict[str, Any]
@@ -124,6 +126,7 @@ class LocalizeChunk:
     poses: tuple[EvalPose, ...]
     scorers: tuple[Scorer, ...]
     world_changes: tuple[tuple[str, tuple[Any, ...]], ...] = field(default_factory=tuple)
+    record_dir: str | None = None
 
 
 def _share_cores(threads: int) -> None:
@@ -432,7 +435,9 @@ def localize_chunk(chunk: LocalizeChunk) -> list[dict[str, Any]]:
                         records.append({"variant": scorer.variant, "skipped": str(err)})
                         break
                     vmap = maps[scorer.map_path]
-                    est, result, ms, cpu = _localize(robot, vmap, cfg, scorer)
+                    est, result, ms, cpu = _localize_recorded(
+                        robot, vmap, cfg, scorer, _recording_path(chunk, scorer, pose)
+                    )
                     truth = room_to_map(chunk.origin_room_pose, sim.true_pose())
                     taken[scorer.strategy] = (result, truth, vmap)
                 else:
@@ -527,14 +532,48 @@ def _require_sim(robot: Any) -> Any:
     return robot.sim
 
 
-def _localize(robot: Any, vmap: Any, cfg: Any, scorer: Scorer) -> tuple[Any, Any, float, float]:
-    """Run the localize behaviour; returns the estimate, the localization, its wall time
-    (ms) and the CPU time of its estimation (ms)."""
+def _recording_path(chunk: LocalizeChunk, scorer: Scorer, pose: EvalPose) -> Path | None:
+    """Where a test pose's localization is recorded: only with ``chunk.record_dir``, and only
+    a filter's (the paper's mode and strategy do not use it)."""
+    paper = scorer.mode in ("paper", "nearest") or scorer.strategy == "paper"
+    if chunk.record_dir is None or paper:
+        return None
+    return Path(chunk.record_dir) / f"{scorer.variant.replace('/', '_')}_{pose.index:03d}.mcap"
+
+
+def _localize_recorded(
+    robot: Any, vmap: Any, cfg: Any, scorer: Scorer, path: Path | None
+) -> tuple[Any, Any, float, float]:
+    """:func:`_localize`, its filter's every observation written to ``path`` (None: not
+    recorded); a localization that fails keeps ``NAME.partial.mcap``."""
+    if path is None:
+        return _localize(robot, vmap, cfg, scorer)
+    from naoloc.data.dataset import interruption_reason
+    from naoloc.data.recording import RecordedLocalizer, RecordingWriter
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    writer = RecordingWriter(path, cfg, "localize", Path(scorer.map_path), vmap)
+    loc = RecordedLocalizer(vmap, cfg, writer)
+    try:
+        out = _localize(robot, vmap, cfg, scorer, loc)
+    except BaseException as err:
+        writer.finish(loc.pose() if loc.log else None, complete=False,
+                      reason=interruption_reason(err))  # fmt: skip
+        raise
+    writer.finish(loc.pose())
+    return out
+
+
+def _localize(
+    robot: Any, vmap: Any, cfg: Any, scorer: Scorer, localizer: Any = None
+) -> tuple[Any, Any, float, float]:
+    """Run the localize behaviour (with ``localizer``'s filter when given); returns the
+    estimate, the localization, its wall time (ms) and the CPU time of its estimation (ms)."""
     from naoloc.behaviours.localize import localize
     from naoloc.localization.paper import localize_nearest_image
 
     mode = "paper" if scorer.mode == "nearest" else scorer.mode
-    result = localize(robot, vmap, cfg, mode=mode, strategy=scorer.strategy)
+    result = localize(robot, vmap, cfg, mode=mode, strategy=scorer.strategy, localizer=localizer)
     if scorer.mode == "nearest":
         c1 = time.process_time()
         est = localize_nearest_image(vmap, result.queries)

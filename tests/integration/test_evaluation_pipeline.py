@@ -15,6 +15,7 @@ from naoloc.errors import BackendError, ConfigError
 from naoloc.evaluation.pipeline import evaluate
 from naoloc.evaluation.protocols import PAPER_POSITIONS, EvalPose, distance_to_walls, room_to_map
 from naoloc.evaluation.runner import LocalizeChunk, Scorer, localize_chunk
+from tests.rooms import run_json
 
 TINY = {
     "robot": {"backend": "fake"},
@@ -70,6 +71,31 @@ def test_evaluate_random_protocol_through_the_cli(
     for png in ("map.png", "estimates.png", "cdf.png"):
         assert (out / png).read_bytes()[:4] == b"\x89PNG"
     assert (out / "config.yaml").is_file() and (out / "surveys" / "base.mcap").is_file()
+
+
+@pytest.mark.slow
+def test_evaluate_records_each_localization_and_replay_gives_its_estimate(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--record``: every filter localization of an evaluation is kept, and ``naoloc
+    replay`` re-runs it without a robot to the estimate the evaluation reported."""
+    cfg_path = tmp_path / "room.yaml"
+    cfg_path.write_text(yaml.safe_dump(TINY))
+    out = tmp_path / "out"
+    argv = ["evaluate", "-c", str(cfg_path), "--protocol", "random", "-n", "2", "--seed", "3"]
+    assert main([*argv, "--workers", "1", "--record", "-o", str(out)]) == 0
+    capsys.readouterr()
+    records = [
+        r for r in json.loads((out / "estimates.json").read_text()) if r["variant"] == "main"
+    ]
+    assert len(records) == 2
+    vmap = next((out / "maps").glob("*.npz"))
+    for rec in records:
+        path = out / "recordings" / f"main_{rec['index']:03d}.mcap"
+        assert path.is_file()
+        again = run_json(["replay", str(path), "-m", str(vmap)], capsys)
+        assert again["same"] is True and again["verb"] == "localize" and again["complete"]
+        assert [again["x"], again["y"], again["theta"]] == pytest.approx(rec["estimate"], abs=1e-9)
 
 
 def test_evaluate_refuses_a_real_robot(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -47,6 +47,7 @@ def run(args: argparse.Namespace, cfg: Config) -> dict[str, Any]:
             workers=args.workers,
             studies=studies,
             executor=executor,
+            record=bool(getattr(args, "record", False)),
         )
     finally:
         executor.close()
