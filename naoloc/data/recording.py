@@ -30,6 +30,8 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -38,7 +40,7 @@ import numpy as np
 
 from naoloc.config import Config
 from naoloc.data import checks
-from naoloc.data.dataset import DatasetWriter, read_dataset
+from naoloc.data.dataset import DatasetWriter, interruption_reason, read_dataset
 from naoloc.errors import DatasetError
 from naoloc.geometry import Pose2D
 from naoloc.localization import Localizer, PoseEstimate
@@ -58,7 +60,9 @@ ESTIMATE_TOPIC = "/pose/estimate"
 RECORDING_NAME = "naoloc.recording"
 VERBS = ("localize", "track", "go-home")
 
-__all__ = ["RecordedLocalizer", "Recording", "RecordingWriter", "read_recording"]
+__all__ = [
+    "RecordedLocalizer", "Recording", "RecordingWriter", "read_recording", "recorded_localizer",
+]  # fmt: skip
 
 
 def estimate_json(est: PoseEstimate) -> dict[str, Any]:
@@ -246,6 +250,33 @@ class RecordedLocalizer(Localizer):
         """Take one observation, then record it with the estimate after it."""
         super().update(obs)
         self.writer.observe(self.log[-1], self.pose())
+
+
+@contextmanager
+def recorded_localizer(
+    path: Path, cfg: Config, verb: str, map_path: Path, vmap: Any
+) -> Iterator[RecordedLocalizer]:
+    """A filter whose every observation is written to ``path`` as it is made, finished with
+    its last estimate. A run that fails keeps ``NAME.partial.mcap`` (its error says so).
+
+    Args:
+        path: The recording (``NAME.mcap``).
+        cfg: The run's config.
+        verb: What is recorded (``localize``, ``track``, ``go-home``).
+        map_path: The map's file, named in the recording.
+        vmap: The map.
+    """
+    writer = RecordingWriter(path, cfg, verb, map_path, vmap)
+    loc = RecordedLocalizer(vmap, cfg, writer)
+    try:
+        yield loc
+    except BaseException as err:
+        last = loc.pose() if loc.log else None
+        kept = writer.finish(last, complete=False, reason=interruption_reason(err))
+        if kept is not None:
+            err.add_note(f"partial recording kept in {kept}")
+        raise
+    writer.finish(loc.pose())
 
 
 @dataclass

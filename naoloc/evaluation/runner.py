@@ -548,20 +548,11 @@ def _localize_recorded(
     recorded); a localization that fails keeps ``NAME.partial.mcap``."""
     if path is None:
         return _localize(robot, vmap, cfg, scorer)
-    from naoloc.data.dataset import interruption_reason
-    from naoloc.data.recording import RecordedLocalizer, RecordingWriter
+    from naoloc.data.recording import recorded_localizer
 
     path.parent.mkdir(parents=True, exist_ok=True)
-    writer = RecordingWriter(path, cfg, "localize", Path(scorer.map_path), vmap)
-    loc = RecordedLocalizer(vmap, cfg, writer)
-    try:
-        out = _localize(robot, vmap, cfg, scorer, loc)
-    except BaseException as err:
-        writer.finish(loc.pose() if loc.log else None, complete=False,
-                      reason=interruption_reason(err))  # fmt: skip
-        raise
-    writer.finish(loc.pose())
-    return out
+    with recorded_localizer(path, cfg, "localize", Path(scorer.map_path), vmap) as loc:
+        return _localize(robot, vmap, cfg, scorer, loc)
 
 
 def _localize(

@@ -70,20 +70,10 @@ def recorder(args: argparse.Namespace, cfg: Config, vmap: Any, verb: str) -> Ite
     if cfg.localize.mode == "paper":
         raise ConfigError("--record records the filter's observations; localize.mode paper "
                           "does not use the filter")  # fmt: skip
-    from naoloc.data.dataset import interruption_reason
-    from naoloc.data.recording import RecordedLocalizer, RecordingWriter
+    from naoloc.data.recording import recorded_localizer
 
-    writer = RecordingWriter(path, cfg, verb, args.map, vmap)
-    loc = RecordedLocalizer(vmap, cfg, writer)
-    try:
+    with recorded_localizer(path, cfg, verb, args.map, vmap) as loc:
         yield loc
-    except BaseException as err:
-        last = loc.pose() if loc.log else None
-        kept = writer.finish(last, complete=False, reason=interruption_reason(err))
-        if kept is not None:
-            err.add_note(f"partial recording kept in {kept}")
-        raise
-    writer.finish(loc.pose())
 
 
 def run_outputs(args: argparse.Namespace, vmap: Any) -> dict[str, Any]:
