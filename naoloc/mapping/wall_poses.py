@@ -325,8 +325,10 @@ def wall_poses(
         poses.append(Pose2D(float(position[0]), float(position[1]), modulo2PI(d + deltas[i])))
 
     # The survey start (the map frame's origin) in the wall frame.
-    own, clean = _own_heading(meta, offset, side_normal, tuning=tun)
-    heading, frames_heading = _start_heading(own, keyframes, lines, frames_of[0], along, tun, clean)
+    own, clean, spread = _own_heading(meta, offset, side_normal, tuning=tun)
+    heading, frames_heading = _start_heading(
+        own, keyframes, lines, frames_of[0], along, tun, clean, spread
+    )
     start = Pose2D(0.0, 0.0, heading or 0.0)
     if start_dist is not None:  # the origin's distance from side 0's wall, not what it saw
         start = Pose2D(0.0, (start_dist - offset) * turn, start.theta)
@@ -1046,14 +1048,15 @@ def _own_heading(
     side_normal: float,
     *,
     tuning: WallPoseTuning | None = None,
-) -> tuple[float | None, bool]:
+) -> tuple[float | None, bool, float]:
     """The survey start's heading to side 0's direction (rad) from the lines the start
     itself saw: the median of its side wall's (``start_side`` and every view's,
     ``start_views``: one view's line can mix in a corner's other wall), else of the
     farther walls' (:func:`_far_headings`: the walls ahead and across are square and
-    parallel to side 0, their lines err more). None without any; and whether it comes
-    from clean views of the side wall (:func:`_clean`). ``tuning``: ``map.tuning.wall_poses``
-    (None: the defaults)."""
+    parallel to side 0, their lines err more). None without any; whether it comes
+    from clean views of the side wall (:func:`_clean`); and the votes' spread (their
+    standard deviation, rad; 0 for one vote). ``tuning``: ``map.tuning.wall_poses`` (None:
+    the defaults)."""
     tun = WallPoseTuning() if tuning is None else tuning
     votes = []
     views = meta.get("start_views")
@@ -1066,7 +1069,9 @@ def _own_heading(
     from_clean = bool(votes) and bool(clean)
     if not votes:  # the far walls' lines err more: only without the side wall's
         votes = _far_headings(meta, side_normal, tun.front_heading_m)
-    return (float(np.median(votes)) if votes else None), from_clean
+    if not votes:
+        return None, from_clean, 0.0
+    return float(np.median(votes)), from_clean, float(np.std(votes))
 
 
 def _clean(entry: dict[str, Any], tuning: WallPoseTuning) -> bool:
@@ -1111,18 +1116,20 @@ def _start_heading(
     along: np.ndarray,
     tuning: WallPoseTuning,
     clean: bool = False,
+    spread: float = 0.0,
 ) -> tuple[float | None, float | None]:
     """The survey start's heading to side 0's wall (rad), or None without any line, and
     what side 0's first frames say of it (None: nothing).
 
     ``own`` is what the start itself saw: its side line's angle, or (a side wall too near
-    to be seen) a farther wall's (:func:`_far_headings`). That, unless side 0's frames'
-    lines within ``start_heading_m`` (of ``map.tuning.wall_poses``) of walk, each less the
-    odometry's turn from the start to its frame (the map frame is the start's odometry
-    frame), have a median more than ``start_gate_rad`` away from it: then that median. A
-    ``clean`` own line (the side wall's, seen whole and straight from the start:
-    :func:`_clean`) is kept: the frames' lines are less the odometry's turn, and a NAO's
-    odometry can turn 0.1 rad in the first metre.
+    to be seen) a farther wall's (:func:`_far_headings`). Side 0's frames' lines within
+    ``start_heading_m`` (of ``map.tuning.wall_poses``) of walk, each less the odometry's
+    turn from the start to its frame (the map frame is the start's odometry frame), say it
+    too: their median. A ``clean`` own line (the side wall's, seen whole and straight from
+    the start: :func:`_clean`) is kept: the frames carry the odometry's turn error, and a
+    NAO's odometry can turn 0.1 rad in the first metre. Otherwise the two are weighed by
+    their variances: the own line's one sigma is ``start_view_std_rad``, or its views'
+    ``spread`` (rad) when larger; the frames' ``start_frames_std_rad``.
     """
     votes = []
     for i in side0:
@@ -1135,4 +1142,6 @@ def _start_heading(
         return (frames if own is None else own), frames
     if clean:
         return own, frames
-    return (own if abs(modulo2PI(frames - own)) <= tuning.start_gate_rad else frames), frames
+    w_own = 1.0 / max(tuning.start_view_std_rad, spread) ** 2
+    w_frames = 1.0 / tuning.start_frames_std_rad**2
+    return modulo2PI(own + w_frames / (w_own + w_frames) * modulo2PI(frames - own)), frames

@@ -24,6 +24,7 @@ from naoloc.localization.walls import wall_map
 from naoloc.mapping.wall_poses import (
     _own_heading,
     _start_from_wall,
+    _start_heading,
     agreeing_fronts,
     side_distances,
     start_views_agree,
@@ -113,8 +114,11 @@ def _survey(
         "sides_m": list(SIDES),
         "vision": vision,
         "wall_follow": {"side_normal": SIDE_NORMAL},
-        "start_side": {"distance_m": OFFSET, "normal_rad": SIDE_NORMAL},
-    }
+        # a clean line, as a survey's start records it (its fit's scatter and share)
+        "start_side": {
+            "distance_m": OFFSET, "normal_rad": SIDE_NORMAL, "rms_m": 0.002, "fraction": 0.9
+        },
+    }  # fmt: skip
     return keyframes, truth, meta
 
 
@@ -298,7 +302,7 @@ def test_furniture_along_a_wall_is_not_the_wall() -> None:
     """A sideboard 0.35 m deep in front of the first metre of side 0 (and of the start):
     those lines are nearer; the wall is the farthest line most of the side agrees with."""
     keyframes, truth, meta = _survey()
-    meta["start_side"] = {"distance_m": OFFSET - 0.35, "normal_rad": SIDE_NORMAL}
+    meta["start_side"] = {**meta["start_side"], "distance_m": OFFSET - 0.35}
     for entry in meta["vision"][:5]:
         entry["side"] = {"distance_m": OFFSET - 0.35, "normal_rad": SIDE_NORMAL}
     walled = wall_poses(keyframes, meta, offset=OFFSET)
@@ -521,13 +525,53 @@ def test_the_start_heading_is_the_median_of_its_clean_views() -> None:
             view(1.5706, 0.57), view(1.5763, 0.48),
         ]
     }  # fmt: skip
-    own, clean = _own_heading(meta, 1.11, math.pi / 2)
+    own, clean, _ = _own_heading(meta, 1.11, math.pi / 2)
     assert clean and own is not None
     assert abs(math.degrees(own)) < 0.1
     # a scattered line (a corner's other wall mixed in) is no clean view
     meta = {"start_views": [view(1.60, 0.8, rms=0.02), view(1.5706, 0.5)]}
-    own, clean = _own_heading(meta, 1.11, math.pi / 2)
+    own, clean, _ = _own_heading(meta, 1.11, math.pi / 2)
     assert clean and own == pytest.approx(math.pi / 2 - 1.5706)
+
+
+@pytest.mark.parametrize(
+    ("views", "frames_deg", "expected_deg", "within_deg"),
+    [
+        # Room 62860460's start: three scattered views (1.9, -2.9, -12.2 deg off the wall)
+        # whose median turned its map 2.9 deg; side 0's frames said 0.25 deg.
+        ([(1.88, 0.0085, 0.77), (-2.91, 0.0123, 0.68), (-12.24, 0.0107, 0.57)], 0.25, 0.25, 0.1),
+        # one scattered view: the frames' sigma is a quarter of its
+        ([(-6.69, 0.0185, 0.88)], 1.21, 0.64, 0.05),
+        # clean views are kept, whatever the odometry's turn makes of the frames
+        ([(0.18, 0.0037, 0.85), (-1.05, 0.0116, 0.86)], 2.77, 0.18, 0.01),
+    ],
+)
+def test_the_start_heading_weighs_unclean_views_against_the_first_frames(
+    views: list[tuple[float, float, float]],
+    frames_deg: float,
+    expected_deg: float,
+    within_deg: float,
+) -> None:
+    tun = WallPoseTuning()
+    meta = {
+        "start_views": [
+            {
+                "distance_m": 0.7,
+                "normal_rad": math.pi / 2 - math.radians(deg),
+                "fraction": fraction,
+                "rms_m": rms,
+            }
+            for deg, rms, fraction in views
+        ]
+    }
+    own, clean, spread = _own_heading(meta, 0.7, math.pi / 2, tuning=tun)
+    assert own is not None
+    frame = Keyframe(image=np.zeros((2, 2, 3), np.uint8), pose=Pose2D(0.2, 0.0, math.radians(0.5)))
+    line = (0.7, math.radians(frames_deg + 0.5))  # the frame's line, its odometry turn in it
+    heading, frames = _start_heading(own, [frame], [line], [0], np.array([0.2]), tun, clean, spread)
+    assert frames is not None and math.degrees(frames) == pytest.approx(frames_deg)
+    assert heading is not None
+    assert math.degrees(heading) == pytest.approx(expected_deg, abs=within_deg)
 
 
 def test_the_start_views_keep_the_origin_when_the_odometry_walks_sideways() -> None:
