@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import difflib
 import enum
+import logging
 import math
 import typing
 from pathlib import Path
@@ -1356,9 +1357,43 @@ def _check_ranges(values: dict[str, Any], source: str) -> None:
                 raise ConfigError(f"{source}: {key}: {item} is outside [{low:g}, {high:g}]")
 
 
+# Keys a release retired: dropped on load, with a warning, so that the configs saved with
+# earlier datasets and recordings still load (their defaults take over). Dotted path ->
+# what replaced it.
+RETIRED_KEYS: dict[str, str] = {
+    "map.tuning.wall_poses.start_gate_rad": "map.tuning.wall_poses.start_view_std_rad and "
+    "start_frames_std_rad",
+}
+
+
+def _drop_retired(data: dict[str, Any], source: str) -> dict[str, Any]:
+    """``data`` without :data:`RETIRED_KEYS` (copied along their paths, never in place)."""
+    for dotted, instead in RETIRED_KEYS.items():
+        *parents, leaf = dotted.split(".")
+        chain = [data]
+        for key in parents:
+            nxt = chain[-1].get(key)
+            if not isinstance(nxt, dict):
+                break
+            chain.append(nxt)
+        else:
+            if leaf not in chain[-1]:
+                continue
+            logging.getLogger(__name__).warning(
+                "%s: %s is retired and ignored (replaced by %s)", source, dotted, instead
+            )
+            node = {k: v for k, v in chain[-1].items() if k != leaf}
+            for parent, key in zip(reversed(chain[:-1]), reversed(parents), strict=True):
+                node = {**parent, key: node}
+            data = node
+    return data
+
+
 def _validate(data: Any, source: str) -> Config:
     if data is None:
         data = {}
+    if isinstance(data, dict):
+        data = _drop_retired(data, source)
     check_values(data, source, model=Config)  # finite, bounded, no `step_m: true`, no 10**12
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: the top level must be a mapping, got {type(data).__name__}")

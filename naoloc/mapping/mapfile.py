@@ -35,7 +35,7 @@ from naoloc.mapping.vocabulary import Vocabulary
 FORMAT_TAG = "naoloc-map"
 # 2: the feature parameters always name akaze_threshold and min_keypoints; a survey's meta
 # with head_yaw also has picture_yaw. Older files are read through :func:`_migrate`.
-FORMAT_VERSION = 3
+FORMAT_VERSION = 4
 _ZIP_TIME = (1980, 1, 1, 0, 0, 0)
 
 
@@ -142,6 +142,8 @@ def _migrate(meta: dict[str, Any]) -> None:
       look-ahead took their pictures where the head pointed (``picture_yaw = head_yaw``).
     - 2 -> 3: the map's config no longer tunes a localizer (``tuning.localizer``): the
       localization filter's tuning is the robot's (``localize.filter``).
+    - 3 -> 4: the survey start's heading gate (``tuning.wall_poses.start_gate_rad``) gave way
+      to two sigmas (``start_view_std_rad``, ``start_frames_std_rad``; their defaults).
     """
     if meta["version"] < 2:
         features = meta["features"]
@@ -156,6 +158,12 @@ def _migrate(meta: dict[str, Any]) -> None:
         )
         if isinstance(tuning, dict):
             tuning.pop("localizer", None)
+    if meta["version"] < 4:
+        config = meta.get("config")
+        tuning = config.get("tuning") if isinstance(config, dict) else None
+        walls = tuning.get("wall_poses") if isinstance(tuning, dict) else None
+        if isinstance(walls, dict):
+            walls.pop("start_gate_rad", None)
 
 
 def _fail(path: str, why: str) -> MapFormatError:

@@ -81,3 +81,18 @@ def test_config_is_immutable_and_overridable() -> None:
     other = cfg.with_overrides({"map": {"neurons": 100}})
     assert other.map.neurons == 100 and cfg.map.neurons == 300
     assert load_config(other.to_dict()) == other
+
+
+def test_a_retired_key_is_dropped_with_a_warning_and_the_source_is_untouched(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """Configs saved with earlier datasets and recordings name keys a release retired."""
+    walls = {"start_gate_rad": 0.06, "edge_m": 0.12}
+    data = {"map": {"tuning": {"wall_poses": walls}}}
+    with caplog.at_level("WARNING", logger="naoloc.config"):
+        cfg = load_config(data)
+    assert cfg.map.tuning.wall_poses.edge_m == 0.12
+    assert "start_gate_rad is retired" in caplog.text
+    assert walls == {"start_gate_rad": 0.06, "edge_m": 0.12}
+    with pytest.raises(ConfigError, match="unknown key"):
+        load_config({"map": {"tuning": {"wall_poses": {"start_gate": 0.06}}}})

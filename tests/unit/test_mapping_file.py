@@ -126,7 +126,7 @@ def _rewrite(data: bytes, edit: dict[str, np.ndarray]) -> bytes:
 def test_a_version_1_map_is_read_through_the_migration(small_map: VisualMap) -> None:
     data = map_bytes(small_map)
     meta = json.loads(np.load(io.BytesIO(data))["meta_json"].tobytes())
-    assert meta["version"] == 3
+    assert meta["version"] == 4
     meta["version"] = 1  # before the adaptive threshold and the look-ahead
     del meta["features"]["min_keypoints"], meta["features"]["akaze_threshold"]
     meta["meta"] = {**meta["meta"], "head_yaw": -1.57}
@@ -135,7 +135,7 @@ def test_a_version_1_map_is_read_through_the_migration(small_map: VisualMap) -> 
     assert vmap.feature_params["min_keypoints"] == 0
     assert vmap.feature_params["akaze_threshold"] == 0.001
     assert vmap.meta["picture_yaw"] == -1.57
-    meta["version"] = 3  # a current file must name them
+    meta["version"] = 4  # a current file must name them
     with pytest.raises(MapFormatError, match="bad feature parameters"):
         load_map(_rewrite(data, {"meta_json": np.frombuffer(json.dumps(meta).encode(), np.uint8)}))
 
@@ -151,6 +151,20 @@ def test_a_version_2_map_drops_the_old_localizer_tuning(small_map: VisualMap) ->
     assert vmap.config == small_map.config
     meta["version"] = 3  # a current file may not
     with pytest.raises(MapFormatError):
+        load_map(_rewrite(data, {"meta_json": np.frombuffer(json.dumps(meta).encode(), np.uint8)}))
+
+
+def test_a_version_3_map_drops_the_start_heading_gate(small_map: VisualMap) -> None:
+    data = map_bytes(small_map)
+    meta = json.loads(np.load(io.BytesIO(data))["meta_json"].tobytes())
+    meta["version"] = 3  # its build-map gated the start's heading
+    meta["config"]["tuning"]["wall_poses"]["start_gate_rad"] = 0.06
+    vmap = load_map(
+        _rewrite(data, {"meta_json": np.frombuffer(json.dumps(meta).encode(), np.uint8)})
+    )
+    assert vmap.config == small_map.config
+    meta["version"] = 4  # a current file may not
+    with pytest.raises(MapFormatError, match="bad map config"):
         load_map(_rewrite(data, {"meta_json": np.frombuffer(json.dumps(meta).encode(), np.uint8)}))
 
 
