@@ -988,36 +988,6 @@ class FilterTuning(_Model):
     behind_wall_m: float = Field(
         0.2, ge=0, description="a proposed pose puts no seen line farther behind its wall (m)"
     )
-    ghost_ratio: float = Field(
-        1.17,
-        ge=1,
-        description="a skirting board's top edge taken for the floor line (its ghost) reads "
-        "this many times the wall's distance: an edge that high, projected to the floor from "
-        "the camera's height (m per m; over the recorded line scans of 40 rooms at the true "
-        "pose, the lines beyond a wall cluster at 1.10-1.27 of its distance)",
-    )
-    ghost_ratio_sigma: float = Field(
-        0.04, ge=0, description="... the ratio's spread (one sigma, per m of the wall's distance)"
-    )
-    ghost_share: float = Field(
-        0.1,
-        ge=0,
-        lt=1,
-        description="prior share of floor lines that are a wall's skirting ghost (about one "
-        "in ten of the lines along a wall's direction)",
-    )
-
-    @field_validator("ghost_share")
-    @classmethod
-    def _shares(cls, value: float, info: Any) -> float:
-        outliers = info.data.get("line_outlier_share", 0.0)
-        if value + outliers >= 1:
-            raise ValueError(
-                f"ghost_share {value} and line_outlier_share {outliers} leave no share for "
-                "the walls' own lines (their sum must be below 1)"
-            )
-        return value
-
     clutter_aligned: float = Field(
         0.8,
         ge=0,

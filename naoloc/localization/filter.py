@@ -330,8 +330,8 @@ class MultiHypothesisFilter:
         for h in leaders:
             for line in lines:
                 fit = fit_line(self.walls, line, h.pose, self.tun, h.cov)
-                if fit.explained and fit.log_ratio > self.tun.shift_explained_nats:
-                    continue  # this hypothesis explains the line already (or its ghost)
+                if fit.wall >= 0 and fit.log_ratio > self.tun.shift_explained_nats:
+                    continue  # this hypothesis explains the line already
                 dist, direction = self.walls.expected(h.pose)
                 turn = np.angle(np.exp(1j * (line.normal - direction)))
                 sig_a = math.hypot(self.tun.line_sigma_rad, math.sqrt(h.cov[2, 2]))

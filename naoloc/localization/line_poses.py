@@ -83,50 +83,33 @@ def _line_heading(
 
 def _axis_values(
     lines: Sequence[WallLine], walls: WallMap, theta: float
-) -> list[list[tuple[float, bool, float]]]:
+) -> list[list[tuple[float, bool]]]:
     """Per axis of W (x, y), the robot coordinate each line gives at heading ``theta`` (W),
-    whether its wall is the one on the axis's + side, and the line's distance (m)."""
+    and whether its wall is the one on the axis's + side."""
     x0, x1, y0, y1 = walls.bounds
     coords = (x1, y1, -x0, -y0)  # each side's coordinate along its outward normal, in W
-    per_axis: list[list[tuple[float, bool, float]]] = [[], []]
+    per_axis: list[list[tuple[float, bool]]] = [[], []]
     for ln in lines:
         k = round((theta + ln.normal) / (math.pi / 2)) % 4
         along = coords[k] - ln.distance
-        per_axis[k % 2].append((along if k < 2 else -along, k < 2, ln.distance))
+        per_axis[k % 2].append((along if k < 2 else -along, k < 2))
     return per_axis
 
 
-def _ghosts(values: Sequence[tuple[float, bool, float]], tun: FilterTuning) -> list[bool]:
-    """Which lines could be a nearer line's skirting ghost: on the same side, within three
-    sigmas of ``ghost_ratio`` times its distance (:func:`naoloc.localization.walls.fit_line`)."""
-    out = []
-    for _v, plus, d in values:
-        out.append(any(
-            q == plus and 0 < e < d
-            and abs(d - tun.ghost_ratio * e) <= 3 * tun.ghost_ratio_sigma * e + tun.line_sigma_m
-            for _u, q, e in values
-        ))  # fmt: skip
-    return out
-
-
-def _feasible(values: Sequence[tuple[float, bool, float]], tun: FilterTuning) -> list[float]:
+def _feasible(values: Sequence[tuple[float, bool]], tun: FilterTuning) -> list[float]:
     """The coordinates along one axis that put no seen line behind its wall.
 
     A line is where the floor ends: at the wall, or at furniture in front of it, so the
     robot is where one of the nearest lines on either side is the wall's. Clusters of the
     lines' coordinates (within ``line_agree_m``) that would put a line more than
-    ``behind_wall_m`` behind a wall are dropped, unless the lines contradict each other. A
-    line that could be a nearer one's skirting ghost (:func:`_ghosts`) may stand behind
-    its wall.
+    ``behind_wall_m`` behind a wall are dropped, unless the lines contradict each other.
     """
     if not values:
         return []
     behind = tun.behind_wall_m
-    ghost = _ghosts(values, tun)
-    firm = [(v, plus) for (v, plus, _d), g in zip(values, ghost, strict=True) if not g]
-    lo = max((v for v, plus in firm if not plus), default=-math.inf) - behind
-    hi = min((v for v, plus in firm if plus), default=math.inf) + behind
-    ordered = sorted(v for v, _plus, _d in values)
+    lo = max((v for v, plus in values if not plus), default=-math.inf) - behind
+    hi = min((v for v, plus in values if plus), default=math.inf) + behind
+    ordered = sorted(v for v, _ in values)
     groups: list[list[float]] = [[ordered[0]]]
     for a in ordered[1:]:
         if a - groups[-1][-1] < tun.line_agree_m:

@@ -8,11 +8,7 @@ wall's outward normal ``n`` (angle ``alpha``), in direction ``phi = alpha - thet
 FRAME_ROBOT. A line that no wall explains (a bench's front, a skirting board in shadow) is
 clutter: the model is a mixture of the walls and a uniform clutter density over the
 detector's range and all directions, as nav2 AMCL's likelihood field mixes a hit and a
-random measurement. A third component is structured clutter: a skirting board's top edge
-taken for the floor line, projected to the floor from the camera's height, reads the wall
-``ghost_ratio`` times as far as its foot (its "ghost", beyond the wall). Without it a ghost
-either pulls a pose that far back or, seen beside the foot, makes the right pose look as if
-a line stood behind its wall.
+random measurement.
 """
 
 from __future__ import annotations
@@ -157,14 +153,11 @@ class LineFit:
 
     Attributes:
         wall: Index of the wall (0..3) or of a furniture front (4.., among those whose
-            stretch the line's foot lies on), or -1 when a ghost or clutter explains it
-            better.
+            stretch the line's foot lies on), or -1 when clutter explains it better.
         residual: ``(2,)`` observed minus expected: distance (m), direction (rad).
         jacobian: ``(2, 3)`` d residual / d pose (x, y, theta).
         sigma: ``(2,)`` the line's noise: distance (m), direction (rad).
-        log_ratio: log of (walls, ghosts and clutter mixture / clutter alone), nats.
-        ghost: Index of the wall (0..3) whose skirting ghost explains the line best of the
-            three components, else -1.
+        log_ratio: log of (walls-and-clutter mixture / clutter alone), nats.
     """
 
     wall: int
@@ -172,12 +165,6 @@ class LineFit:
     jacobian: np.ndarray
     sigma: np.ndarray
     log_ratio: float
-    ghost: int = -1
-
-    @property
-    def explained(self) -> bool:
-        """Whether a wall's (or a front's) foot or a wall's ghost explains the line."""
-        return self.wall >= 0 or self.ghost >= 0
 
 
 def line_sigma(line: WallLine, tun: FilterTuning) -> np.ndarray:
@@ -230,47 +217,23 @@ def fit_line(
         coords = np.concatenate([coords, walls.faces[on, 1]])
     n, dist, direction = _seen(normals, coords, pose)
     sigma = line_sigma(line, tun)
+    r_d = line.distance - dist
     r_a = np.angle(np.exp(1j * (line.normal - direction)))
-    best, best_density = _best(n, line.distance - dist, r_a, np.diag(sigma**2), cov)
-    # The walls' skirting ghosts: ghost_ratio times each wall's distance, the ratio's spread
-    # growing with it (fronts of furniture have no skirting).
-    ratio = tun.ghost_ratio
-    spread = np.hypot(sigma[0], tun.ghost_ratio_sigma * np.maximum(dist[:4], 0.0))
-    ghost, ghost_density = _best(
-        n[:4] * ratio, line.distance - ratio * dist[:4], r_a[:4], np.diag(sigma**2), cov, spread
-    )
-    clutter = tun.line_outlier_share * clutter_density(walls, line, pose, tun)
-    hit = (1.0 - tun.line_outlier_share - tun.ghost_share) * best_density
-    echo = tun.ghost_share * ghost_density
-    log_ratio = math.log((hit + echo + clutter) / clutter)
-    jac = np.array([[n[best, 0], n[best, 1], 0.0], [0.0, 0.0, 1.0]])
-    residual = np.array([line.distance - dist[best], r_a[best]])
-    wall = best if hit > max(clutter, echo) else -1
-    return LineFit(wall, residual, jac, sigma, log_ratio, ghost if echo > max(clutter, hit) else -1)
-
-
-def _best(
-    n: np.ndarray,
-    r_d: np.ndarray,
-    r_a: np.ndarray,
-    noise: np.ndarray,
-    cov: np.ndarray | None,
-    spread: np.ndarray | None = None,
-) -> tuple[int, float]:
-    """The line model ``k`` whose residuals ``(r_d[k], r_a[k])`` are likeliest and its
-    density (per m and rad): ``n[k]`` is d distance / d position; the pose's ``cov``
-    widens the match, ``spread[k]`` (m) replaces the distance noise when given."""
-    best, best_m, best_s = 0, math.inf, noise
-    for k in range(len(r_d)):
+    best, best_m, best_s = -1, math.inf, np.diag(sigma**2)
+    for k in range(len(normals)):
         jac = np.array([[n[k, 0], n[k, 1], 0.0], [0.0, 0.0, 1.0]])
-        s = noise.copy() if spread is None else np.diag([spread[k] ** 2, noise[1, 1]])
-        if cov is not None:
-            s = s + jac @ cov @ jac.T
+        s = np.diag(sigma**2) + (jac @ cov @ jac.T if cov is not None else 0.0)
         r = np.array([r_d[k], r_a[k]])
         m = float(r @ np.linalg.solve(s, r))
         if m < best_m:
             best, best_m, best_s = k, m, s
-    if not math.isfinite(best_m):
-        return best, 0.0
-    density = math.exp(-0.5 * best_m) / (2.0 * math.pi * math.sqrt(float(np.linalg.det(best_s))))
-    return best, density
+    clutter = tun.line_outlier_share * clutter_density(walls, line, pose, tun)
+    hit = (
+        (1.0 - tun.line_outlier_share)
+        * math.exp(-0.5 * best_m)
+        / (2.0 * math.pi * math.sqrt(float(np.linalg.det(best_s))))
+    )
+    log_ratio = math.log((hit + clutter) / clutter)
+    jac = np.array([[n[best, 0], n[best, 1], 0.0], [0.0, 0.0, 1.0]])
+    residual = np.array([r_d[best], r_a[best]])
+    return LineFit(best if hit > clutter else -1, residual, jac, sigma, log_ratio)

@@ -217,43 +217,6 @@ def test_the_lines_of_a_corner_propose_the_pose_modulo_the_rooms_symmetry() -> N
     assert line_poses(lines[:1], WALLS, TUN) == []  # one line gives no pose
 
 
-def _ghost(line: WallLine, ratio: float = TUN.ghost_ratio) -> WallLine:
-    """A skirting board's top edge taken for ``line``'s foot: ``ratio`` times as far."""
-    return dataclasses.replace(line, distance=line.distance * ratio)
-
-
-def test_a_skirting_ghost_beyond_a_wall_is_explained_as_the_ghost_not_as_the_wall() -> None:
-    """Room 1805250006, pose 7: facing a wall 1.61 m away the robot saw its foot and a line
-    at 1.93 m (the skirting's top edge); the ghost pulled the pose 0.28 m back."""
-    pose = np.array([2.0, 0.5, 0.7])
-    foot = _line(WALLS, pose, 1)
-    fit = fit_line(WALLS, _ghost(foot), pose, TUN, None)
-    assert fit.wall == -1 and fit.ghost == 1 and fit.explained and fit.log_ratio > 1.0
-    # From where the ghost would be the foot, it is the wall's foot (and moves the pose).
-    back = pose - np.array([math.cos(WALLS.normals[1]), math.sin(WALLS.normals[1]), 0.0]) * (
-        foot.distance * (TUN.ghost_ratio - 1)
-    )
-    assert fit_line(WALLS, _ghost(foot), back, TUN, None).wall == 1
-    # Without the ghost component the same line is clutter: nothing explains it.
-    bare = TUN.model_copy(update={"ghost_share": 0.0})
-    plain = fit_line(WALLS, _ghost(foot), pose, bare, None)
-    assert not plain.explained and plain.log_ratio < fit.log_ratio
-    # A line farther than any ghost of a wall stays clutter.
-    assert not fit_line(WALLS, _ghost(foot, 1.6), pose, TUN, None).explained
-
-
-def test_a_skirting_ghost_seen_beside_its_foot_does_not_rule_out_the_pose() -> None:
-    """A line behind its wall rules a proposed pose out, unless it can be a nearer line's
-    ghost: the foot and the ghost of one wall, and another wall, still propose the truth."""
-    truth = np.array([2.0, 0.5, 0.7])
-    foot, side = _line(WALLS, truth, 1), _line(WALLS, truth, 0)
-    poses = line_poses([foot, _ghost(foot), side], WALLS, TUN, heading=truth[2])
-    assert any(np.allclose(p, truth, atol=1e-6) for p in poses)
-    bare = TUN.model_copy(update={"ghost_ratio": 2.0})  # no line is another's ghost
-    poses = line_poses([foot, _ghost(foot), side], WALLS, bare, heading=truth[2])
-    assert not any(np.allclose(p, truth, atol=1e-6) for p in poses)
-
-
 def test_the_filter_starts_from_the_lines_and_a_picture_decides() -> None:
     truth = np.array([2.0, 0.5, 0.7])
     f = MultiHypothesisFilter(WALLS, TUN)
