@@ -1369,24 +1369,24 @@ RETIRED_KEYS: dict[str, str] = {
 def _drop_retired(data: dict[str, Any], source: str) -> dict[str, Any]:
     """``data`` without :data:`RETIRED_KEYS` (copied along their paths, never in place)."""
     for dotted, instead in RETIRED_KEYS.items():
-        *parents, leaf = dotted.split(".")
-        chain = [data]
-        for key in parents:
-            nxt = chain[-1].get(key)
-            if not isinstance(nxt, dict):
-                break
-            chain.append(nxt)
-        else:
-            if leaf not in chain[-1]:
-                continue
+        path = dotted.split(".")
+        node: Any = data
+        for key in path[:-1]:
+            node = node.get(key) if isinstance(node, dict) else None
+        if isinstance(node, dict) and path[-1] in node:
             logging.getLogger(__name__).warning(
                 "%s: %s is retired and ignored (replaced by %s)", source, dotted, instead
             )
-            node = {k: v for k, v in chain[-1].items() if k != leaf}
-            for parent, key in zip(reversed(chain[:-1]), reversed(parents), strict=True):
-                node = {**parent, key: node}
-            data = node
+            data = _without(data, path)
     return data
+
+
+def _without(data: dict[str, Any], path: list[str]) -> dict[str, Any]:
+    """A copy of ``data`` without the key at ``path`` (the dicts along it copied)."""
+    key, *rest = path
+    if not rest:
+        return {k: v for k, v in data.items() if k != key}
+    return {**data, key: _without(data[key], rest)}
 
 
 def _validate(data: Any, source: str) -> Config:
