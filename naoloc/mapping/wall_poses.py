@@ -965,7 +965,11 @@ def side_distances(
             break
     if wall is None:
         return None
-    on_wall = [v is not None and abs(v - wall) < tun.wall_level_m for v in levels]
+    again = wall_seen_again(measured, levels, wall, tuning=tun)
+    on_wall = [
+        v is not None and (abs(v - wall) < tun.wall_level_m or abs(v - again) < tun.wall_level_m)
+        for v in levels
+    ]
     # A line on the wall's level sees the wall: its own distance, not the level's (levels
     # closer than wall_level_m differ only by the odometry's sideways error in between).
     out: list[float | None] = [
@@ -981,6 +985,66 @@ def side_distances(
         if out[i] is None and nxt is not None:
             out[i] = nxt - inward[i + 1]
     return [float(v) for v in out if v is not None], on_wall
+
+
+def wall_seen_again(
+    measured: Sequence[float | None],
+    levels: Sequence[float | None],
+    wall: float,
+    *,
+    tuning: WallPoseTuning | None = None,
+) -> float:
+    """A nearer level of one side's lines that is its wall seen again (or ``wall``).
+
+    Levels are chained by the jumps between stretches: each stretch of fronts between two
+    stretches of the wall adds its own error, and a run of fronts of several depths steered
+    along as one adds up theirs (a map origin 0.136 m off: the start's stretch of wall was
+    put 0.136 m before the wall it saw). A level is the wall again when
+
+    - at least ``map.tuning.wall_poses.min_wall_frames`` lines see it (not the wall's
+      share of the side: a lone far line is what that rules out, and this level is nearer),
+    - it never borders the wall's level (a jump seen directly, from one line to the next,
+      measures a front's depth to 1-4 cm: such a level stays a front), and
+    - its lines read as the wall's do, their medians within
+      ``map.tuning.wall_poses.wall_again_m`` (the survey keeps the wall at its offset; a
+      front stands nearer by its depth).
+
+    Args:
+        measured: Per frame in walking order: the side line's distance (m) or None.
+        levels: Each line's level from :func:`side_distances` (None without a line), m.
+        wall: The wall's level, m.
+        tuning: ``map.tuning.wall_poses`` (None: the defaults).
+
+    Returns:
+        The level that is the wall seen again, the nearest such to ``wall``; ``wall`` when
+        there is none.
+    """
+    tun = WallPoseTuning() if tuning is None else tuning
+    pairs = zip(levels, measured, strict=True)
+    lines = [(v, m) for v, m in pairs if v is not None and m is not None]
+    seen = [v for v, _ in lines]
+
+    def near(level: float) -> list[float]:
+        return [m for v, m in lines if abs(v - level) < tun.wall_level_m]
+
+    on_wall = [abs(v - wall) < tun.wall_level_m for v in seen]
+    wall_reads = float(np.median(near(wall)))
+    best = wall
+    for level in sorted(set(seen), reverse=True):
+        if level >= wall or abs(level - wall) < tun.wall_level_m:
+            continue
+        group = [abs(v - level) < tun.wall_level_m for v in seen]
+        if sum(group) < tun.min_wall_frames:
+            continue
+        borders = any(
+            (a and d) or (b and c)
+            for (a, b), (c, d) in itertools.pairwise(zip(group, on_wall, strict=True))
+        )
+        if borders or abs(float(np.median(near(level))) - wall_reads) > tun.wall_again_m:
+            continue
+        if best == wall or level > best:
+            best = level
+    return best
 
 
 def _start_from_wall(

@@ -391,6 +391,68 @@ def test_a_doorway_entered_and_left_while_stepping_toward_the_wall_is_not_the_wa
     assert np.abs(np.array(dists) - truth).max() < 0.03
 
 
+# Room 1934964074's first side (8.2 x 7.7 m, offset 1 m; skirting included): the start's
+# stretch of wall, fronts of several depths (0.28-0.51 m) the robot steered along as one
+# for 2.2 m, then the wall again. The truth: every line before and after the fronts sees
+# the wall.
+_AGAIN_MEASURED: list[float | None] = [
+    1.0, 1.002, 1.004, 1.029, 1.03, 0.996, 0.713, 0.67, 0.711, 0.684, 0.657, 0.672, 0.712,
+    0.78, 0.671, 0.679, 0.64, 1.149, 0.99, 1.01, 1.025, 1.024, 0.988, 0.998, 0.97, 1.017,
+    1.055, 1.012, 0.993, 1.035,
+]  # fmt: skip
+_AGAIN_INWARD = [
+    0.0, 0.012, 0.009, 0.009, -0.017, -0.018, 0.016, 0.0, 0.043, 0.003, 0.029, 0.056, 0.08,
+    0.031, -0.066, 0.042, 0.034, 0.073, -0.118, 0.022, 0.002, -0.013, -0.011, 0.025, 0.014,
+    0.042, -0.005, -0.042, 0.001, 0.018,
+]  # fmt: skip
+
+
+def test_the_wall_seen_again_after_a_run_of_fronts_is_the_wall() -> None:
+    """The levels chained through the fronts put the start's stretch 0.136 m before the
+    wall after them: a front, and the map origin 0.136 m off. It never borders the wall's
+    level and its lines read as the wall's: it is the wall, each line its own distance."""
+    found = side_distances(_AGAIN_MEASURED, _AGAIN_INWARD)
+    assert found is not None
+    dists, on_wall = found
+    assert on_wall == [not 6 <= i <= 16 for i in range(len(_AGAIN_MEASURED))]
+    assert dists[0] == pytest.approx(1.0, abs=1e-9)
+    assert _start_from_wall(dists, on_wall, _AGAIN_INWARD) == pytest.approx(1.0, abs=0.02)
+
+
+def _without_fronts() -> tuple[list[float | None], list[float]]:
+    """The side with its fronts cut out: the start's stretch, then at once the wall after
+    them, the odometry stepping 0.2 m toward the wall at the join."""
+    measured = _AGAIN_MEASURED[:6] + _AGAIN_MEASURED[17:]
+    inward = [*_AGAIN_INWARD[:6], -0.2, *_AGAIN_INWARD[18:]]
+    return measured, inward
+
+
+@pytest.mark.parametrize(
+    ("case", "why"),
+    [
+        (
+            ([v - 0.136 if i < 6 and v is not None else v for i, v in enumerate(_AGAIN_MEASURED)],
+             _AGAIN_INWARD),
+            "its lines read nearer than the wall's: a front",
+        ),
+        (_without_fronts(), "it borders the wall: the jump measured its depth"),
+        (
+            ([0.7 if 2 <= i <= 5 else v for i, v in enumerate(_AGAIN_MEASURED)],
+             _AGAIN_INWARD),
+            "two lines are too few",
+        ),
+    ],
+)  # fmt: skip
+def test_a_nearer_level_stays_a_front(
+    case: tuple[list[float | None], list[float]], why: str
+) -> None:
+    measured, inward = case
+    found = side_distances(measured, inward)
+    assert found is not None, why
+    _, on_wall = found
+    assert not any(on_wall[:2]), why
+
+
 def test_side_distances_need_a_wall_most_lines_agree_on() -> None:
     assert side_distances([None, None], [0.0, 0.0]) is None
     # Two levels of one frame each: no level has three lines
