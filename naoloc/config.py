@@ -690,8 +690,9 @@ class WallPoseTuning(_Model):
     wall_again_m: float = Field(
         0.05,
         ge=0,
-        description="a nearer level as well supported, never bordering the wall's, whose "
-        "lines read within this of the wall's (medians, m) is the wall seen again: levels "
+        description="a nearer level of min_wall_frames lines or more, never bordering the "
+        "wall's, whose lines read within this of the wall's (medians, m) is the wall seen "
+        "again: levels "
         "chained through a run of fronts err (a map origin 0.136 m off); the survey keeps "
         "the wall at its offset to 1-3 cm, a front stands nearer by its depth",
     )
