@@ -636,6 +636,14 @@ class WallPoseTuning(_Model):
         "start, one sigma (rad): over 125 surveys it erred 0.78 deg (std; 0.40 deg median "
         "of abs)",
     )
+    start_clean_std_rad: float = Field(
+        0.005,
+        gt=0,
+        description="a clean start view's heading (the side wall seen whole and straight), "
+        "one sigma (rad): over 125 surveys such views erred 0.14 deg at the median, 0.48 "
+        "deg at p90; a door beside the start (its face 1.8 cm proud of the skirting) turned "
+        "four views 1 deg. The map records its frame's heading sigma (heading_std_rad)",
+    )
     clean_rms_m: float = Field(
         0.006,
         gt=0,
@@ -979,6 +987,14 @@ class FilterTuning(_Model):
         "uses that",
     )
     map_floor_rad: float = Field(0.01, ge=0, description="the same for the heading (rad, std)")
+    map_frame_rad: float = Field(
+        0.005,
+        ge=0,
+        description="the map frame's heading error (rad, std) for a map that does not record "
+        "its own (meta wall_poses.heading_std_rad): the survey start's heading to its wall "
+        "turns the whole map about its origin, so a pose r m from it is off by r times it, "
+        "across; added to the reported covariance",
+    )
     line_sigma_m: float = Field(0.02, gt=0, description="floor-line distance noise (m, std)")
     line_sigma_per_m: float = Field(
         0.02, ge=0, description="floor-line distance noise growing with distance (m per m)"

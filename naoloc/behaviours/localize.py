@@ -227,8 +227,9 @@ class Eyes:
 def own_sigma(est: PoseEstimate, floor_m: float) -> float:
     """The belief's position std along its wider axis less the map's own error (m): the
     floor the filter adds to every covariance (``localize.filter.map_floor_m``, or the
-    map's ``keyframe_sigma_m``), which no number of looks removes."""
-    sigma = est.sigmas()[0]
+    map's ``keyframe_sigma_m``) and the map frame's heading error at the pose
+    (``est.map_frame``), which no number of looks removes."""
+    sigma = est.sigmas(frame=False)[0]
     return math.sqrt(max(0.0, sigma**2 - floor_m**2))
 
 

@@ -54,12 +54,16 @@ class PoseEstimate:
         y: Left coordinate, m (map frame); NaN unless tracking.
         theta: Heading, rad in (-pi, pi] (map frame); NaN unless tracking.
         covariance: 3 x 3 covariance of (x, y, theta) (m^2, rad^2); None unless tracking.
+            It holds the belief's spread, the map's own error (``map_floor_m``) and the map
+            frame's heading error at this pose (``map_frame``).
         confidence: Probability of the best place given the observations (0 unless
             tracking).
         status: Tracking, lost, or not the mapped room.
         reason: Why there is no pose ("" when tracking).
         method: ``filter`` (or ``gcs`` for the paper's Algorithm 5, ``none`` without a pose).
         evidence: JSON-able figures behind it (pictures, support, hypotheses, other_room).
+        map_frame: The part of ``covariance`` that is the map frame's heading error
+            (:func:`frame_covariance`; None unless tracking): no look removes it.
     """
 
     x: float
@@ -71,6 +75,7 @@ class PoseEstimate:
     reason: str = ""
     method: str = "filter"
     evidence: dict[str, Any] = field(default_factory=dict)
+    map_frame: np.ndarray | None = None
 
     @property
     def found(self) -> bool:
@@ -81,11 +86,15 @@ class PoseEstimate:
         """The pose (map frame)."""
         return Pose2D(self.x, self.y, self.theta)
 
-    def sigmas(self) -> tuple[float, float]:
-        """Position std along the wider axis (m) and heading std (rad); inf without one."""
+    def sigmas(self, frame: bool = True) -> tuple[float, float]:
+        """Position std along the wider axis (m) and heading std (rad); inf without one.
+        ``frame``: with the map frame's heading error at the pose (False: without)."""
         if self.covariance is None:
             return math.inf, math.inf
-        return MultiHypothesisFilter.sigma(self.covariance)
+        cov = self.covariance
+        if not frame and self.map_frame is not None:
+            cov = cov - self.map_frame
+        return MultiHypothesisFilter.sigma(cov)
 
 
 def turn_scale_of(meta: dict[str, Any]) -> float:
@@ -102,6 +111,24 @@ def keyframe_sigma_of(meta: dict[str, Any]) -> float | None:
     if not isinstance(value, (int, float)) or isinstance(value, bool):
         return None
     return float(value) if math.isfinite(value) and value >= 0 else None
+
+
+def heading_std_of(meta: dict[str, Any], default: float) -> float:
+    """The map frame's heading error (``meta.wall_poses.heading_std_rad``, one sigma, rad:
+    how its survey found the start's heading to its wall), else ``default``."""
+    walls = meta.get("wall_poses")
+    value = walls.get("heading_std_rad") if isinstance(walls, dict) else None
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        return default
+    return float(value) if math.isfinite(value) and value >= 0 else default
+
+
+def frame_covariance(pose: np.ndarray, sigma: float) -> np.ndarray:
+    """The covariance a map frame turned by an error of ``sigma`` (rad, std) about its
+    origin gives a pose (x, y m, theta rad; map frame): turned by ``d``, the map puts a
+    place at (x, y) at (x - d y, y + d x) and every heading d more."""
+    jac = np.array([-float(pose[1]), float(pose[0]), 1.0])
+    return sigma**2 * np.outer(jac, jac)
 
 
 def decide(belief: Belief, tun: FilterTuning) -> tuple[Status, str]:
@@ -153,6 +180,7 @@ class Localizer:
         self.tuning = tuning if tuning is not None else FilterTuning()
         self.seed = seed
         self.landmarks = LandmarkIndex(vmap)
+        self.heading_std = heading_std_of(vmap.meta, self.tuning.map_frame_rad)
         self.filter = self._new_filter()
         self.log: list[Observation] = []
         self.cpu_s = 0.0
@@ -211,9 +239,10 @@ class Localizer:
         if status is not Status.TRACKING or b.pose is None:
             nan = float("nan")
             return PoseEstimate(nan, nan, nan, None, 0.0, status, reason, "none", evidence)
+        frame = frame_covariance(b.pose, self.heading_std)
         return PoseEstimate(
-            float(b.pose[0]), float(b.pose[1]), float(b.pose[2]), b.cov, b.probability,
-            status, "", "filter", evidence,
+            float(b.pose[0]), float(b.pose[1]), float(b.pose[2]), b.cov + frame, b.probability,
+            status, "", "filter", evidence, frame,
         )  # fmt: skip
 
 

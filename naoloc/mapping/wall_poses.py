@@ -77,6 +77,9 @@ class WallPoses:
             None: it saw none).
         start_frames: The same from side 0's first frames' lines, less the odometry's turn
             since the start (rad; None: none).
+        heading_std: The map frame's heading error, one sigma (rad), as the start's heading
+            was found (:func:`_start_heading`); None without a heading. The whole map turns
+            with it about the origin: a pose r m from it is off by r times it, across.
         faces: The fronts of furniture standing along the walls that the side lines saw
             (:func:`furniture_faces`): ``(wall, depth, xa, ya, xb, yb)``, the wall's index
             (0: x_max, 1: y_max, 2: x_min, 3: y_min), how far before that wall's floor line
@@ -98,6 +101,7 @@ class WallPoses:
     skirting: float = 0.0
     start_own: float | None = None
     start_frames: float | None = None
+    heading_std: float | None = None
     faces: list[tuple[int, float, float, float, float, float]] = dataclasses.field(
         default_factory=list
     )
@@ -115,6 +119,7 @@ class WallPoses:
             "frames": len(self.keyframes),
             "turn_scale": None if self.turn_scale is None else round(self.turn_scale, 4),
             "hidden": [[k, round(d, 4)] for k, d in self.hidden],
+            **({} if self.heading_std is None else {"heading_std_rad": round(self.heading_std, 5)}),
             **(
                 {}
                 if self.wall_frame is None or self.walls is None
@@ -326,7 +331,7 @@ def wall_poses(
 
     # The survey start (the map frame's origin) in the wall frame.
     own, clean, spread = _own_heading(meta, offset, side_normal, tuning=tun)
-    heading, frames_heading = _start_heading(
+    heading, frames_heading, heading_std = _start_heading(
         own, keyframes, lines, frames_of[0], along, tun, clean, spread
     )
     start = Pose2D(0.0, 0.0, heading or 0.0)
@@ -358,6 +363,7 @@ def wall_poses(
         skirting=skirting,
         start_own=own,
         start_frames=frames_heading,
+        heading_std=heading_std,
         faces=faces,
         hidden=hidden,
     )
@@ -1181,9 +1187,10 @@ def _start_heading(
     tuning: WallPoseTuning,
     clean: bool = False,
     spread: float = 0.0,
-) -> tuple[float | None, float | None]:
-    """The survey start's heading to side 0's wall (rad), or None without any line, and
-    what side 0's first frames say of it (None: nothing).
+) -> tuple[float | None, float | None, float | None]:
+    """The survey start's heading to side 0's wall (rad), or None without any line; what
+    side 0's first frames say of it (None: nothing); and the heading's one sigma (rad;
+    None without a heading).
 
     ``own`` is what the start itself saw: its side line's angle, or (a side wall too near
     to be seen) a farther wall's (:func:`_far_headings`). Side 0's frames' lines within
@@ -1193,7 +1200,8 @@ def _start_heading(
     the start: :func:`_clean`) is kept: the frames carry the odometry's turn error, and a
     NAO's odometry can turn 0.1 rad in the first metre. Otherwise the two are weighed by
     their variances: the own line's one sigma is ``start_view_std_rad``, or its views'
-    ``spread`` (rad) when larger; the frames' ``start_frames_std_rad``.
+    ``spread`` (rad) when larger; the frames' ``start_frames_std_rad``. A clean own line's
+    sigma is ``start_clean_std_rad``; a weighed heading's, the weighing's.
     """
     votes = []
     for i in side0:
@@ -1202,10 +1210,12 @@ def _start_heading(
         if (line := lines[i]) is not None:
             votes.append(modulo2PI(line[1] - keyframes[i].pose.theta))
     frames = float(np.median(votes)) if votes else None
-    if own is None or frames is None:
-        return (frames if own is None else own), frames
-    if clean:
-        return own, frames
-    w_own = 1.0 / max(tuning.start_view_std_rad, spread) ** 2
+    own_std = tuning.start_clean_std_rad if clean else max(tuning.start_view_std_rad, spread)
+    if own is None:
+        return frames, frames, None if frames is None else tuning.start_frames_std_rad
+    if frames is None or clean:
+        return own, frames, own_std
+    w_own = 1.0 / own_std**2
     w_frames = 1.0 / tuning.start_frames_std_rad**2
-    return modulo2PI(own + w_frames / (w_own + w_frames) * modulo2PI(frames - own)), frames
+    weighed = modulo2PI(own + w_frames / (w_own + w_frames) * modulo2PI(frames - own))
+    return weighed, frames, 1.0 / math.sqrt(w_own + w_frames)

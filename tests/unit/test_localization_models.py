@@ -14,7 +14,13 @@ from naoloc.geometry import Pose2D
 from naoloc.localization.filter import Belief, MultiHypothesisFilter
 from naoloc.localization.hypothesis import Hypothesis, motion_step
 from naoloc.localization.line_poses import line_poses
-from naoloc.localization.localizer import Status, decide
+from naoloc.localization.localizer import (
+    PoseEstimate,
+    Status,
+    decide,
+    frame_covariance,
+    heading_std_of,
+)
 from naoloc.localization.pictures import (
     PictureMatches,
     landmarks_in_view,
@@ -419,3 +425,38 @@ def test_a_blank_view_where_the_map_expects_landmarks_fades_the_place() -> None:
         assert f.contradicted is fades
         assert (decide(f.belief(), TUN)[0] is Status.TRACKING) is not fades
         assert all(h.score <= 0.0 for h in f.hypotheses) is fades
+
+
+@pytest.mark.parametrize(
+    ("meta", "expected"),
+    [
+        ({"wall_poses": {"heading_std_rad": 0.012}}, 0.012),
+        ({"wall_poses": {}}, 0.005),  # older maps: the tuning's
+        ({}, 0.005),
+        ({"wall_poses": {"heading_std_rad": "x"}}, 0.005),
+        ({"wall_poses": {"heading_std_rad": -1.0}}, 0.005),
+        ({"wall_poses": {"heading_std_rad": float("nan")}}, 0.005),
+    ],
+)
+def test_the_map_frames_heading_error_comes_from_the_map(
+    meta: dict[str, object], expected: float
+) -> None:
+    assert heading_std_of(meta, FilterTuning().map_frame_rad) == expected
+
+
+def test_the_map_frames_heading_error_grows_across_with_the_distance_from_the_origin() -> None:
+    """A map turned 1 deg about its origin puts a place 5 m along x 8.7 cm off along y: the
+    covariance admits that across the ray from the origin, not along it."""
+    sigma = math.radians(1.0)
+    at_origin = frame_covariance(np.array([0.0, 0.0, 0.3]), sigma)
+    assert at_origin[:2, :2] == pytest.approx(np.zeros((2, 2)))
+    assert at_origin[2, 2] == pytest.approx(sigma**2)
+    far = frame_covariance(np.array([5.0, 0.0, 0.3]), sigma)
+    assert math.sqrt(far[1, 1]) == pytest.approx(5.0 * sigma)
+    assert far[0, 0] == pytest.approx(0.0)
+    assert far[1, 2] == pytest.approx(5.0 * sigma**2)  # position and heading turn together
+    # the estimate's own spread leaves it out; the reported covariance keeps it
+    base = np.diag([0.02**2, 0.02**2, 0.01**2])
+    est = PoseEstimate(5.0, 0.0, 0.3, base + far, 1.0, Status.TRACKING, map_frame=far)
+    assert est.sigmas()[0] == pytest.approx(math.hypot(0.02, 5.0 * sigma))
+    assert est.sigmas(frame=False)[0] == pytest.approx(0.02)

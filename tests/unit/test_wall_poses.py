@@ -597,22 +597,26 @@ def test_the_start_heading_is_the_median_of_its_clean_views() -> None:
 
 
 @pytest.mark.parametrize(
-    ("views", "frames_deg", "expected_deg", "within_deg"),
+    ("views", "frames_deg", "expected_deg", "within_deg", "sigma_deg"),
     [
         # Room 62860460's start: three scattered views (1.9, -2.9, -12.2 deg off the wall)
-        # whose median turned its map 2.9 deg; side 0's frames said 0.25 deg.
-        ([(1.88, 0.0085, 0.77), (-2.91, 0.0123, 0.68), (-12.24, 0.0107, 0.57)], 0.25, 0.25, 0.1),
+        # whose median turned its map 2.9 deg; side 0's frames said 0.25 deg. The weighed
+        # heading's sigma is about the frames' (0.8 deg).
+        ([(1.88, 0.0085, 0.77), (-2.91, 0.0123, 0.68), (-12.24, 0.0107, 0.57)], 0.25, 0.25, 0.1,
+         0.80),
         # one scattered view: the frames' sigma is a quarter of its
-        ([(-6.69, 0.0185, 0.88)], 1.21, 0.64, 0.05),
-        # clean views are kept, whatever the odometry's turn makes of the frames
-        ([(0.18, 0.0037, 0.85), (-1.05, 0.0116, 0.86)], 2.77, 0.18, 0.01),
+        ([(-6.69, 0.0185, 0.88)], 1.21, 0.64, 0.05, 0.78),
+        # clean views are kept, whatever the odometry's turn makes of the frames, with a
+        # clean view's sigma (0.29 deg)
+        ([(0.18, 0.0037, 0.85), (-1.05, 0.0116, 0.86)], 2.77, 0.18, 0.01, 0.29),
     ],
-)
+)  # fmt: skip
 def test_the_start_heading_weighs_unclean_views_against_the_first_frames(
     views: list[tuple[float, float, float]],
     frames_deg: float,
     expected_deg: float,
     within_deg: float,
+    sigma_deg: float,
 ) -> None:
     tun = WallPoseTuning()
     meta = {
@@ -630,10 +634,13 @@ def test_the_start_heading_weighs_unclean_views_against_the_first_frames(
     assert own is not None
     frame = Keyframe(image=np.zeros((2, 2, 3), np.uint8), pose=Pose2D(0.2, 0.0, math.radians(0.5)))
     line = (0.7, math.radians(frames_deg + 0.5))  # the frame's line, its odometry turn in it
-    heading, frames = _start_heading(own, [frame], [line], [0], np.array([0.2]), tun, clean, spread)
+    heading, frames, sigma = _start_heading(
+        own, [frame], [line], [0], np.array([0.2]), tun, clean, spread
+    )
     assert frames is not None and math.degrees(frames) == pytest.approx(frames_deg)
-    assert heading is not None
+    assert heading is not None and sigma is not None
     assert math.degrees(heading) == pytest.approx(expected_deg, abs=within_deg)
+    assert math.degrees(sigma) == pytest.approx(sigma_deg, abs=0.01)
 
 
 def test_the_start_views_keep_the_origin_when_the_odometry_walks_sideways() -> None:
