@@ -104,23 +104,26 @@ def turn_scale_of(meta: dict[str, Any]) -> float:
     return float(scale) if isinstance(scale, (int, float)) and scale > 0 else 1.0
 
 
-def keyframe_sigma_of(meta: dict[str, Any]) -> float | None:
-    """The map's keyframes' own error (``meta.keyframe_sigma_m``, std per axis, m: how its
-    survey's laps disagree, :mod:`naoloc.mapping.laps`), or None (one lap, older maps)."""
-    value = meta.get("keyframe_sigma_m")
+def _sigma(value: Any) -> float | None:
+    """``value`` as a sigma read from a map's meta: a finite number >= 0 (not a bool), else
+    None."""
     if not isinstance(value, (int, float)) or isinstance(value, bool):
         return None
     return float(value) if math.isfinite(value) and value >= 0 else None
+
+
+def keyframe_sigma_of(meta: dict[str, Any]) -> float | None:
+    """The map's keyframes' own error (``meta.keyframe_sigma_m``, std per axis, m: how its
+    survey's laps disagree, :mod:`naoloc.mapping.laps`), or None (one lap, older maps)."""
+    return _sigma(meta.get("keyframe_sigma_m"))
 
 
 def heading_std_of(meta: dict[str, Any], default: float) -> float:
     """The map frame's heading error (``meta.wall_poses.heading_std_rad``, one sigma, rad:
     how its survey found the start's heading to its wall), else ``default``."""
     walls = meta.get("wall_poses")
-    value = walls.get("heading_std_rad") if isinstance(walls, dict) else None
-    if not isinstance(value, (int, float)) or isinstance(value, bool):
-        return default
-    return float(value) if math.isfinite(value) and value >= 0 else default
+    value = _sigma(walls.get("heading_std_rad") if isinstance(walls, dict) else None)
+    return default if value is None else value
 
 
 def frame_covariance(pose: np.ndarray, sigma: float) -> np.ndarray:

@@ -1028,29 +1028,29 @@ def wall_seen_again(
     tun = WallPoseTuning() if tuning is None else tuning
     pairs = zip(levels, measured, strict=True)
     lines = [(v, m) for v, m in pairs if v is not None and m is not None]
-    seen = [v for v, _ in lines]
 
-    def near(level: float) -> list[float]:
-        return [m for v, m in lines if abs(v - level) < tun.wall_level_m]
+    def on(level: float) -> list[bool]:
+        return [abs(v - level) < tun.wall_level_m for v, _ in lines]
 
-    on_wall = [abs(v - wall) < tun.wall_level_m for v in seen]
-    wall_reads = float(np.median(near(wall)))
-    best = wall
-    for level in sorted(set(seen), reverse=True):
-        if level >= wall or abs(level - wall) < tun.wall_level_m:
-            continue
-        group = [abs(v - level) < tun.wall_level_m for v in seen]
-        if sum(group) < tun.min_wall_frames:
-            continue
+    def reads(group: list[bool]) -> float:
+        return float(np.median([m for (_, m), g in zip(lines, group, strict=True) if g]))
+
+    on_wall = on(wall)
+    wall_reads = reads(on_wall)
+    # nearest to the wall first: the first level that qualifies is the answer
+    for level in sorted({v for v, _ in lines if v <= wall - tun.wall_level_m}, reverse=True):
+        group = on(level)
         borders = any(
             (a and d) or (b and c)
             for (a, b), (c, d) in itertools.pairwise(zip(group, on_wall, strict=True))
         )
-        if borders or abs(float(np.median(near(level))) - wall_reads) > tun.wall_again_m:
-            continue
-        if best == wall or level > best:
-            best = level
-    return best
+        if (
+            sum(group) >= tun.min_wall_frames
+            and not borders
+            and abs(reads(group) - wall_reads) <= tun.wall_again_m
+        ):
+            return level
+    return wall
 
 
 def _start_from_wall(
