@@ -44,6 +44,14 @@ TONE_RATIO = (0.75, 1.45)
 DARKEST_FOOT = 0.7
 # Chromaticity distance of the same floor's boards (bounds of the sample's own spread).
 CHROMA_TOL = (0.008, 0.02)
+# A skirting board's top edge (0.08-0.12 m up) projected to the floor from a camera 0.4-0.5 m
+# up stands 1.1-1.35 times as far as the wall's foot (measured: 1.10-1.27, RESULTS stop 49).
+GHOST_RATIO = (1.04, 1.4)
+# The far line's band moved this share of the way from the floor's colour to the board's, in
+# a channel (weighted Lab) in which they differ by GHOST_MIN_STEP or more.
+GHOST_BAND_SHARE = 0.5
+GHOST_MIN_STEP = 2.0
+GHOST_PARALLEL_RAD = 0.3  # a board's edge runs along its foot; a short ghost's fit turns 0.3 rad
 
 
 @dataclass(frozen=True, slots=True)
@@ -437,23 +445,125 @@ def detect_wall_lines(
     edge = rays_at(subpixel_edges(lab, floor, rows, cols), cols, (w, h), hfov, vfov,
                    pose.reshape(4, 4), lens)  # fmt: skip
     pts = floor_points(np.arange(rows.size), np.zeros(rows.size, np.int64), origin, edge[:, None])
-    pts = pts[np.all(np.isfinite(pts), axis=1)]
+    finite = np.all(np.isfinite(pts), axis=1)
+    pts, rows, cols = pts[finite], rows[finite], cols[finite]
     lines: list[WallLine] = []
-    remaining = pts
+    members: list[np.ndarray] = []  # each line's boundary pixels (indices into pts)
+    remaining = np.arange(len(pts))
     for k in range(max_lines):
-        line, outliers = _one_line(remaining, seed + k)
+        line, inl = _one_line(pts[remaining], seed + k)
         if line is None:
             break
         lines.append(line)
-        remaining = outliers
+        members.append(remaining[inl])
+        remaining = remaining[~inl]
+    if len(lines) == 2 and (pair := _parallel_pair(lines)) is not None:
+        near, far = pair
+        band = _ghost_band(lab, rows[members[far]], cols[members[far]], lines[near],
+                           (w, h), hfov, vfov, pose.reshape(4, 4), lens)  # fmt: skip
+        if band is not None and skirting_ghost(
+            _band_colours(lab, rows[members[near]], cols[members[near]]), band
+        ):
+            del lines[far]
     return lines
 
 
+def _parallel_pair(lines: list[WallLine]) -> tuple[int, int] | None:
+    """``(near, far)`` indices of two lines that could be a wall's foot and its skirting
+    board's top edge (parallel, the far one :data:`GHOST_RATIO` times as far), else None."""
+    a, b = lines
+    if abs(modulo2PI(a.normal - b.normal)) > GHOST_PARALLEL_RAD:
+        return None
+    near, far = (0, 1) if a.distance <= b.distance else (1, 0)
+    ratio = lines[far].distance / max(lines[near].distance, 1e-9)
+    return (near, far) if GHOST_RATIO[0] <= ratio <= GHOST_RATIO[1] else None
+
+
+def _band_colours(lab: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """The colours (weighted Lab, median over the pixels) just above boundary pixels (what
+    stands at the line) and just below them (the floor): ``(2, 3)``."""
+    h = lab.shape[0]
+    above = np.clip(rows[:, None] - np.arange(2, 5), 0, h - 1)
+    below = np.clip(rows[:, None] + np.arange(2, 5), 0, h - 1)
+    return np.stack([
+        np.median(lab[above, cols[:, None]].reshape(-1, 3), axis=0),
+        np.median(lab[below, cols[:, None]].reshape(-1, 3), axis=0),
+    ])  # fmt: skip
+
+
+def _ghost_band(
+    lab: np.ndarray,
+    rows: np.ndarray,
+    cols: np.ndarray,
+    near: WallLine,
+    size: tuple[int, int],
+    hfov: float,
+    vfov: float,
+    pose: np.ndarray,
+    lens: Lens | None,
+) -> np.ndarray | None:
+    """In the far line's columns (its boundary ``rows``, ``cols``): the colour between the
+    far line and where the near line would meet the floor, and the colour of the floor
+    nearer than that, ``(2, 3)`` (weighted Lab, medians); None where the band is under two
+    pixels tall or the near line is not below the far one in the image."""
+    h = size[1]
+    below = np.arange(h)
+    rays = rays_at(np.repeat(below + 0.5, len(cols)), np.tile(cols, h), size, hfov, vfov,
+                   pose, lens).reshape(h, len(cols), 3)  # fmt: skip
+    origin = pose[:3, 3]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = -origin[2] / rays[..., 2]
+    xy = origin[:2] + np.where(rays[..., 2] < -1e-6, s, np.nan)[..., None] * rays[..., :2]
+    normal = np.array([math.cos(near.normal), math.sin(near.normal)])
+    nearer = (xy @ normal) < near.distance  # (h, n): the pixel's floor point is before the line
+    # the near line's row in each column: the first row from the far line down that is nearer
+    nearer &= below[:, None] > rows[None, :]
+    foot = np.where(nearer.any(axis=0), np.argmax(nearer, axis=0), -1)
+    ok = (foot - rows >= 3) & (foot + 3 < h)
+    if ok.sum() < MIN_INLIERS // 2:
+        return None
+    c, r, f = cols[ok], rows[ok], foot[ok]
+    band = [lab[k, ci] for ci, ri, fi in zip(c, r, f, strict=True) for k in range(ri + 1, fi - 1)]
+    floor = lab[f[:, None] + np.arange(1, 4), c[:, None]].reshape(-1, 3)
+    if not band:
+        return None
+    return np.stack([np.median(np.asarray(band), axis=0), np.median(floor, axis=0)])
+
+
+def skirting_ghost(near: np.ndarray, far_band: np.ndarray) -> bool:
+    """Whether a farther line is a skirting board's top edge taken for the floor line.
+
+    Where the floor's colour model takes a skirting board for floor (a grey board on a grey
+    carpet, in the columns where the light makes them alike), the top of the "floor" is the
+    board's top edge, 8-12 cm up the wall: projected to the floor from the camera it is a
+    line parallel to the wall's foot, :data:`GHOST_RATIO` times as far. In the columns where
+    the board is not taken for floor, the same image shows the foot. In the far line's
+    columns, the band between it and where the near line would meet the floor is then the
+    board, not floor: in a channel of colour in which the board at the near line differs
+    from the floor (by :data:`GHOST_MIN_STEP` or more), the band has moved from the floor's
+    toward the board's by more than :data:`GHOST_BAND_SHARE` of the way (a board in shade
+    keeps its hue and loses its lightness). A wall seen beyond a piece
+    of furniture has open floor there.
+
+    Args:
+        near: The near line's colours just above and below it (:func:`_band_colours`).
+        far_band: The far line's band and the floor below it (:func:`_ghost_band`).
+    """
+    board, floor = near
+    axis = board - floor
+    seen = np.abs(axis) >= GHOST_MIN_STEP  # the channels in which the board differs
+    if not seen.any():
+        return False
+    share = (far_band[0] - far_band[1])[seen] / axis[seen]
+    return float(share.max()) > GHOST_BAND_SHARE
+
+
 def _one_line(pts: np.ndarray, seed: int) -> tuple[WallLine | None, np.ndarray]:
-    """The best line through ``pts`` and the points it leaves; (None, pts) when none."""
+    """The best line through ``pts`` and its inlier mask; (None, all False) when none."""
+    none = np.zeros(len(pts), bool)
     fit = fit_line(pts, seed)
     if fit is None:
-        return None, pts
+        return None, none
     (point, direction), inl = fit
     p = pts[inl]
     normal = np.array([-direction[1], direction[0]])
@@ -464,14 +574,14 @@ def _one_line(pts: np.ndarray, seed: int) -> tuple[WallLine | None, np.ndarray]:
     span = float(along.max() - along.min())
     fraction = float(inl.sum()) / len(pts)
     if span < MIN_SPAN_M or fraction < MIN_INLIER_FRACTION / 2:
-        return None, pts
+        return None, none
     rms = float(np.sqrt(np.mean(((p - point) @ normal) ** 2)))
     side = p @ np.array([-normal[1], normal[0]])  # along the line, from the nearest point
     ends = (float(side.min()), float(side.max()))
     line = WallLine(
         offset, math.atan2(normal[1], normal[0]), int(inl.sum()), fraction, rms, span, ends
     )
-    return line, pts[~inl]
+    return line, inl
 
 
 def detect_wall_line(

@@ -218,3 +218,62 @@ def test_the_colour_distance_is_numpys_norm_to_the_bit(channels: int) -> None:
     got = _norm_last(v)
     assert got.dtype == np.float32
     assert np.array_equal(got, np.linalg.norm(v, axis=-1))
+
+
+def render_skirting(
+    pose: np.ndarray, wall_distance: float, *, shade: float, front: float | None = None
+) -> np.ndarray:
+    """A wall straight ahead on a blue-grey carpet, an 8 cm light-grey skirting board along
+    its foot; left of column 110 the light is ``shade`` times as strong on the board (in
+    shade a grey board passes for the carpet's colour). ``front``: a bench's front that
+    far ahead in columns 110-210 (floor before the wall on either side of it)."""
+    rng = np.random.default_rng(0)
+    yaw = math.atan2(pose[1, 0], pose[0, 0])
+    floor, _hit, z = trace(pose, yaw, wall_distance)
+    cols = np.arange(320)[None, :]
+    carpet = (
+        np.array([125, 112, 100], float) * (1 + 0.08 * rng.standard_normal(floor.shape))[..., None]
+    )
+    board = np.where((cols < 110)[..., None], shade, 1.0) * np.array([185, 185, 182], float)
+    wall = np.array([150, 160, 172], float)
+    img = np.where(floor[..., None], carpet, np.where((z < 0.08)[..., None], board, wall))
+    if front is not None:
+        before, _hit, _z = trace(pose, yaw, front)
+        bench = ((cols >= 110) & (cols < 210)) & ~before
+        img = np.where(bench[..., None], np.array([40, 70, 110], float), img)
+    return np.clip(img + rng.normal(0, 2, img.shape), 0, 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize("shade", [0.6, 0.7])
+def test_a_skirting_board_in_shade_is_no_second_wall(shade: float) -> None:
+    # Offices (stop 51): where the light makes a grey board pass for a grey carpet, the
+    # board's top edge, 8 cm up, read as a second wall line 1.2 times as far.
+    pose = camera_pose(0.0, 0.35)
+    lines = detect_wall_lines(render_skirting(pose, 1.8, shade=shade), HFOV, VFOV, pose)
+    assert [round(ln.distance, 1) for ln in lines] == [1.8]
+
+
+def test_a_wall_beyond_a_bench_stays_a_second_line() -> None:
+    # The same ratio (1.25) with floor between: a wall seen on either side of a bench.
+    pose = camera_pose(0.0, 0.35)
+    lines = detect_wall_lines(render_skirting(pose, 1.5, shade=1.0, front=1.2), HFOV, VFOV, pose)
+    assert sorted(round(ln.distance, 1) for ln in lines) == [1.2, 1.5]
+
+
+@pytest.mark.parametrize(
+    ("band", "ghost"),
+    [
+        ((40.0, 127.0, 128.0), True),  # the board in shade: its hue, not its lightness
+        ((52.0, 127.0, 121.0), True),  # the board lit: its lightness
+        ((36.0, 127.0, 120.5), False),  # floor (a wall beyond a bench)
+        ((30.0, 127.0, 119.0), False),  # a darker plank of the floor, no nearer the board
+    ],
+)
+def test_skirting_ghost_asks_whether_the_band_moved_toward_the_board(
+    band: tuple[float, float, float], ghost: bool
+) -> None:
+    from naoloc.perception.floorline import skirting_ghost
+
+    near = np.array([[57.0, 127.0, 128.0], [35.4, 127.0, 119.0]])  # board, floor
+    below = np.array([35.4, 126.0, 120.0])
+    assert skirting_ghost(near, np.array([band, below])) is ghost
