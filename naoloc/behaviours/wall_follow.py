@@ -72,9 +72,6 @@ JUMP_RAD = 0.12  # or turned this much from it (a NAO's step turns it by about 0
 # keeps this far from it: its body's disc (0.155 m) and a blind stretch's drift (a NAO's
 # heading errs 2-4 deg over a metre: 4-8 cm), m.
 BODY_CLEAR_M = 0.35
-# After a corner placed by a front line, a line beyond it this far along the new side is the
-# wall: the front was furniture at that wall (the widest piece, a sideboard, is 1.2 m), m.
-CORNER_FRONT_M = 1.4
 FACE_ANGLE_RAD = 0.3  # a face's line within this of the side wall's direction, rad
 FACE_PAST_M = 0.2  # a face is behind the robot this far past its far end (the body's length), m
 
@@ -354,9 +351,7 @@ class SideMemory:
     level (``level``, m: how far nearer than the wall it stands), and the lines of that
     stretch steer as the wall behind them, so the robot walks past a sideboard on its
     circuit, not along its face; a line back at the wall's distance, or beyond it, ends the
-    stretch (and within :data:`CORNER_FRONT_M` of a corner a line beyond the last side's
-    front line is the wall: that front was furniture before it, which made the corner
-    early). A
+    stretch. A
     line turned more than :data:`JUMP_RAD` from the carried wall keeps the wall's angle,
     unless the next line is turned the same way: then the carried angle was the wrong one
     (``doubt`` holds the first such line).
@@ -368,7 +363,6 @@ class SideMemory:
     level: float = 0.0
     doubt: tuple[WallLine, Pose2D] | None = None  # the last line that turned from the wall
     face: tuple[WallLine, Pose2D] | None = None  # a face seen ahead nearer than BODY_CLEAR_M
-    corner: Pose2D | None = None  # where the last side's front line was seen (its corner)
 
     def carried(self, here: Pose2D) -> WallLine | None:
         """The wall's last line, carried to odometry pose ``here`` (None: too old)."""
@@ -399,15 +393,12 @@ class SideMemory:
             turned = abs(modulo2PI(line.normal - again.normal)) > JUMP_RAD
         self.doubt = (line, here) if turned else None
         normal = known.normal if turned else line.normal
-        beyond = line.distance > known.distance + JUMP_M
-        near_corner = self.corner is not None and here.distance(self.corner) < CORNER_FRONT_M
         if abs(line.distance - known.distance) <= JUMP_M or (
-            beyond and (self.level > 0.0 or near_corner)
+            self.level > 0.0 and line.distance > known.distance + JUMP_M
         ):
-            # the wall itself; or a line beyond the wall a front's stretch assumed (the
-            # front's depth was misread: its line slid in as it came into view), or, along
-            # the first metre after a corner, beyond the last side's front line (a box or a
-            # sideboard at that wall made the corner early): the wall, not a recess
+            # the wall itself; or, on a front's stretch, a line beyond the wall the stretch
+            # assumed: the front's depth was misread (its line slid in as the front came
+            # into view), and this is the wall, not a recess
             self.level = 0.0
             return _moved(line, 0.0, normal)
         if abs(line.distance + self.level - known.distance) > JUMP_M:
@@ -448,7 +439,6 @@ class SideMemory:
 
     def turned(self) -> None:
         """A corner: the front wall becomes the side wall; the old side is behind."""
-        self.corner = None if self.front is None else self.front[1]
         self.side, self.front, self.angle_known, self.level = self.front, None, False, 0.0
         self.doubt, self.face = None, None
 

@@ -277,23 +277,3 @@ def test_a_line_beyond_the_wall_ends_a_fronts_stretch() -> None:
     wall = memory.seen_side(_line(0.95, right), Pose2D(0.2, 0.0, 0.0))
     assert wall is not None and wall.distance == pytest.approx(0.7)
     assert memory.level == pytest.approx(-0.25)
-
-
-def test_after_a_corner_a_line_beyond_the_last_front_is_the_wall() -> None:
-    """Room 1472114761 (stop 51): the front line that placed a corner was a piece of
-    furniture 0.34 m before the wall; the next side took the wall for a recess and kept
-    0.33 m off its circuit, into a table."""
-    right = -math.pi / 2
-    memory = SideMemory()
-    memory.seen_side(_line(1.0, right), Pose2D())
-    memory.seen_front(_line(1.0, 0.0), Pose2D(3.0, 0.0, 0.0))  # a sideboard's front
-    memory.turned()
-    # the first line after the turn is that piece's front again, the next the wall
-    memory.seen_side(_line(1.0, right), Pose2D(3.0, 0.0, math.pi / 2))
-    wall = memory.seen_side(_line(1.34, right), Pose2D(3.0, 0.2, math.pi / 2))
-    assert wall is not None and wall.distance == pytest.approx(1.34)
-    assert memory.level == 0.0
-    # past the first metre and a half of the side, a farther line is a recess again
-    memory.seen_side(_line(1.34, right), Pose2D(3.0, 1.6, math.pi / 2))
-    memory.seen_side(_line(1.62, right), Pose2D(3.0, 1.8, math.pi / 2))
-    assert memory.level == pytest.approx(-0.28, abs=1e-6)
