@@ -49,7 +49,6 @@ from naoloc.behaviours.wall_follow import (
     FloorEye,
     FrontSample,
     SideMemory,
-    clear_of,
     corrected_step,
     heading_views,
     line_dict,
@@ -485,8 +484,6 @@ def _walk_laps(
                         break
                     steer = memory.steer(here)
                     move, steered = corrected_step(steer, side_normal, keep, length_now)
-                    face = memory.face_at(here)
-                    move = clear_of(move, face)
                     if not robot.motion.moveTo(move.x, move.y, move.theta):
                         raise watch.blocked(f"moveTo failed; {_ahead(robot, eye)}")
                     watch.stepped(length_now)
@@ -501,10 +498,8 @@ def _walk_laps(
                         far.append(camera.keyframe(origin, command_origin))
                         result.far_frames += 1
                         if far_yaw == 0.0:  # the wall ahead: its line is the watch's too,
-                            # and the map's where it is farther than the survey steers by;
-                            # a face along the way nearer than the body needs is kept clear
-                            seen_ahead, lines_ahead = eye.look_ahead(0.0, 0.4)
-                            memory.seen_ahead(lines_ahead, side_normal, keyframe.pose)
+                            # and the map's where it is farther than the survey steers by
+                            seen_ahead = eye.measure(0.0, 0.4)
                             far_front = _far_front(seen_ahead)
                             _watch_ahead(
                                 robot,
@@ -535,7 +530,6 @@ def _walk_laps(
                             **({"far_front": line_dict(far_front)} if far_front else {}),
                             "steered": steered,
                             "carried": steered and steer is not None and steer.inliers == 0,
-                            **({"face": line_dict(face)} if face is not None else {}),
                             "level_m": round(memory.level, 3),
                             "motion": motion,
                             **({"turn_side": line_dict(turn_side)} if steps == 1 else {}),

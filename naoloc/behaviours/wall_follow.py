@@ -21,12 +21,7 @@ import numpy as np
 from naoloc.config import CameraConfig
 from naoloc.constants import BOTTOM_CAMERA_IN_HEAD, FRAME_ROBOT
 from naoloc.geometry import Pose2D, mid_transform, modulo2PI
-from naoloc.perception.floorline import (
-    WallLine,
-    detect_wall_lines,
-    pick_candidates,
-    wall_line_candidates,
-)
+from naoloc.perception.floorline import WallLine, detect_wall_lines, wall_line_candidates
 from naoloc.perception.wall_gate import crosses_path, in_front_range, side_line_angle
 from naoloc.robot import Robot
 from naoloc.robot.camera import Camera, look
@@ -67,13 +62,6 @@ FRONT_NEAR_M = 0.8  # a front wall expected nearer than this is looked for level
 MAX_CARRY_M = 0.8  # a side line carried by the odometry steers for this much walk, m
 JUMP_M = 0.15  # a side line this far from the carried one sees something else, m
 JUMP_RAD = 0.12  # or turned this much from it (a NAO's step turns it by about 0.02), rad
-# A face that stands out of the side wall into the circuit (a sideboard, a desk at a small
-# offset) is nearer than the side views reach (0.45 m): only a look ahead sees it. The robot
-# keeps this far from it: its body's disc (0.155 m) and a blind stretch's drift (a NAO's
-# heading errs 2-4 deg over a metre: 4-8 cm), m.
-BODY_CLEAR_M = 0.35
-FACE_ANGLE_RAD = 0.3  # a face's line within this of the side wall's direction, rad
-FACE_PAST_M = 0.2  # a face is behind the robot this far past its far end (the body's length), m
 
 
 class FloorEye:
@@ -134,17 +122,6 @@ class FloorEye:
             image, hfov, vfov, pose, expect_normal=expect_normal, tolerance=tolerance,
             lens=self.lens,
         )  # fmt: skip
-
-    def look_ahead(
-        self, expect_normal: float, tolerance: float
-    ) -> tuple[WallLine | None, list[WallLine]]:
-        """One picture: what :meth:`measure` gives, and every line in it (FRAME_ROBOT)."""
-        view = self.view()
-        if view is None:
-            return None, []
-        lines = self.detect(view)
-        found = pick_candidates(lines, expect_normal, tolerance)
-        return (found[0] if found else None), lines
 
     def lines(self) -> list[WallLine]:
         """Every floor-wall line in view (up to two: a corner), FRAME_ROBOT."""
@@ -350,8 +327,7 @@ class SideMemory:
     sideboard's foot), a doorway's recess, a corner's other wall. Its jump is kept as a
     level (``level``, m: how far nearer than the wall it stands), and the lines of that
     stretch steer as the wall behind them, so the robot walks past a sideboard on its
-    circuit, not along its face; a line back at the wall's distance, or beyond it, ends the
-    stretch. A
+    circuit, not along its face; a line back at the wall's distance ends the stretch. A
     line turned more than :data:`JUMP_RAD` from the carried wall keeps the wall's angle,
     unless the next line is turned the same way: then the carried angle was the wrong one
     (``doubt`` holds the first such line).
@@ -362,7 +338,6 @@ class SideMemory:
     angle_known: bool = True  # False after a corner: the odometry's turn errs 6 %
     level: float = 0.0
     doubt: tuple[WallLine, Pose2D] | None = None  # the last line that turned from the wall
-    face: tuple[WallLine, Pose2D] | None = None  # a face seen ahead nearer than BODY_CLEAR_M
 
     def carried(self, here: Pose2D) -> WallLine | None:
         """The wall's last line, carried to odometry pose ``here`` (None: too old)."""
@@ -393,13 +368,8 @@ class SideMemory:
             turned = abs(modulo2PI(line.normal - again.normal)) > JUMP_RAD
         self.doubt = (line, here) if turned else None
         normal = known.normal if turned else line.normal
-        if abs(line.distance - known.distance) <= JUMP_M or (
-            self.level > 0.0 and line.distance > known.distance + JUMP_M
-        ):
-            # the wall itself; or, on a front's stretch, a line beyond the wall the stretch
-            # assumed: the front's depth was misread (its line slid in as the front came
-            # into view), and this is the wall, not a recess
-            self.level = 0.0
+        if abs(line.distance - known.distance) <= JUMP_M:
+            self.level = 0.0  # the wall itself
             return _moved(line, 0.0, normal)
         if abs(line.distance + self.level - known.distance) > JUMP_M:
             self.level = known.distance - line.distance  # a new stretch begins
@@ -440,59 +410,11 @@ class SideMemory:
     def turned(self) -> None:
         """A corner: the front wall becomes the side wall; the old side is behind."""
         self.side, self.front, self.angle_known, self.level = self.front, None, False, 0.0
-        self.doubt, self.face = None, None
-
-    def seen_ahead(self, lines: list[WallLine], side_normal: float, here: Pose2D) -> None:
-        """The lines of a look ahead at odometry pose ``here``: the nearest that runs along
-        the side wall within :data:`BODY_CLEAR_M` of the robot is a face in the way."""
-        near = [
-            ln for ln in lines
-            if abs(modulo2PI(ln.normal - side_normal)) <= FACE_ANGLE_RAD
-            and ln.distance < BODY_CLEAR_M and ln.ends_m is not None
-        ]  # fmt: skip
-        if near:
-            self.face = (min(near, key=lambda ln: ln.distance), here)
-
-    def face_at(self, here: Pose2D) -> WallLine | None:
-        """The face seen ahead, carried to odometry pose ``here``; None when there is none
-        or the robot has walked past its far end."""
-        if self.face is None:
-            return None
-        seen, there = self.face
-        motion = there.inverse() * here
-        if seen.ends_m is None or _passed(seen, motion):
-            self.face = None
-            return None
-        return carry(seen, motion)
+        self.doubt = None
 
     def steer(self, here: Pose2D) -> WallLine | None:
         """The wall to steer by at ``here``: the last one seen or carried (None: none)."""
         return self.carried(here)
-
-
-def _passed(line: WallLine, motion: Pose2D) -> bool:
-    """Whether the robot, after ``motion`` from where ``line`` was seen, is beyond the
-    line's far end (its last inlier, in the robot's direction of travel)."""
-    assert line.ends_m is not None
-    nx, ny = math.cos(line.normal), math.sin(line.normal)
-    ux, uy = -ny, nx  # along the line, as ends_m counts
-    ends = [(line.distance * nx + e * ux, line.distance * ny + e * uy) for e in line.ends_m]
-    far = max(ends, key=lambda p: p[0])  # the end farther ahead
-    return motion.x > far[0] + FACE_PAST_M
-
-
-def clear_of(move: Pose2D, face: WallLine | None) -> Pose2D:
-    """``move`` (FRAME_ROBOT) pushed sideways so that it ends :data:`BODY_CLEAR_M` from a
-    face in the way, by at most :data:`MAX_LATERAL_M` more (a face seen 0.5 m ahead leaves
-    two steps to clear it)."""
-    if face is None:
-        return move
-    nx, ny = math.cos(face.normal), math.sin(face.normal)
-    after = face.distance - (move.x * nx + move.y * ny)
-    if after >= BODY_CLEAR_M:
-        return move
-    push = min(BODY_CLEAR_M - after, MAX_LATERAL_M)
-    return Pose2D(move.x - push * nx, move.y - push * ny, move.theta)
 
 
 def _moved(line: WallLine, by: float, normal: float) -> WallLine:

@@ -639,14 +639,6 @@ def wall_line_candidates(
         of the boundary pixels left to it.
     """
     lines = detect_wall_lines(image, hfov, vfov, camera_pose, seed=seed, lens=lens)
-    return pick_candidates(lines, expect_normal, tolerance)
-
-
-def pick_candidates(
-    lines: list[WallLine], expect_normal: float | None, tolerance: float = 0.5
-) -> list[WallLine]:
-    """The lines of one image :func:`wall_line_candidates` gives (``lines`` from
-    :func:`detect_wall_lines`)."""
     if expect_normal is not None:
         lines = [ln for ln in lines if abs(modulo2PI(ln.normal - expect_normal)) <= tolerance]
     return [ln for ln in lines if ln.fraction >= MIN_INLIER_FRACTION or ln is lines[0]]

@@ -15,14 +15,7 @@ import pytest
 from naoloc.behaviours.nearest_wall import decide_side
 from naoloc.behaviours.survey import check_offset
 from naoloc.behaviours.walk_watch import WalkWatch, expected_shift_px
-from naoloc.behaviours.wall_follow import (
-    BODY_CLEAR_M,
-    MIN_OFFSET_M,
-    SideMemory,
-    carry,
-    clear_of,
-    side_views,
-)
+from naoloc.behaviours.wall_follow import MIN_OFFSET_M, SideMemory, carry, side_views
 from naoloc.errors import ConfigError, SurveyBlocked
 from naoloc.geometry import Pose2D
 from naoloc.perception.floorline import WallLine
@@ -227,53 +220,3 @@ def test_a_wall_ahead_that_vanishes_near_is_carried_not_forgotten() -> None:
     watch.front_line(None, Pose2D(1.52, 0.0, 0.0), 1.48, 3.0)  # carried: 0.48 m, one strike
     with pytest.raises(SurveyBlocked, match="the wall ahead is 0.26 m away"):
         watch.front_line(None, Pose2D(1.74, 0.0, 0.0), 1.26, 3.0)
-
-
-def test_a_face_seen_ahead_in_the_way_is_kept_clear_of_until_passed() -> None:
-    """Room 1557136907 (stop 51): a sideboard's face 0.25 m from a circuit 0.7 m from the
-    wall is nearer than the side views reach; the robot walked blind beside it, drifted and
-    touched it. A look ahead sees the face as a line along the way."""
-    right = -math.pi / 2
-    memory = SideMemory()
-    # the look ahead: the face 0.25 m to the right from 0.5 to 1.8 m ahead; a wall across
-    # 2.5 m ahead and the side wall 0.7 m away are not in the way
-    face = WallLine(0.25, right, 60, 0.5, 0.01, 1.3, (0.5, 1.8))
-    others = [WallLine(2.5, 0.0, 100, 1.0, 0.01, 2.0, (-1.0, 1.0)), _line(0.7, right)]
-    memory.seen_ahead([*others, face], right, Pose2D())
-    straight = Pose2D(0.2, 0.0, 0.0)
-    move = clear_of(straight, memory.face_at(Pose2D()))
-    assert move.y == pytest.approx(0.1)  # a step away from it (at most MAX_LATERAL_M)
-    # carried by the odometry: from 0.35 m (after that step) the face needs nothing more
-    at = Pose2D(0.2, 0.1, 0.0)
-    carried = memory.face_at(at)
-    assert carried is not None and carried.distance == pytest.approx(0.35)
-    assert clear_of(straight, carried) == straight
-    assert clear_of(Pose2D(0.2, -0.05, 0.0), carried).y == pytest.approx(0.0)  # not back in
-    assert memory.face_at(Pose2D(2.1, 0.1, 0.0)) is None  # past its far end: forgotten
-    # a line along the way farther than the body needs, or across it, is no face
-    memory.seen_ahead([WallLine(BODY_CLEAR_M + 0.05, right, 60, 0.5, 0.01, 1.3, (0.5, 1.8))],
-                      right, Pose2D())  # fmt: skip
-    assert memory.face_at(Pose2D()) is None
-    memory.seen_ahead(others, right, Pose2D())
-    assert memory.face_at(Pose2D()) is None
-
-
-def test_a_line_beyond_the_wall_ends_a_fronts_stretch() -> None:
-    """A front's line that slid in as it came into view misread its depth (room
-    1557136907, stop 51: 0.22 m for a 0.45 m sideboard); past it the wall, 0.44 m beyond
-    the wall the stretch assumed, was taken for a recess and the robot kept 0.3 m off its
-    circuit. A line beyond the stretch's wall is the wall."""
-    right = -math.pi / 2
-    memory = SideMemory()
-    memory.seen_side(_line(0.7, right), Pose2D())
-    memory.seen_side(_line(0.48, right), Pose2D(0.2, 0.0, 0.0))  # the front: level 0.22
-    assert memory.level == pytest.approx(0.22)
-    wall = memory.seen_side(_line(1.14, right), Pose2D(0.4, 0.0, 0.0))
-    assert wall is not None and wall.distance == pytest.approx(1.14)
-    assert memory.level == 0.0
-    # with no front's stretch, a line that jumps farther is a recess (a doorway's)
-    memory = SideMemory()
-    memory.seen_side(_line(0.7, right), Pose2D())
-    wall = memory.seen_side(_line(0.95, right), Pose2D(0.2, 0.0, 0.0))
-    assert wall is not None and wall.distance == pytest.approx(0.7)
-    assert memory.level == pytest.approx(-0.25)
