@@ -971,11 +971,8 @@ def side_distances(
             break
     if wall is None:
         return None
-    again = wall_seen_again(measured, levels, wall, tuning=tun)
-    on_wall = [
-        v is not None and (abs(v - wall) < tun.wall_level_m or abs(v - again) < tun.wall_level_m)
-        for v in levels
-    ]
+    walls = [wall, *wall_seen_again(measured, levels, wall, tuning=tun)]
+    on_wall = [v is not None and any(abs(v - w) < tun.wall_level_m for w in walls) for v in levels]
     # A line on the wall's level sees the wall: its own distance, not the level's (levels
     # closer than wall_level_m differ only by the odometry's sideways error in between).
     out: list[float | None] = [
@@ -999,16 +996,18 @@ def wall_seen_again(
     wall: float,
     *,
     tuning: WallPoseTuning | None = None,
-) -> float:
-    """A nearer level of one side's lines that is its wall seen again (or ``wall``).
+) -> list[float]:
+    """The levels of one side's lines, nearer or farther, that are its wall seen again.
 
     Levels are chained by the jumps between stretches: each stretch of fronts between two
     stretches of the wall adds its own error, and a run of fronts of several depths steered
     along as one adds up theirs (a map origin 0.136 m off: the start's stretch of wall was
-    put 0.136 m before the wall it saw). A level is the wall again when
+    put 0.136 m before the wall it saw; another's, 0.106 m beyond it). A level is the wall
+    again when
 
     - at least ``map.tuning.wall_poses.min_wall_frames`` lines see it (not the wall's
-      share of the side: a lone far line is what that rules out, and this level is nearer),
+      share of the side: a lone far line is what that rules out, and the reading below
+      does too),
     - it never borders the wall's level (a jump seen directly, from one line to the next,
       measures a front's depth to 1-4 cm: such a level stays a front), and
     - its lines read as the wall's do, their medians within
@@ -1022,8 +1021,8 @@ def wall_seen_again(
         tuning: ``map.tuning.wall_poses`` (None: the defaults).
 
     Returns:
-        The level that is the wall seen again, the nearest such to ``wall``; ``wall`` when
-        there is none.
+        Every level that is the wall seen again (nearer ones first, each nearest to ``wall``
+        first); none when there is none. Several runs of fronts each err their own way.
     """
     tun = WallPoseTuning() if tuning is None else tuning
     pairs = zip(levels, measured, strict=True)
@@ -1037,9 +1036,15 @@ def wall_seen_again(
 
     on_wall = on(wall)
     wall_reads = reads(on_wall)
-    # nearest to the wall first: the first level that qualifies is the answer
-    for level in sorted({v for v, _ in lines if v <= wall - tun.wall_level_m}, reverse=True):
-        group = on(level)
+    # nearer levels first, then farther ones (a chain's error goes either way: the start's
+    # stretch can stand beyond the wall too, with fewer lines than the wall's share of the
+    # side asks), each nearest to the wall first
+    again: list[float] = []
+    nearer = sorted({v for v, _ in lines if v <= wall - tun.wall_level_m}, reverse=True)
+    farther = sorted({v for v, _ in lines if v >= wall + tun.wall_level_m})
+    for level in nearer + farther:
+        # its own lines: a level within wall_level_m of the wall's shares some of them
+        group = [g and not w for g, w in zip(on(level), on_wall, strict=True)]
         borders = any(
             (a and d) or (b and c)
             for (a, b), (c, d) in itertools.pairwise(zip(group, on_wall, strict=True))
@@ -1049,8 +1054,8 @@ def wall_seen_again(
             and not borders
             and abs(reads(group) - wall_reads) <= tun.wall_again_m
         ):
-            return level
-    return wall
+            again.append(level)
+    return again
 
 
 def _start_from_wall(

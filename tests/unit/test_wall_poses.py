@@ -419,6 +419,33 @@ def test_the_wall_seen_again_after_a_run_of_fronts_is_the_wall() -> None:
     assert _start_from_wall(dists, on_wall, _AGAIN_INWARD) == pytest.approx(1.0, abs=0.02)
 
 
+# Room 879761629's first side (stop 51): the start's stretch of wall, two runs of fronts
+# with the wall between them and after. The chained levels put the start's stretch 0.10 m
+# before the wall and the last stretch 0.05 m: the wall, in truth, all three.
+_TWICE_MEASURED: list[float | None] = [
+    1.0026, 1.0028, 1.003, 1.0279, 1.0335, 0.6277, 0.6525, 0.5863, 0.6349, 0.5061, 0.9944,
+    0.9648, 1.0144, 1.0405, 0.9711, 0.9564, 0.6362, 0.6528, 0.5851, 0.6735, 0.6105, 0.9645,
+    0.981, 0.9907, 0.9977,
+]  # fmt: skip
+_TWICE_INWARD = [
+    0.0, 0.0093, 0.0091, 0.0093, -0.0158, -0.0214, 0.0, -0.0248, 0.0418, -0.0073, 0.0005,
+    0.0178, 0.0471, -0.0019, -0.0279, 0.041, 0.0549, 0.0018, -0.0159, 0.0517, -0.0363, 0.0265,
+    0.0471, 0.0311, 0.0213,
+]  # fmt: skip
+
+
+def test_the_wall_seen_again_twice_is_the_wall_both_times() -> None:
+    """The last stretch's level lies within ``wall_level_m`` of the wall's and shares its
+    lines; it no longer makes the start's stretch "border" the wall, and each stretch that
+    reads as the wall is the wall (the map origin was 0.106 m off)."""
+    found = side_distances(_TWICE_MEASURED, _TWICE_INWARD)
+    assert found is not None
+    dists, on_wall = found
+    assert on_wall == [not (5 <= i <= 9 or 16 <= i <= 20) for i in range(len(on_wall))]
+    assert dists[0] == pytest.approx(1.0026, abs=1e-9)
+    assert _start_from_wall(dists, on_wall, _TWICE_INWARD) == pytest.approx(1.0, abs=0.02)
+
+
 def _without_fronts() -> tuple[list[float | None], list[float]]:
     """The side with its fronts cut out: the start's stretch, then at once the wall after
     them, the odometry stepping 0.2 m toward the wall at the join."""
