@@ -700,9 +700,9 @@ class WallPoseTuning(_Model):
         ge=0,
         description="a nearer or farther level of min_wall_frames lines or more, never "
         "bordering the wall's, whose lines read within this of the wall's (medians, m) is the "
-        "wall seen again: levels chained through a run of fronts err either way (map origins "
-        "0.136 and 0.106 m off); the survey keeps the wall at its offset to 1-3 cm, a front "
-        "stands nearer by its depth",
+        "wall seen again: levels chained through runs of fronts err (map origins 0.136 and "
+        "0.106 m off); the survey keeps the wall at its offset to 1-3 cm, a front stands "
+        "nearer by its depth",
     )
     min_wall_frames: int = Field(3, ge=1, description="least frames that must see a side's wall")
     wall_support: float = Field(

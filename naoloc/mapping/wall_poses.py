@@ -1002,8 +1002,8 @@ def wall_seen_again(
     Levels are chained by the jumps between stretches: each stretch of fronts between two
     stretches of the wall adds its own error, and a run of fronts of several depths steered
     along as one adds up theirs (a map origin 0.136 m off: the start's stretch of wall was
-    put 0.136 m before the wall it saw; another's, 0.106 m beyond it). A level is the wall
-    again when
+    put 0.136 m before the wall it saw; another's 0.106 m, where a second stretch of wall
+    seen again came first). A level is the wall again when
 
     - at least ``map.tuning.wall_poses.min_wall_frames`` lines see it (not the wall's
       share of the side: a lone far line is what that rules out, and the reading below
@@ -1036,9 +1036,9 @@ def wall_seen_again(
 
     on_wall = on(wall)
     wall_reads = reads(on_wall)
-    # nearer levels first, then farther ones (a chain's error goes either way: the start's
-    # stretch can stand beyond the wall too, with fewer lines than the wall's share of the
-    # side asks), each nearest to the wall first
+    # nearer levels first, then farther ones (a chain can err the other way too, leaving a
+    # stretch beyond the wall with fewer lines than the wall's share of the side asks: once
+    # in 121 surveys), each nearest to the wall first
     again: list[float] = []
     nearer = sorted({v for v, _ in lines if v <= wall - tun.wall_level_m}, reverse=True)
     farther = sorted({v for v, _ in lines if v >= wall + tun.wall_level_m})

@@ -14,7 +14,9 @@ The detector:
 3. in each column, takes the top of the lowest run of floor that reaches the image bottom
    or the robot's own body (the first non-floor pixel above it is the wall's foot, or
    whatever stands on the floor in front of the wall);
-4. back-projects those pixels to z = 0 and fits a line by RANSAC, then least squares.
+4. back-projects those pixels to z = 0 and fits a line by RANSAC, then least squares;
+5. of two parallel lines, drops the farther when it is a skirting board's top edge taken
+   for floor in part of the picture (:func:`skirting_ghost`).
 
 A line is reported only with enough inliers spread along it; otherwise None (a floor and a
 wall of the same colour, no wall in view, or a view filled with furniture).
@@ -504,8 +506,9 @@ def _ghost_band(
 ) -> np.ndarray | None:
     """In the far line's columns (its boundary ``rows``, ``cols``): the colour between the
     far line and where the near line would meet the floor, and the colour of the floor
-    nearer than that, ``(2, 3)`` (weighted Lab, medians); None where the band is under two
-    pixels tall or the near line is not below the far one in the image."""
+    nearer than that, ``(2, 3)`` (weighted Lab, medians). A column counts where the near
+    line meets the floor 3 or more pixels below the far line and 3 above the image's
+    bottom; None when fewer than ``MIN_INLIERS // 2`` columns do."""
     h = size[1]
     below = np.arange(h)
     rays = rays_at(np.repeat(below + 0.5, len(cols)), np.tile(cols, h), size, hfov, vfov,
@@ -542,8 +545,8 @@ def skirting_ghost(near: np.ndarray, far_band: np.ndarray) -> bool:
     board, not floor: in a channel of colour in which the board at the near line differs
     from the floor (by :data:`GHOST_MIN_STEP` or more), the band has moved from the floor's
     toward the board's by more than :data:`GHOST_BAND_SHARE` of the way (a board in shade
-    keeps its hue and loses its lightness). A wall seen beyond a piece
-    of furniture has open floor there.
+    keeps its hue and loses its lightness). A wall seen beyond a piece of furniture has
+    open floor there.
 
     Args:
         near: The near line's colours just above and below it (:func:`_band_colours`).
