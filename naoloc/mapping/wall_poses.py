@@ -1021,8 +1021,8 @@ def wall_seen_again(
         tuning: ``map.tuning.wall_poses`` (None: the defaults).
 
     Returns:
-        Every level that is the wall seen again (nearer ones first, each nearest to ``wall``
-        first); none when there is none. Several runs of fronts each err their own way.
+        Every level that is the wall seen again, in ascending order; none when there is
+        none. Several runs of fronts each err their own way.
     """
     tun = WallPoseTuning() if tuning is None else tuning
     pairs = zip(levels, measured, strict=True)
@@ -1036,13 +1036,11 @@ def wall_seen_again(
 
     on_wall = on(wall)
     wall_reads = reads(on_wall)
-    # nearer levels first, then farther ones (a chain can err the other way too, leaving a
-    # stretch beyond the wall with fewer lines than the wall's share of the side asks: once
-    # in 121 surveys), each nearest to the wall first
+    # nearer levels and farther ones (a chain can err the other way too, leaving a stretch
+    # beyond the wall with fewer lines than the wall's share of the side asks: once in 121
+    # surveys)
     again: list[float] = []
-    nearer = sorted({v for v, _ in lines if v <= wall - tun.wall_level_m}, reverse=True)
-    farther = sorted({v for v, _ in lines if v >= wall + tun.wall_level_m})
-    for level in nearer + farther:
+    for level in sorted({v for v, _ in lines if abs(v - wall) >= tun.wall_level_m}):
         # its own lines: a level within wall_level_m of the wall's shares some of them
         group = [g and not w for g, w in zip(on(level), on_wall, strict=True)]
         borders = any(

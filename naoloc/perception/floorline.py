@@ -509,28 +509,25 @@ def _ghost_band(
     nearer than that, ``(2, 3)`` (weighted Lab, medians). A column counts where the near
     line meets the floor 3 or more pixels below the far line and 3 above the image's
     bottom; None when fewer than ``MIN_INLIERS // 2`` columns do."""
-    h = size[1]
+    h, n = size[1], len(cols)
     below = np.arange(h)
-    rays = rays_at(np.repeat(below + 0.5, len(cols)), np.tile(cols, h), size, hfov, vfov,
-                   pose, lens).reshape(h, len(cols), 3)  # fmt: skip
-    origin = pose[:3, 3]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = -origin[2] / rays[..., 2]
-    xy = origin[:2] + np.where(rays[..., 2] < -1e-6, s, np.nan)[..., None] * rays[..., :2]
+    rays = rays_at(np.repeat(below + 0.5, n), np.tile(cols, h), size, hfov, vfov,
+                   pose, lens).reshape(h, n, 3)  # fmt: skip
+    xy = floor_points(np.repeat(below, n), np.tile(np.arange(n), h), pose[:3, 3], rays)
     normal = np.array([math.cos(near.normal), math.sin(near.normal)])
-    nearer = (xy @ normal) < near.distance  # (h, n): the pixel's floor point is before the line
-    # the near line's row in each column: the first row from the far line down that is nearer
-    nearer &= below[:, None] > rows[None, :]
+    # (h, n): the pixel's floor point is before the near line, below the far line
+    nearer = ((xy @ normal) < near.distance).reshape(h, n) & (below[:, None] > rows[None, :])
+    # the near line's row in each column: the first such row from the far line down
     foot = np.where(nearer.any(axis=0), np.argmax(nearer, axis=0), -1)
     ok = (foot - rows >= 3) & (foot + 3 < h)
     if ok.sum() < MIN_INLIERS // 2:
         return None
     c, r, f = cols[ok], rows[ok], foot[ok]
-    band = [lab[k, ci] for ci, ri, fi in zip(c, r, f, strict=True) for k in range(ri + 1, fi - 1)]
+    # the band: rows r+1 .. f-2 of each column
+    inside = (below[:, None] > r[None, :]) & (below[:, None] < f[None, :] - 1)
+    band = lab[:, c][inside]
     floor = lab[f[:, None] + np.arange(1, 4), c[:, None]].reshape(-1, 3)
-    if not band:
-        return None
-    return np.stack([np.median(np.asarray(band), axis=0), np.median(floor, axis=0)])
+    return np.stack([np.median(band, axis=0), np.median(floor, axis=0)])
 
 
 def skirting_ghost(near: np.ndarray, far_band: np.ndarray) -> bool:
