@@ -249,6 +249,96 @@ def _resolution_id(v: int) -> int:
     return v
 
 
+class FloorLineTuning(_Model):
+    """Thresholds of the floor-wall line detector (naoloc.perception.floorline).
+
+    Distances in metres on the floor (FRAME_ROBOT), angles in radians; colours in the
+    detector's weighted CIE Lab (lightness scaled by 0.3) or chromaticity (channel shares).
+    """
+
+    min_inliers: int = Field(
+        12, ge=2, description="least boundary pixels on a line (RANSAC's best and each refit)"
+    )
+    min_inlier_fraction: float = Field(
+        0.5,
+        ge=0,
+        le=1,
+        description="least share of the boundary pixels left to it that a line after the "
+        "image's best needs (every line needs half of this)",
+    )
+    min_span_m: float = Field(
+        0.3, ge=0, description="least length of the line its inliers cover (m)"
+    )
+    ransac_tolerance_m: float = Field(
+        0.03, gt=0, description="largest distance of an inlier from the line (m)"
+    )
+    ransac_samples: int = Field(
+        200, ge=1, le=10000, description="random point pairs a line's RANSAC tries"
+    )
+    max_range_m: float = Field(
+        4.0,
+        gt=0,
+        description="floor points farther than this from the camera's foot are dropped (m)",
+    )
+    tone_ratio: tuple[float, float] = Field(
+        (0.75, 1.45),
+        description="lightness of a board of the same floor against the floor's (ratio, low "
+        "and high): planks' tones vary",
+    )
+    darkest_foot: float = Field(
+        0.7,
+        ge=0,
+        le=1,
+        description="a pixel at the wall's foot darker than this share of the floor's "
+        "lightness is not floor",
+    )
+    chroma_tol: tuple[float, float] = Field(
+        (0.008, 0.02),
+        description="chromaticity distance of the same floor's boards (bounds of the "
+        "sample's own spread, channel shares)",
+    )
+    ghost_ratio: tuple[float, float] = Field(
+        (1.04, 1.4),
+        description="a skirting board's top edge (0.08-0.12 m up) projected to the floor "
+        "from a camera 0.4-0.5 m up stands 1.1-1.35 times as far as the wall's foot (measured: "
+        "1.10-1.27, RESULTS stop 49): a farther parallel line within this ratio (low, high) "
+        "may be that ghost",
+    )
+    ghost_band_share: float = Field(
+        0.5,
+        ge=0,
+        description="the far line's band moved more than this share of the way from the "
+        "floor's colour to the board's is the board (a skirting ghost)",
+    )
+    ghost_min_step: float = Field(
+        2.0,
+        gt=0,
+        description="... in a channel (weighted Lab) in which the board and floor differ by "
+        "this or more",
+    )
+    ghost_parallel_rad: float = Field(
+        0.3,
+        ge=0,
+        le=math.pi,
+        description="lines within this angle are a foot and its board's edge (rad): a "
+        "board's edge runs along its foot; a short ghost's fit turns 0.3 rad",
+    )
+
+    @field_validator("tone_ratio", "ghost_ratio")
+    @classmethod
+    def _ratio_ok(cls, v: tuple[float, float]) -> tuple[float, float]:
+        if not 0 < v[0] < v[1]:
+            raise ValueError("must be [low, high] with 0 < low < high")
+        return v
+
+    @field_validator("chroma_tol")
+    @classmethod
+    def _clip_ok(cls, v: tuple[float, float]) -> tuple[float, float]:
+        if not 0 <= v[0] <= v[1]:
+            raise ValueError("must be [low, high] with 0 <= low <= high")
+        return v
+
+
 class CameraConfig(_Model):
     """Which camera and image format behaviours subscribe to."""
 
@@ -261,6 +351,10 @@ class CameraConfig(_Model):
         description="the lens naoloc undoes (floor lines, keypoints): nao = NAO's calibrated "
         "top camera (fx 557 px at VGA, principal point (309, 231), k1 -0.055), pinhole = none; "
         "auto = nao unless world.camera_realism turns lens distortion off",
+    )
+    floor_lines: FloorLineTuning = Field(
+        FloorLineTuning(),
+        description="the floor-wall line detector's thresholds (naoloc.perception.floorline)",
     )
 
     @field_validator("resolution")

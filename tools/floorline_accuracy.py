@@ -35,6 +35,7 @@ import numpy as np
 
 import naoloc
 from naoloc.behaviours.wall_follow import FRONT_PITCH, FloorEye
+from naoloc.config import FloorLineTuning
 from naoloc.constants import FRAME_ROBOT
 from naoloc.errors import RobotError
 from naoloc.robot.camera import lens_of, look, stand
@@ -127,12 +128,21 @@ def _module_at(rev: str) -> ModuleType:
     return mod
 
 
-def score(name: str, detector: ModuleType, data: list[dict[str, Any]], lens: Any) -> None:
-    """Print the errors of ``detector`` on ``data``."""
+def score(
+    name: str,
+    detector: ModuleType,
+    data: list[dict[str, Any]],
+    lens: Any,
+    tun: FloorLineTuning | None = None,
+) -> None:
+    """Print the errors of ``detector`` on ``data`` (``tun``: its thresholds, the config's
+    ``camera.floor_lines``; None: the detector's defaults, as a revision before them has)."""
     rows: dict[tuple[str, int | str], list[float]] = {}
+    extra: dict[str, Any] = {} if tun is None else {"tun": tun}
     for v in data:
         line = detector.detect_wall_line(v["image"], v["hfov"], v["vfov"], v["pose"],
-                                         expect_normal=v["expect"], lens=lens)  # fmt: skip
+                                         expect_normal=v["expect"], lens=lens,
+                                         **extra)  # fmt: skip
         err = math.nan if line is None else line.distance - v["truth"]
         rows.setdefault((v["kind"], "all"), []).append(err)
         rows.setdefault((v["kind"], v["seed"]), []).append(err)
@@ -166,10 +176,11 @@ def main(argv: list[str] | None = None) -> int:
     overrides = parse_sets(args.set)
     side = (*args.side[:4], int(args.side[4]))
     data = [v for seed in args.seeds for v in views(seed, args.views, overrides, args.front, side)]
-    lens = lens_of(room_config(args.seeds[0], overrides=overrides))
+    cfg = room_config(args.seeds[0], overrides=overrides)
+    lens = lens_of(cfg)
     from naoloc.perception import floorline
 
-    score("this tree", floorline, data, lens)
+    score("this tree", floorline, data, lens, cfg.camera.floor_lines)
     if args.compare:
         score(f"revision {args.compare}", _module_at(args.compare), data, lens)
     return 0

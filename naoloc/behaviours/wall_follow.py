@@ -69,7 +69,8 @@ class FloorEye:
 
     Args:
         robot: The robot.
-        like: The survey's camera config (resolution and colorspace are reused).
+        like: The survey's camera config (resolution and colorspace are reused, and its
+            ``floor_lines`` tunes the floor-line detector).
         name: Subscriber name.
         lens: The camera's lens, undone by the floor-line detector (None: a pinhole).
     """
@@ -83,6 +84,7 @@ class FloorEye:
     ) -> None:
         self.robot = robot
         self.lens = lens
+        self.tun = like.floor_lines  # the floor-line detector's thresholds
         self.last_pitch: float | None = None  # the pitch of measure_front's last line
         cfg = CameraConfig(
             index=BOTTOM_CAMERA,
@@ -120,7 +122,7 @@ class FloorEye:
             image = cv2.GaussianBlur(image, (blur | 1, blur | 1), 0)
         return wall_line_candidates(
             image, hfov, vfov, pose, expect_normal=expect_normal, tolerance=tolerance,
-            lens=self.lens,
+            lens=self.lens, tun=self.tun,
         )  # fmt: skip
 
     def lines(self) -> list[WallLine]:
@@ -131,7 +133,7 @@ class FloorEye:
     def detect(self, view: tuple[np.ndarray, float, float, np.ndarray]) -> list[WallLine]:
         """Every floor-wall line (up to two: a corner) in a :meth:`view`, FRAME_ROBOT."""
         image, hfov, vfov, pose = view
-        return detect_wall_lines(image, hfov, vfov, pose, lens=self.lens)
+        return detect_wall_lines(image, hfov, vfov, pose, lens=self.lens, tun=self.tun)
 
     def view(self, still: bool = False) -> tuple[np.ndarray, float, float, np.ndarray] | None:
         """A picture (BGR), its fields of view (rad) and the camera's pose in FRAME_ROBOT;

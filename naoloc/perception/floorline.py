@@ -20,6 +20,9 @@ The detector:
 
 A line is reported only with enough inliers spread along it; otherwise None (a floor and a
 wall of the same colour, no wall in view, or a view filled with furniture).
+
+Every threshold is a field of :class:`naoloc.config.FloorLineTuning` (a config's
+``camera.floor_lines``), passed as ``tun`` (None: the defaults).
 """
 
 from __future__ import annotations
@@ -29,31 +32,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from naoloc.config import FloorLineTuning
 from naoloc.errors import FeatureError
 from naoloc.geometry import modulo2PI
 from naoloc.robot.lens import Lens, pinhole_lens
 
-MIN_INLIERS = 12
-MIN_INLIER_FRACTION = 0.5
-MIN_SPAN_M = 0.3
-RANSAC_TOLERANCE_M = 0.03
-# Random point pairs a line's RANSAC tries.
-RANSAC_SAMPLES = 200
-MAX_RANGE_M = 4.0
-# Lightness of a board of the same floor against the floor's (ratio): planks' tones vary.
-TONE_RATIO = (0.75, 1.45)
-# A pixel at the wall's foot darker than this share of the floor's lightness is not floor.
-DARKEST_FOOT = 0.7
-# Chromaticity distance of the same floor's boards (bounds of the sample's own spread).
-CHROMA_TOL = (0.008, 0.02)
-# A skirting board's top edge (0.08-0.12 m up) projected to the floor from a camera 0.4-0.5 m
-# up stands 1.1-1.35 times as far as the wall's foot (measured: 1.10-1.27, RESULTS stop 49).
-GHOST_RATIO = (1.04, 1.4)
-# The far line's band moved this share of the way from the floor's colour to the board's, in
-# a channel (weighted Lab) in which they differ by GHOST_MIN_STEP or more.
-GHOST_BAND_SHARE = 0.5
-GHOST_MIN_STEP = 2.0
-GHOST_PARALLEL_RAD = 0.3  # a board's edge runs along its foot; a short ghost's fit turns 0.3 rad
+# The default thresholds (``camera.floor_lines`` of a config tunes them); immutable.
+_DEFAULT = FloorLineTuning()
 
 
 @dataclass(frozen=True, slots=True)
@@ -128,18 +113,25 @@ def pixel_rays(
 
 
 def floor_points(
-    rows: np.ndarray, cols: np.ndarray, origin: np.ndarray, rays: np.ndarray
+    rows: np.ndarray,
+    cols: np.ndarray,
+    origin: np.ndarray,
+    rays: np.ndarray,
+    *,
+    tun: FloorLineTuning | None = None,
 ) -> np.ndarray:
     """Back-project pixels ``(rows, cols)`` onto the floor z = 0; ``(n, 2)`` x, y in m.
 
-    Pixels whose ray does not go down, or that land beyond :data:`MAX_RANGE_M`, come back NaN.
+    Pixels whose ray does not go down, or that land beyond ``tun.max_range_m``, come back NaN
+    (``tun``: the detector's thresholds, None: the defaults).
     """
+    tun = _DEFAULT if tun is None else tun
     d = rays[rows, cols]
     with np.errstate(divide="ignore", invalid="ignore"):
         s = -origin[2] / d[:, 2]
     s = np.where(d[:, 2] < -1e-6, s, np.nan)
     xy = origin[None, :2] + s[:, None] * d[:, :2]
-    far = np.hypot(xy[:, 0] - origin[0], xy[:, 1] - origin[1]) > MAX_RANGE_M
+    far = np.hypot(xy[:, 0] - origin[0], xy[:, 1] - origin[1]) > tun.max_range_m
     xy[far] = np.nan
     return xy
 
@@ -155,13 +147,15 @@ def _norm_last(v: np.ndarray) -> np.ndarray:
 
 
 def floor_mask(
-    bgr: np.ndarray, sample_rows: np.ndarray
+    bgr: np.ndarray, sample_rows: np.ndarray, *, tun: FloorLineTuning | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """Pixels that look like the floor; the colour model comes from ``sample_rows``.
 
     Args:
         bgr: ``(h, w, 3)`` uint8 image.
         sample_rows: Boolean ``(h,)``: rows known to look at the near floor.
+        tun: The detector's thresholds (``tone_ratio``, ``darkest_foot``, ``chroma_tol``);
+            None: the defaults.
 
     Returns:
         Boolean ``(h, w)`` mask, the weighted Lab image ``(h, w, 3)``, the floor's
@@ -169,6 +163,7 @@ def floor_mask(
     """
     import cv2
 
+    tun = _DEFAULT if tun is None else tun
     blurred = cv2.GaussianBlur(bgr, (5, 5), 0)
     lab = cv2.cvtColor(blurred, cv2.COLOR_BGR2LAB).astype(np.float32)
     lab[..., 0] *= 0.3  # shading and plank tones change lightness more than colour
@@ -188,9 +183,9 @@ def floor_mask(
     total = channels[..., 0] + channels[..., 1] + channels[..., 2] + 1.0  # exact: integers
     rg = channels[..., 1:] / total[..., None]  # (g, r) shares
     chroma = _norm_last(rg - np.median(rg[sample_rows].reshape(-1, 2), axis=0))
-    chroma_tol = float(np.clip(2.5 * np.percentile(chroma[sample_rows], 75), *CHROMA_TOL))
+    chroma_tol = float(np.clip(2.5 * np.percentile(chroma[sample_rows], 75), *tun.chroma_tol))
     ratio = total / max(1.0, float(np.median(total[sample_rows])))
-    mask |= (chroma < chroma_tol) & (ratio > TONE_RATIO[0]) & (ratio < TONE_RATIO[1])
+    mask |= (chroma < chroma_tol) & (ratio > tun.tone_ratio[0]) & (ratio < tun.tone_ratio[1])
     # bands of another tone across the floor (plank rows, seams, shadows) are shorter in
     # the image than what stands on the floor: close them
     kernel = np.ones((max(7, bgr.shape[0] // 18) | 1, 3), np.uint8)
@@ -198,7 +193,7 @@ def floor_mask(
     mask = cv2.morphologyEx(closed, cv2.MORPH_OPEN, np.ones((5, 5), np.uint8)).astype(bool)
     # Much darker than the floor is never floor, whatever closing did: a skirting of the
     # floor's wood (its blur into a lighter wall above can look like floor).
-    mask &= ratio > DARKEST_FOOT
+    mask &= ratio > tun.darkest_foot
     return mask, lab, centre, threshold
 
 
@@ -209,6 +204,8 @@ def refine_boundary(
     rows: np.ndarray,
     cols: np.ndarray,
     reach: int,
+    *,
+    tun: FloorLineTuning | None = None,
 ) -> np.ndarray:
     """Move each boundary up through floor pixels darker or lighter than the floor model.
 
@@ -224,10 +221,12 @@ def refine_boundary(
         rows: Boundary rows (the top floor pixel of each column).
         cols: Their columns.
         reach: Most pixels to move up.
+        tun: The detector's thresholds (``darkest_foot``); None: the defaults.
 
     Returns:
         The refined rows.
     """
+    tun = _DEFAULT if tun is None else tun
     out = rows.copy()
     ok = rows - reach - 6 >= 0
     if not ok.any() or reach < 1:
@@ -238,7 +237,7 @@ def refine_boundary(
     # Pixels r-1, r-2, ... r-reach above each boundary: (n, reach, 3).
     px = lab[r[:, None] - np.arange(1, reach + 1), c[:, None]]
     to_floor = np.linalg.norm(px - floor, axis=-1)
-    lighter = px[..., 0] > DARKEST_FOOT * floor[0]  # much darker: a skirting, not floor
+    lighter = px[..., 0] > tun.darkest_foot * floor[0]  # much darker: a skirting, not floor
     floorish = (
         lighter
         & (to_floor < 3.0 * threshold)
@@ -342,19 +341,28 @@ def boundary_pixels(mask: np.ndarray, min_run: int) -> tuple[np.ndarray, np.ndar
     return (h - end[cols]).astype(np.int64), cols.astype(np.int64)
 
 
-def fit_line(points: np.ndarray, seed: int = 0) -> tuple[np.ndarray, np.ndarray] | None:
+def fit_line(
+    points: np.ndarray, seed: int = 0, *, tun: FloorLineTuning | None = None
+) -> tuple[np.ndarray, np.ndarray] | None:
     """RANSAC then least-squares line through 2-D points.
+
+    Args:
+        points: ``(n, 2)`` points, m.
+        seed: Seed of RANSAC.
+        tun: The detector's thresholds (``min_inliers``, ``ransac_samples``,
+            ``ransac_tolerance_m``); None: the defaults.
 
     Returns:
         ``(point on the line, unit direction)`` and the inlier mask as a pair, or None.
     """
+    tun = _DEFAULT if tun is None else tun
     n = len(points)
-    if n < MIN_INLIERS:
+    if n < tun.min_inliers:
         return None
-    # RANSAC_SAMPLES random pairs of distinct points (drawn one pair at a time, as ever: the
+    # tun.ransac_samples random pairs of distinct points (drawn one pair at a time, as ever: the
     # same seed gives the same lines), scored at once.
     rng = np.random.default_rng(seed)
-    pairs = np.array([rng.choice(n, 2, replace=False) for _ in range(RANSAC_SAMPLES)])
+    pairs = np.array([rng.choice(n, 2, replace=False) for _ in range(tun.ransac_samples)])
     d = points[pairs[:, 1]] - points[pairs[:, 0]]
     norm = np.hypot(d[:, 0], d[:, 1])
     usable = norm >= 0.05
@@ -367,10 +375,10 @@ def fit_line(points: np.ndarray, seed: int = 0) -> tuple[np.ndarray, np.ndarray]
         (points[None, :, 0] - first[:, 0, None]) * normal[:, 0, None]
         + (points[None, :, 1] - first[:, 1, None]) * normal[:, 1, None]
     )
-    counts = (res < RANSAC_TOLERANCE_M).sum(axis=1)
+    counts = (res < tun.ransac_tolerance_m).sum(axis=1)
     k = int(np.argmax(counts))  # the first of the best
-    best, best_count = res[k] < RANSAC_TOLERANCE_M, int(counts[k])
-    if best_count < MIN_INLIERS:
+    best, best_count = res[k] < tun.ransac_tolerance_m, int(counts[k])
+    if best_count < tun.min_inliers:
         return None
     inl = best
     for _ in range(2):
@@ -379,8 +387,8 @@ def fit_line(points: np.ndarray, seed: int = 0) -> tuple[np.ndarray, np.ndarray]
         _, _, vt = np.linalg.svd(p - centre, full_matrices=False)  # not the n x n U
         direction = vt[0]
         normal = np.array([-direction[1], direction[0]])
-        inl = np.abs((points - centre) @ normal) < RANSAC_TOLERANCE_M
-        if inl.sum() < MIN_INLIERS:
+        inl = np.abs((points - centre) @ normal) < tun.ransac_tolerance_m
+        if inl.sum() < tun.min_inliers:
             return None
     return np.vstack([centre, direction]), inl
 
@@ -395,6 +403,7 @@ def detect_wall_lines(
     max_lines: int = 2,
     seed: int = 0,
     lens: Lens | None = None,
+    tun: FloorLineTuning | None = None,
 ) -> list[WallLine]:
     """The floor-wall lines in one image (up to ``max_lines``, most inliers first), FRAME_ROBOT.
 
@@ -408,6 +417,8 @@ def detect_wall_lines(
         max_lines: Most lines to fit (a corner shows two walls).
         seed: Seed of RANSAC.
         lens: The camera's lens, undone before pixels become rays (None: a pinhole).
+        tun: The detector's thresholds (a config's ``camera.floor_lines``; None: the
+            defaults).
 
     Returns:
         The lines seen well enough (possibly none).
@@ -417,6 +428,7 @@ def detect_wall_lines(
     """
     import cv2
 
+    tun = _DEFAULT if tun is None else tun
     img = np.asarray(image)
     if img.ndim == 2:
         img = cv2.cvtColor(img, cv2.COLOR_GRAY2BGR)
@@ -431,54 +443,60 @@ def detect_wall_lines(
     origin = pose.reshape(4, 4)[:3, 3].copy()
     mid = rays_at(np.arange(h) + 0.5, np.full(h, w // 2), (w, h), hfov, vfov,
                   pose.reshape(4, 4), lens)  # fmt: skip
-    centre = floor_points(np.arange(h), np.zeros(h, np.int64), origin, mid[:, None])
+    centre = floor_points(np.arange(h), np.zeros(h, np.int64), origin, mid[:, None], tun=tun)
     reach = np.hypot(centre[:, 0], centre[:, 1])
     sample_rows = (reach > 0.2) & (reach < near_m)
     if sample_rows.sum() < 5:
         sample_rows = np.zeros(h, bool)
         sample_rows[int(h * 0.75) :] = True
-    mask, lab, floor, threshold = floor_mask(img, sample_rows)
+    mask, lab, floor, threshold = floor_mask(img, sample_rows, tun=tun)
     rows, cols = boundary_pixels(mask, max(4, h // 20))
-    rows = refine_boundary(lab, floor, threshold, rows, cols, max(4, h // 24))
-    if rows.size < MIN_INLIERS:
+    rows = refine_boundary(lab, floor, threshold, rows, cols, max(4, h // 24), tun=tun)
+    if rows.size < tun.min_inliers:
         return []
     # the foot of the wall, to a fraction of a pixel: a line nearly parallel to the image
     # rows would otherwise be quantised to whole rows (3 cm at 2 m in QVGA)
     edge = rays_at(subpixel_edges(lab, floor, rows, cols), cols, (w, h), hfov, vfov,
                    pose.reshape(4, 4), lens)  # fmt: skip
-    pts = floor_points(np.arange(rows.size), np.zeros(rows.size, np.int64), origin, edge[:, None])
+    pts = floor_points(
+        np.arange(rows.size), np.zeros(rows.size, np.int64), origin, edge[:, None], tun=tun
+    )
     finite = np.all(np.isfinite(pts), axis=1)
     pts, rows, cols = pts[finite], rows[finite], cols[finite]
     lines: list[WallLine] = []
     members: list[np.ndarray] = []  # each line's boundary pixels (indices into pts)
     remaining = np.arange(len(pts))
     for k in range(max_lines):
-        line, inl = _one_line(pts[remaining], seed + k)
+        line, inl = _one_line(pts[remaining], seed + k, tun=tun)
         if line is None:
             break
         lines.append(line)
         members.append(remaining[inl])
         remaining = remaining[~inl]
-    if len(lines) == 2 and (pair := _parallel_pair(lines)) is not None:
+    if len(lines) == 2 and (pair := _parallel_pair(lines, tun=tun)) is not None:
         near, far = pair
         band = _ghost_band(lab, rows[members[far]], cols[members[far]], lines[near],
-                           (w, h), hfov, vfov, pose.reshape(4, 4), lens)  # fmt: skip
+                           (w, h), hfov, vfov, pose.reshape(4, 4), lens, tun=tun)  # fmt: skip
         if band is not None and skirting_ghost(
-            _band_colours(lab, rows[members[near]], cols[members[near]]), band
+            _band_colours(lab, rows[members[near]], cols[members[near]]), band, tun=tun
         ):
             del lines[far]
     return lines
 
 
-def _parallel_pair(lines: list[WallLine]) -> tuple[int, int] | None:
+def _parallel_pair(
+    lines: list[WallLine], *, tun: FloorLineTuning | None = None
+) -> tuple[int, int] | None:
     """``(near, far)`` indices of two lines that could be a wall's foot and its skirting
-    board's top edge (parallel, the far one :data:`GHOST_RATIO` times as far), else None."""
+    board's top edge (within ``tun.ghost_parallel_rad`` of parallel, the far one
+    ``tun.ghost_ratio`` times as far), else None."""
+    tun = _DEFAULT if tun is None else tun
     a, b = lines
-    if abs(modulo2PI(a.normal - b.normal)) > GHOST_PARALLEL_RAD:
+    if abs(modulo2PI(a.normal - b.normal)) > tun.ghost_parallel_rad:
         return None
     near, far = (0, 1) if a.distance <= b.distance else (1, 0)
     ratio = lines[far].distance / max(lines[near].distance, 1e-9)
-    return (near, far) if GHOST_RATIO[0] <= ratio <= GHOST_RATIO[1] else None
+    return (near, far) if tun.ghost_ratio[0] <= ratio <= tun.ghost_ratio[1] else None
 
 
 def _band_colours(lab: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
@@ -503,24 +521,28 @@ def _ghost_band(
     vfov: float,
     pose: np.ndarray,
     lens: Lens | None,
+    *,
+    tun: FloorLineTuning | None = None,
 ) -> np.ndarray | None:
     """In the far line's columns (its boundary ``rows``, ``cols``): the colour between the
     far line and where the near line would meet the floor, and the colour of the floor
     nearer than that, ``(2, 3)`` (weighted Lab, medians). A column counts where the near
     line meets the floor 3 or more pixels below the far line and 3 above the image's
-    bottom; None when fewer than ``MIN_INLIERS // 2`` columns do."""
+    bottom; None when fewer than ``tun.min_inliers // 2`` columns do (``tun``: the
+    detector's thresholds, None: the defaults)."""
+    tun = _DEFAULT if tun is None else tun
     h, n = size[1], len(cols)
     below = np.arange(h)
     rays = rays_at(np.repeat(below + 0.5, n), np.tile(cols, h), size, hfov, vfov,
                    pose, lens).reshape(h, n, 3)  # fmt: skip
-    xy = floor_points(np.repeat(below, n), np.tile(np.arange(n), h), pose[:3, 3], rays)
+    xy = floor_points(np.repeat(below, n), np.tile(np.arange(n), h), pose[:3, 3], rays, tun=tun)
     normal = np.array([math.cos(near.normal), math.sin(near.normal)])
     # (h, n): the pixel's floor point is before the near line, below the far line
     nearer = ((xy @ normal) < near.distance).reshape(h, n) & (below[:, None] > rows[None, :])
     # the near line's row in each column: the first such row from the far line down
     foot = np.where(nearer.any(axis=0), np.argmax(nearer, axis=0), -1)
     ok = (foot - rows >= 3) & (foot + 3 < h)
-    if ok.sum() < MIN_INLIERS // 2:
+    if ok.sum() < tun.min_inliers // 2:
         return None
     c, r, f = cols[ok], rows[ok], foot[ok]
     # the band: rows r+1 .. f-2 of each column
@@ -530,38 +552,47 @@ def _ghost_band(
     return np.stack([np.median(band, axis=0), np.median(floor, axis=0)])
 
 
-def skirting_ghost(near: np.ndarray, far_band: np.ndarray) -> bool:
+def skirting_ghost(
+    near: np.ndarray, far_band: np.ndarray, *, tun: FloorLineTuning | None = None
+) -> bool:
     """Whether a farther line is a skirting board's top edge taken for the floor line.
 
     Where the floor's colour model takes a skirting board for floor (a grey board on a grey
     carpet, in the columns where the light makes them alike), the top of the "floor" is the
     board's top edge, 8-12 cm up the wall: projected to the floor from the camera it is a
-    line parallel to the wall's foot, :data:`GHOST_RATIO` times as far. In the columns where
+    line parallel to the wall's foot, ``tun.ghost_ratio`` times as far. In the columns where
     the board is not taken for floor, the same image shows the foot. In the far line's
     columns, the band between it and where the near line would meet the floor is then the
     board, not floor: in a channel of colour in which the board at the near line differs
-    from the floor (by :data:`GHOST_MIN_STEP` or more), the band has moved from the floor's
-    toward the board's by more than :data:`GHOST_BAND_SHARE` of the way (a board in shade
+    from the floor (by ``tun.ghost_min_step`` or more), the band has moved from the floor's
+    toward the board's by more than ``tun.ghost_band_share`` of the way (a board in shade
     keeps its hue and loses its lightness). A wall seen beyond a piece of furniture has
     open floor there.
 
     Args:
         near: The near line's colours just above and below it (:func:`_band_colours`).
         far_band: The far line's band and the floor below it (:func:`_ghost_band`).
+        tun: The detector's thresholds (a config's ``camera.floor_lines``; None: the
+            defaults).
     """
+    tun = _DEFAULT if tun is None else tun
     board, floor = near
     axis = board - floor
-    seen = np.abs(axis) >= GHOST_MIN_STEP  # the channels in which the board differs
+    seen = np.abs(axis) >= tun.ghost_min_step  # the channels in which the board differs
     if not seen.any():
         return False
     share = (far_band[0] - far_band[1])[seen] / axis[seen]
-    return float(share.max()) > GHOST_BAND_SHARE
+    return float(share.max()) > tun.ghost_band_share
 
 
-def _one_line(pts: np.ndarray, seed: int) -> tuple[WallLine | None, np.ndarray]:
-    """The best line through ``pts`` and its inlier mask; (None, all False) when none."""
+def _one_line(
+    pts: np.ndarray, seed: int, *, tun: FloorLineTuning | None = None
+) -> tuple[WallLine | None, np.ndarray]:
+    """The best line through ``pts`` and its inlier mask; (None, all False) when none (a
+    line needs ``tun.min_span_m`` of span and half ``tun.min_inlier_fraction`` of ``pts``)."""
+    tun = _DEFAULT if tun is None else tun
     none = np.zeros(len(pts), bool)
-    fit = fit_line(pts, seed)
+    fit = fit_line(pts, seed, tun=tun)
     if fit is None:
         return None, none
     (point, direction), inl = fit
@@ -573,7 +604,7 @@ def _one_line(pts: np.ndarray, seed: int) -> tuple[WallLine | None, np.ndarray]:
     along = p @ direction
     span = float(along.max() - along.min())
     fraction = float(inl.sum()) / len(pts)
-    if span < MIN_SPAN_M or fraction < MIN_INLIER_FRACTION / 2:
+    if span < tun.min_span_m or fraction < tun.min_inlier_fraction / 2:
         return None, none
     rms = float(np.sqrt(np.mean(((p - point) @ normal) ** 2)))
     side = p @ np.array([-normal[1], normal[0]])  # along the line, from the nearest point
@@ -594,6 +625,7 @@ def detect_wall_line(
     tolerance: float = 0.5,
     seed: int = 0,
     lens: Lens | None = None,
+    tun: FloorLineTuning | None = None,
 ) -> WallLine | None:
     """The floor-wall line nearest in direction to ``expect_normal`` (or the best one).
 
@@ -607,13 +639,15 @@ def detect_wall_line(
         tolerance: Largest accepted difference from ``expect_normal``, rad.
         seed: Seed of RANSAC.
         lens: The camera's lens (None: a pinhole).
+        tun: The detector's thresholds (a config's ``camera.floor_lines``; None: the
+            defaults).
 
     Returns:
         The line with at least half of the boundary pixels it was fitted among, or None.
     """
     lines = wall_line_candidates(
         image, hfov, vfov, camera_pose, expect_normal=expect_normal, tolerance=tolerance,
-        seed=seed, lens=lens,
+        seed=seed, lens=lens, tun=tun,
     )  # fmt: skip
     return lines[0] if lines else None
 
@@ -628,6 +662,7 @@ def wall_line_candidates(
     tolerance: float = 0.5,
     seed: int = 0,
     lens: Lens | None = None,
+    tun: FloorLineTuning | None = None,
 ) -> list[WallLine]:
     """Every line :func:`detect_wall_line` could return, the one it returns first.
 
@@ -635,10 +670,11 @@ def wall_line_candidates(
 
     Returns:
         The lines within ``tolerance`` of ``expect_normal`` (all of them for None), most
-        inliers first; a line after the image's best one needs :data:`MIN_INLIER_FRACTION`
+        inliers first; a line after the image's best one needs ``tun.min_inlier_fraction``
         of the boundary pixels left to it.
     """
-    lines = detect_wall_lines(image, hfov, vfov, camera_pose, seed=seed, lens=lens)
+    tun = _DEFAULT if tun is None else tun
+    lines = detect_wall_lines(image, hfov, vfov, camera_pose, seed=seed, lens=lens, tun=tun)
     if expect_normal is not None:
         lines = [ln for ln in lines if abs(modulo2PI(ln.normal - expect_normal)) <= tolerance]
-    return [ln for ln in lines if ln.fraction >= MIN_INLIER_FRACTION or ln is lines[0]]
+    return [ln for ln in lines if ln.fraction >= tun.min_inlier_fraction or ln is lines[0]]

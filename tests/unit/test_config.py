@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from naoloc.config import Config, load_config
+from naoloc.config import Config, FloorLineTuning, load_config
 from naoloc.errors import ConfigError
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -47,6 +47,8 @@ def test_minimal_file_is_complete(tmp_path: Path) -> None:
         ("survey: {laps: 0}\n", "survey.laps"),
         ("survey: {wall_offset_m: 3.5}\n", "survey.wall_offset_m"),
         ("world: {start_pose: [9, 1, 0]}\n", "world.start_pose"),
+        ("camera: {floor_lines: {ghost_ratio: [1.5, 1.2]}}\n", "camera.floor_lines.ghost_ratio"),
+        ("camera: {floor_lines: {min_span: 0.3}}\n", "camera.floor_lines.min_span: unknown key"),
         ("- just\n- a list\n", "top level must be a mapping"),
         ("robot: [\n", "line"),
     ],
@@ -60,6 +62,25 @@ def test_errors_are_one_line_with_file_and_key(tmp_path: Path, text: str, fragme
     assert "\n" not in msg
     assert msg.startswith(str(f))
     assert fragment in msg
+
+
+def test_floor_line_tuning_defaults_are_the_detectors_and_bad_ranges_name_the_key() -> None:
+    tun = load_config(None).camera.floor_lines
+    assert tun == FloorLineTuning()
+    assert (tun.min_inliers, tun.min_span_m, tun.max_range_m) == (12, 0.3, 4.0)
+    assert (tun.tone_ratio, tun.chroma_tol, tun.ghost_ratio) == (
+        (0.75, 1.45),
+        (0.008, 0.02),
+        (1.04, 1.4),
+    )
+    with pytest.raises(ConfigError, match=r"camera\.floor_lines\.ghost_ratio: .*low < high"):
+        load_config({"camera": {"floor_lines": {"ghost_ratio": [1.5, 1.2]}}})
+    with pytest.raises(ConfigError, match=r"camera\.floor_lines\.chroma_tol"):
+        load_config({"camera": {"floor_lines": {"chroma_tol": [0.03, 0.01]}}})
+    with pytest.raises(ConfigError, match=r"camera\.floor_lines\.ransac_sample: unknown key"):
+        load_config({"camera": {"floor_lines": {"ransac_sample": 100}}})
+    tuned = load_config({"camera": {"floor_lines": {"min_span_m": 0.5}}})
+    assert tuned.camera.floor_lines.min_span_m == 0.5 and tuned.camera.floor_lines.min_inliers == 12
 
 
 def test_missing_file() -> None:

@@ -7,13 +7,16 @@ import math
 import numpy as np
 import pytest
 
+import naoloc
 from naoloc.behaviours.wall_follow import (
     MAX_LATERAL_M,
     MAX_TURN_RAD,
+    FloorEye,
     FrontSample,
     corrected_step,
     metric_scale,
 )
+from naoloc.config import FloorLineTuning, load_config
 from naoloc.errors import FeatureError
 from naoloc.geometry import Pose2D
 from naoloc.perception.floorline import WallLine, detect_wall_line, detect_wall_lines, pixel_rays
@@ -104,6 +107,34 @@ def test_bad_input_names_the_problem() -> None:
         detect_wall_line(np.zeros((10, 10, 4)), HFOV, VFOV, np.eye(4))
     with pytest.raises(FeatureError, match="16 finite"):
         detect_wall_line(np.zeros((10, 10, 3), np.uint8), HFOV, VFOV, np.eye(3))
+
+
+def test_the_config_tunes_the_detector() -> None:
+    """``camera.floor_lines`` reaches the detector: a line shorter than its least span, or
+    with fewer inliers than its least count, is no line."""
+    pose = camera_pose(0.0, 0.35)
+    img = render(pose, 0.05, 1.6)
+    line = detect_wall_line(img, HFOV, VFOV, pose, tun=load_config(None).camera.floor_lines)
+    assert line is not None and line.span_m < 2.5
+    assert line == detect_wall_line(img, HFOV, VFOV, pose)  # None: the defaults
+    long = load_config({"camera": {"floor_lines": {"min_span_m": 2.5}}}).camera.floor_lines
+    assert detect_wall_line(img, HFOV, VFOV, pose, tun=long) is None
+    many = FloorLineTuning(min_inliers=line.inliers + 1)
+    assert detect_wall_lines(img, HFOV, VFOV, pose, tun=many) == []
+
+
+def test_the_survey_eye_uses_the_camera_config_floor_lines() -> None:
+    pose = camera_pose(0.0, 0.35)
+    view = (render(pose, 0.05, 1.6), HFOV, VFOV, pose)
+    cfg = load_config({"robot": {"backend": "fake"}})
+    tuned = cfg.with_overrides({"camera": {"floor_lines": {"min_span_m": 2.5}}})
+    with naoloc.connect(cfg) as robot:
+        for camera, found in [(cfg.camera, 1), (tuned.camera, 0)]:
+            eye = FloorEye(robot, camera)
+            try:
+                assert len(eye.detect(view)) == found
+            finally:
+                eye.close()
 
 
 def _line(distance: float, normal: float) -> WallLine:
@@ -251,6 +282,15 @@ def test_a_skirting_board_in_shade_is_no_second_wall(shade: float) -> None:
     pose = camera_pose(0.0, 0.35)
     lines = detect_wall_lines(render_skirting(pose, 1.8, shade=shade), HFOV, VFOV, pose)
     assert [round(ln.distance, 1) for ln in lines] == [1.8]
+
+
+def test_the_skirting_ghost_is_only_dropped_within_the_tuned_ratio() -> None:
+    # The ghost stands 1.19 times as far as the foot: outside [1.3, 1.4] it is kept.
+    pose = camera_pose(0.0, 0.35)
+    image = render_skirting(pose, 1.8, shade=0.6)
+    narrow = FloorLineTuning(ghost_ratio=(1.3, 1.4))
+    lines = detect_wall_lines(image, HFOV, VFOV, pose, tun=narrow)
+    assert [round(ln.distance, 1) for ln in lines] == [1.8, 2.2]
 
 
 def test_a_wall_beyond_a_bench_stays_a_second_line() -> None:
