@@ -46,6 +46,10 @@ from naoloc.perception.floorline import WallLine
 __all__ = ["Belief", "Evidence", "MultiHypothesisFilter"]
 
 
+CHI2_3DOF_99 = 11.345
+"""The 99 % quantile of the chi-square distribution with 3 degrees of freedom (x, y, theta):
+a pose's 99 % region is where its squared Mahalanobis distance is below it."""
+
 Evidence = PictureMatches | tuple[WallLine, ...] | None
 """What one observation gives the filter: a picture's matches, a scan's lines, or nothing."""
 
@@ -57,7 +61,9 @@ class Belief:
     Attributes:
         pose: The best hypothesis' pose, map frame (None: no hypothesis).
         cov: Its covariance (3 x 3: x, y m; theta rad).
-        probability: Its weight among the hypotheses and the other-room alternative.
+        probability: The weight, among the hypotheses and the other-room alternative, of
+            the hypotheses inside the belief's 99 % region about the best pose (``cov``
+            covers them): how concentrated the belief is.
         other_room: The other-room alternative's weight.
         hypotheses: How many hypotheses the filter holds.
         support: Pictures the best hypothesis explained.
@@ -541,10 +547,20 @@ class MultiHypothesisFilter:
         if near > 0:
             cov = (weights[best] * cov + spread) / (weights[best] + near)
         cov = cov + np.diag([self.map_floor_m**2] * 2 + [self.tun.map_floor_rad**2])
+        # How concentrated the belief is: the weight of the places inside its own 99 %
+        # region about the best pose (the reported spread covers them), not the best
+        # hypothesis' alone: two hypotheses a centimetre apart are one place.
+        inv = np.linalg.inv(cov)
+        mass = 0.0
+        for w, g in zip(weights[:-1], self.hypotheses, strict=True):
+            d = g.pose - h.pose
+            d[2] = math.remainder(float(d[2]), 2 * math.pi)
+            if g is h or float(d @ inv @ d) <= CHI2_3DOF_99:
+                mass += float(w)
         return Belief(
             h.pose.copy(),
             cov,
-            float(weights[best]),
+            mass,
             float(weights[-1]),
             len(self.hypotheses),
             h.support,
