@@ -1105,6 +1105,24 @@ class FilterTuning(_Model):
         description="floor-line direction noise (rad; measured 0.009-0.016 up to 3 m, 0.026 "
         "beyond)",
     )
+    walk_line_sigma_m: float = Field(
+        0.02,
+        gt=0,
+        description="floor-line distance noise while the robot walks (m, std): the camera "
+        "sways with the gait; not measured (the at-rest model before stop 52)",
+    )
+    walk_line_sigma_per_m: float = Field(
+        0.02, ge=0, description="the same, growing with distance (m per m)"
+    )
+    walk_line_sigma_rad: float = Field(
+        0.04, gt=0, description="floor-line direction noise while the robot walks (rad)"
+    )
+    walking_step_m: float = Field(
+        0.001,
+        ge=0,
+        description="a scan whose odometry moved more than this since the previous "
+        "observation was taken walking (m; a standing NAO's odometry does not move)",
+    )
     line_outlier_share: float = Field(
         0.4, gt=0, lt=1, description="prior share of floor lines that are not a wall's foot"
     )

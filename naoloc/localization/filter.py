@@ -43,15 +43,25 @@ from naoloc.localization.walls import WallMap, fit_line
 from naoloc.mapping.planar_ransac import planar_hypotheses
 from naoloc.perception.floorline import WallLine
 
-__all__ = ["Belief", "Evidence", "MultiHypothesisFilter"]
+__all__ = ["Belief", "Evidence", "MultiHypothesisFilter", "WalkingLines"]
 
 
 CHI2_3DOF_99 = 11.345
 """The 99 % quantile of the chi-square distribution with 3 degrees of freedom (x, y, theta):
 a pose's 99 % region is where its squared Mahalanobis distance is below it."""
 
+
+class WalkingLines(tuple[WallLine, ...]):
+    """A scan's floor lines taken while the robot walked (its odometry moved since the
+    previous observation): weighed at the walking noise (``walk_line_sigma_*``), since the
+    camera sways with the gait."""
+
+    __slots__ = ()
+
+
 Evidence = PictureMatches | tuple[WallLine, ...] | None
-"""What one observation gives the filter: a picture's matches, a scan's lines, or nothing."""
+"""What one observation gives the filter: a picture's matches, a scan's lines (a
+:class:`WalkingLines` when taken walking), or nothing."""
 
 
 @dataclass(frozen=True)
@@ -128,6 +138,14 @@ class MultiHypothesisFilter:
         self._proposal_cov = np.diag([m**2, m**2, r**2])
         m, r = tun.line_proposal_sigma
         self._line_cov = np.diag([m**2, m**2, r**2])
+        # Lines taken walking are weighed at the walking noise.
+        self._walk_tun = tun.model_copy(
+            update={
+                "line_sigma_m": tun.walk_line_sigma_m,
+                "line_sigma_per_m": tun.walk_line_sigma_per_m,
+                "line_sigma_rad": tun.walk_line_sigma_rad,
+            }
+        )
 
     def step_of(self, a: Pose2D, b: Pose2D) -> np.ndarray:
         """The odometry step from ``a`` to ``b`` in FRAME_ROBOT at ``a``, turn de-scaled."""
@@ -140,6 +158,9 @@ class MultiHypothesisFilter:
             step = self.step_of(self.odometry, odometry)
             for h in self.hypotheses:
                 h.predict(step, self.tun)
+            walked = math.hypot(step[0], step[1]) > self.tun.walking_step_m
+            if walked and isinstance(evidence, tuple) and evidence:
+                evidence = WalkingLines(evidence)
         self.odometry = odometry
         if evidence is not None:
             self.window.append((evidence, odometry))
@@ -333,14 +354,15 @@ class MultiHypothesisFilter:
         assert self.walls is not None
         leaders = sorted(self.hypotheses, key=lambda h: -h.score)[: self.tun.shift_from]
         fresh: list[Hypothesis] = []
+        tun = self._line_tun(lines)
         for h in leaders:
             for line in lines:
-                fit = fit_line(self.walls, line, h.pose, self.tun, h.cov)
+                fit = fit_line(self.walls, line, h.pose, tun, h.cov)
                 if fit.wall >= 0 and fit.log_ratio > self.tun.shift_explained_nats:
                     continue  # this hypothesis explains the line already
                 dist, direction = self.walls.expected(h.pose)
                 turn = np.angle(np.exp(1j * (line.normal - direction)))
-                sig_a = math.hypot(self.tun.line_sigma_rad, math.sqrt(h.cov[2, 2]))
+                sig_a = math.hypot(tun.line_sigma_rad, math.sqrt(h.cov[2, 2]))
                 for k in np.flatnonzero(np.abs(turn) < self.tun.gate_mahalanobis * sig_a):
                     shift = dist[k] - line.distance
                     if abs(shift) > self.tun.shift_max_m or abs(shift) < self.tun.shift_min_m:
@@ -361,8 +383,12 @@ class MultiHypothesisFilter:
         if isinstance(evidence, PictureMatches):
             return h.update_picture(evidence, self.tun).evidence
         if evidence and self.walls is not None:
-            return h.update_lines(self.walls, evidence, self.tun)
+            return h.update_lines(self.walls, evidence, self._line_tun(evidence))
         return 0.0
+
+    def _line_tun(self, lines: tuple[WallLine, ...]) -> FilterTuning:
+        """The tuning a scan's lines are weighed with: walking or at rest."""
+        return self._walk_tun if isinstance(lines, WalkingLines) else self.tun
 
     def _identity(self, h: Hypothesis, evidence: Evidence) -> float:
         """What an observation says of the map's room being the robot's at ``h``: a

@@ -11,7 +11,7 @@ import pytest
 
 from naoloc.config import FilterTuning
 from naoloc.geometry import Pose2D
-from naoloc.localization.filter import Belief, MultiHypothesisFilter
+from naoloc.localization.filter import Belief, MultiHypothesisFilter, WalkingLines
 from naoloc.localization.hypothesis import Hypothesis, motion_step
 from naoloc.localization.line_poses import line_poses
 from naoloc.localization.localizer import (
@@ -291,6 +291,26 @@ def test_a_line_of_furniture_before_a_wall_is_not_the_wall() -> None:
     assert fit_line(WALLS, wall, pose, TUN, cov).wall == 1
     front = dataclasses.replace(wall, distance=wall.distance - 0.15)
     assert fit_line(WALLS, front, pose, TUN, cov).wall == -1
+
+
+@pytest.mark.parametrize(("walked_m", "explained"), [(0.0, False), (0.05, True)])
+def test_lines_taken_walking_are_weighed_at_the_walking_noise(
+    walked_m: float, explained: bool
+) -> None:
+    """The same line 0.15 m before a wall 2.3 m away: standing, clutter (the measured
+    noise); after the odometry walked, the wall (the camera sways with the gait)."""
+    pose = np.array([2.0, 0.5, 0.7])
+    front = dataclasses.replace(
+        _line(WALLS, pose, 1), distance=_line(WALLS, pose, 1).distance - 0.15
+    )
+    f = MultiHypothesisFilter(WALLS, TUN)
+    h = Hypothesis(pose.copy(), np.diag([0.02**2, 0.02**2, 0.01**2]), TUN, 50.0)
+    f.hypotheses = [h]
+    f.observe(None, Pose2D(0.0, 0.0, 0.0))
+    f.observe((front,), Pose2D(walked_m, 0.0, 0.0))
+    walked = isinstance(f.window[-1][0], WalkingLines)
+    assert walked == (walked_m > 0)
+    assert (h.line_support > 0) == explained
 
 
 def test_the_room_evidence_is_the_places_by_their_weight() -> None:
