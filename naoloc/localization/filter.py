@@ -558,16 +558,20 @@ class MultiHypothesisFilter:
         other = 1.0 / (1.0 + math.exp(min(700.0, max(-700.0, seen - null))))
         weights = np.append(weights * (1.0 - other), other)
         h = self.hypotheses[best]
+        # Each hypothesis' pose less the best's, heading wrapped.
+        deltas = []
+        for g in self.hypotheses:
+            d = g.pose - h.pose
+            d[2] = math.remainder(float(d[2]), 2 * math.pi)
+            deltas.append(d)
         # The belief's spread about the best pose: its own covariance, the hypotheses near
         # it by their weight (moment matching), and the map's irreducible error.
         cov = h.cov.copy()
         near = 0.0
         spread = np.zeros((3, 3))
-        for w, g in zip(weights[:-1], self.hypotheses, strict=True):
+        for w, g, d in zip(weights[:-1], self.hypotheses, deltas, strict=True):
             if g is h or w < 1e-6:
                 continue
-            d = g.pose - h.pose
-            d[2] = math.remainder(float(d[2]), 2 * math.pi)
             spread += w * (g.cov + np.outer(d, d))
             near += w
         if near > 0:
@@ -578,9 +582,7 @@ class MultiHypothesisFilter:
         # hypothesis' alone: two hypotheses a centimetre apart are one place.
         inv = np.linalg.inv(cov)
         mass = 0.0
-        for w, g in zip(weights[:-1], self.hypotheses, strict=True):
-            d = g.pose - h.pose
-            d[2] = math.remainder(float(d[2]), 2 * math.pi)
+        for w, g, d in zip(weights[:-1], self.hypotheses, deltas, strict=True):
             if g is h or float(d @ inv @ d) <= CHI2_3DOF_99:
                 mass += float(w)
         return Belief(

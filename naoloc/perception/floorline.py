@@ -484,13 +484,10 @@ def detect_wall_lines(
     return lines
 
 
-def _parallel_pair(
-    lines: list[WallLine], *, tun: FloorLineTuning | None = None
-) -> tuple[int, int] | None:
+def _parallel_pair(lines: list[WallLine], *, tun: FloorLineTuning) -> tuple[int, int] | None:
     """``(near, far)`` indices of two lines that could be a wall's foot and its skirting
     board's top edge (within ``tun.ghost_parallel_rad`` of parallel, the far one
     ``tun.ghost_ratio`` times as far), else None."""
-    tun = _DEFAULT if tun is None else tun
     a, b = lines
     if abs(modulo2PI(a.normal - b.normal)) > tun.ghost_parallel_rad:
         return None
@@ -522,15 +519,14 @@ def _ghost_band(
     pose: np.ndarray,
     lens: Lens | None,
     *,
-    tun: FloorLineTuning | None = None,
+    tun: FloorLineTuning,
 ) -> np.ndarray | None:
     """In the far line's columns (its boundary ``rows``, ``cols``): the colour between the
     far line and where the near line would meet the floor, and the colour of the floor
     nearer than that, ``(2, 3)`` (weighted Lab, medians). A column counts where the near
     line meets the floor 3 or more pixels below the far line and 3 above the image's
     bottom; None when fewer than ``tun.min_inliers // 2`` columns do (``tun``: the
-    detector's thresholds, None: the defaults)."""
-    tun = _DEFAULT if tun is None else tun
+    detector's thresholds)."""
     h, n = size[1], len(cols)
     below = np.arange(h)
     rays = rays_at(np.repeat(below + 0.5, n), np.tile(cols, h), size, hfov, vfov,
@@ -586,11 +582,10 @@ def skirting_ghost(
 
 
 def _one_line(
-    pts: np.ndarray, seed: int, *, tun: FloorLineTuning | None = None
+    pts: np.ndarray, seed: int, *, tun: FloorLineTuning
 ) -> tuple[WallLine | None, np.ndarray]:
     """The best line through ``pts`` and its inlier mask; (None, all False) when none (a
     line needs ``tun.min_span_m`` of span and half ``tun.min_inlier_fraction`` of ``pts``)."""
-    tun = _DEFAULT if tun is None else tun
     none = np.zeros(len(pts), bool)
     fit = fit_line(pts, seed, tun=tun)
     if fit is None:
