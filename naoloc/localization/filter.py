@@ -14,7 +14,10 @@ The filter keeps up to ``max_hypotheses`` :class:`~naoloc.localization.hypothesi
 
 The belief's answer (:meth:`MultiHypothesisFilter.belief`) weighs each hypothesis by
 ``exp(score)`` against the prior that the observations come from somewhere the map does
-not show (``exp(null_nats)``). "Not the mapped room" is that alternative winning.
+not show (``exp(null_nats)``). "Not the mapped room" is that alternative winning. What
+speaks for the mapped room is the pictures' distinctive matches (floor lines fit some
+corner of any room); what speaks against it is those matches failing, and floor lines
+seen beyond the map's walls, where the mapped room shows nothing.
 """
 
 from __future__ import annotations
@@ -173,10 +176,12 @@ class MultiHypothesisFilter:
         leader = max(self.hypotheses, key=lambda h: h.score) if self.hypotheses else None
         gains = {}
         for h in self.hypotheses:
-            gains[id(h)] = self._update(h, evidence)
+            gains[id(h)], against = self._update(h, evidence)
             h.score = keep * h.score + gains[id(h)]
-            if isinstance(evidence, PictureMatches):  # lines say nothing of which room
+            if isinstance(evidence, PictureMatches):
                 h.seen_score = kept * h.seen_score + self._identity(h, evidence)
+            else:  # lines fit some corner of any room; beyond the walls, they speak against it
+                h.seen_score += against
         if isinstance(evidence, PictureMatches):
             if evidence.features > 0:
                 self.pictures += 1
@@ -379,23 +384,25 @@ class MultiHypothesisFilter:
                         fresh.append(sibling)
         self.hypotheses += fresh
 
-    def _update(self, h: Hypothesis, evidence: Evidence) -> float:
+    def _update(self, h: Hypothesis, evidence: Evidence) -> tuple[float, float]:
+        """Correct ``h`` with ``evidence``: the evidence it gave ``h`` (nats) and what it
+        said against the mapped room at ``h`` (nats, <= 0; lines beyond the walls)."""
         if isinstance(evidence, PictureMatches):
-            return h.update_picture(evidence, self.tun).evidence
+            return h.update_picture(evidence, self.tun).evidence, 0.0
         if evidence and self.walls is not None:
             return h.update_lines(self.walls, evidence, self._line_tun(evidence))
-        return 0.0
+        return 0.0, 0.0
 
     def _line_tun(self, lines: tuple[WallLine, ...]) -> FilterTuning:
         """The tuning a scan's lines are weighed with: walking or at rest."""
         return self._walk_tun if isinstance(lines, WalkingLines) else self.tun
 
     def _identity(self, h: Hypothesis, evidence: Evidence) -> float:
-        """What an observation says of the map's room being the robot's at ``h``: a
-        picture's distinctive matches at its pose (:func:`distinct_only`), at most
+        """What a picture says of the map's room being the robot's at ``h``: its
+        distinctive matches at its pose (:func:`distinct_only`), at most
         ``identity_cap_nats`` for it and ``identity_floor_nats`` against it (one picture's
-        matches share its view: one picture alone is not another room's proof); lines,
-        nothing."""
+        matches share its view: one picture alone is not another room's proof). A scan's
+        lines speak only against it (:meth:`Hypothesis.update_lines`)."""
         if not isinstance(evidence, PictureMatches) or evidence.distinct.shape[0] == 0:
             return 0.0
         gain = picture_log_ratio(distinct_only(evidence), h.pose, self.tun)
@@ -506,10 +513,13 @@ class MultiHypothesisFilter:
                 math.hypot(step[0], step[1]) < self.tun.near_m and abs(step[2]) < self.tun.near_rad
             )
             probe = h if near else Hypothesis(*motion_step(h.pose, h.cov, step, self.tun), self.tun)
-            score += keep**age * self._update(probe, evidence)
+            gain, against = self._update(probe, evidence)
+            score += keep**age * gain
             if isinstance(evidence, PictureMatches):
                 seen += kept**shown * self._identity(probe, evidence)
                 shown += 1
+            else:
+                seen += kept**shown * against
         if h.support + h.line_support == 0:
             return None
         h.score, h.seen_score = score, seen
@@ -541,7 +551,8 @@ class MultiHypothesisFilter:
                 self.room_seen,
             )  # fmt: skip
         # Which place of the map: every observation's evidence. Whether the map's room at
-        # all: the pictures' alone (any room's walls give floor lines a corner can fit).
+        # all: the pictures', and lines only against it (any room's walls give floor lines
+        # a corner can fit; only the mapped room's keep them inside its walls).
         scores = np.array([h.score for h in self.hypotheses])
         weights = np.exp(scores - scores.max())
         weights /= weights.sum()

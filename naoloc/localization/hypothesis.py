@@ -189,20 +189,27 @@ class Hypothesis:
         s = self.cov + (cov if cov is not None else 0.0)
         return math.sqrt(max(0.0, float(d @ np.linalg.solve(s, d))))
 
-    def update_lines(self, walls: WallMap, lines: tuple[WallLine, ...], tun: FilterTuning) -> float:
+    def update_lines(
+        self, walls: WallMap, lines: tuple[WallLine, ...], tun: FilterTuning
+    ) -> tuple[float, float]:
         """Correct the pose with floor-wall lines.
 
         Returns:
             The evidence (nats over clutter) the lines give the hypothesis *before* they
             correct it: each line's predictive density, widened by the pose's own
-            uncertainty, so a vague hypothesis that could slide to fit gains less.
+            uncertainty, so a vague hypothesis that could slide to fit gains less; within
+            +-``line_evidence_cap_nats`` (one scan's lines share the walls' errors). And
+            what they say against the mapped room at this pose (nats, <= 0: lines beyond
+            its walls, :attr:`LineFit.log_beyond`), at most ``identity_floor_nats``.
         """
         gate = tun.gate_mahalanobis**2
         floor = np.array([tun.wall_sigma_m, tun.wall_sigma_rad]) ** 2
         evidence = 0.0
+        against = 0.0
         for line in lines:
             fit = fit_line(walls, line, self.pose, tun, self.cov)
             evidence += fit.log_ratio
+            against += fit.log_beyond
             if fit.wall < 0:
                 continue
             r = np.diag(fit.sigma**2 + floor)
@@ -217,7 +224,8 @@ class Hypothesis:
             ikh = np.eye(6) - k @ jac
             self.full = ikh @ self.full @ ikh.T + k @ r @ k.T  # Joseph form
             self.line_support += 1
-        return min(tun.line_evidence_cap_nats, evidence)
+        cap = tun.line_evidence_cap_nats
+        return max(-cap, min(cap, evidence)), max(-tun.identity_floor_nats, against)
 
     def update_picture(self, m: PictureMatches, tun: FilterTuning) -> PictureFit:
         """Correct the pose (and the landmarks' error) with a picture's landmark candidates.

@@ -157,7 +157,13 @@ class LineFit:
         residual: ``(2,)`` observed minus expected: distance (m), direction (rad).
         jacobian: ``(2, 3)`` d residual / d pose (x, y, theta).
         sigma: ``(2,)`` the line's noise: distance (m), direction (rad).
-        log_ratio: log of (walls-and-clutter mixture / clutter alone), nats.
+        log_ratio: log of (walls-and-clutter mixture / clutter alone), nats; negative for
+            a line beyond the map's walls.
+        log_beyond: What the map's walls say against the line (nats, <= 0): log of the
+            mixture whose clutter stands inside the walls over the one whose clutter may
+            stand anywhere. About 0 for a wall's foot and for a line inside the room;
+            ``log(line_beyond_share)`` for one well beyond the walls, which the mapped room
+            cannot show from this pose.
     """
 
     wall: int
@@ -165,6 +171,7 @@ class LineFit:
     jacobian: np.ndarray
     sigma: np.ndarray
     log_ratio: float
+    log_beyond: float = 0.0
 
 
 def line_sigma(line: WallLine, tun: FilterTuning) -> np.ndarray:
@@ -233,7 +240,50 @@ def fit_line(
         * math.exp(-0.5 * best_m)
         / (2.0 * math.pi * math.sqrt(float(np.linalg.det(best_s))))
     )
-    log_ratio = math.log((hit + clutter) / clutter)
+    # Clutter stands inside the walls: a line beyond them is a detector's error, or not this
+    # room (nav2 AMCL's beam model: nothing is seen past the wall but at random).
+    inside = inside_probability(walls, line, pose, tun, cov)
+    kept = tun.line_beyond_share + (1.0 - tun.line_beyond_share) * inside
+    log_ratio = math.log((hit + kept * clutter) / clutter)
+    log_beyond = math.log((hit + kept * clutter) / (hit + clutter))
     jac = np.array([[n[best, 0], n[best, 1], 0.0], [0.0, 0.0, 1.0]])
     residual = np.array([r_d[best], r_a[best]])
-    return LineFit(best if hit > clutter else -1, residual, jac, sigma, log_ratio)
+    return LineFit(best if hit > clutter else -1, residual, jac, sigma, log_ratio, log_beyond)
+
+
+def inside_probability(
+    walls: WallMap, line: WallLine, pose: np.ndarray, tun: FilterTuning, cov: np.ndarray | None
+) -> float:
+    """The probability that ``line`` seen from ``pose`` stands inside the map's walls.
+
+    The line's nearest point to the robot (of its inliers' stretch where known, else the
+    foot of its normal) is placed in the map frame and its depth inside the walls, plus
+    ``line_ghost_share`` of its range (a skirting board's top edge, read as the floor's
+    boundary when the foot is hidden, stands that much farther), weighed against its noise:
+    the line's distance noise, the walls' (``wall_sigma_m``) and the pose's own (its
+    position and, times the range, its heading), as a normal distribution. The nearest
+    point, because a vertical edge (a corner, a cupboard's side) read as a floor line stands
+    on the floor only at its near end: the rest is the edge above the floor, projected
+    onto it beyond.
+
+    Args:
+        walls: The map's walls.
+        line: A floor-wall line, FRAME_ROBOT.
+        pose: ``(x, y, theta)`` of the robot at capture, map frame.
+        tun: The filter's tuning.
+        cov: The pose's covariance (None: the pose is exact).
+
+    Returns:
+        Between 0 (well beyond a wall) and 1 (well inside).
+    """
+    along = 0.0 if line.ends_m is None else min(max(0.0, line.ends_m[0]), line.ends_m[1])
+    heading = float(pose[2]) + line.normal
+    c, s = math.cos(heading), math.sin(heading)
+    x = float(pose[0]) + line.distance * c - along * s
+    y = float(pose[1]) + line.distance * s + along * c
+    reach = math.hypot(line.distance, along)
+    depth = float(walls.depth(np.asarray(x), np.asarray(y))) + tun.line_ghost_share * reach
+    var = float(line_sigma(line, tun)[0]) ** 2 + tun.wall_sigma_m**2
+    if cov is not None:
+        var += float(np.linalg.eigvalsh(cov[:2, :2]).max()) + reach**2 * float(cov[2, 2])
+    return 0.5 * (1.0 + math.erf(depth / math.sqrt(2.0 * var)))

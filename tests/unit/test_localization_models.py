@@ -71,6 +71,60 @@ def test_a_seen_wall_explains_its_line_and_clutter_explains_a_stray_one() -> Non
     assert fit_line(WALLS, stray, pose, TUN, None).wall == -1
 
 
+@pytest.mark.parametrize(
+    ("beyond_m", "ends", "against"),
+    [
+        (0.0, None, "none"),  # the wall's own foot
+        (-0.6, None, "none"),  # a front 0.6 m before the wall: clutter inside the room
+        (0.6, None, "full"),  # 0.6 m beyond the wall: no wall nor furniture makes it
+        (0.6, (-0.3, 0.3), "full"),  # the same, its inliers about the foot
+        (0.03, None, "none"),  # 3 cm beyond, at 1.5 m: the wall's foot, its noise
+        (0.15, None, "none"),  # 0.15 m beyond at 1.65 m: a skirting board's top edge
+        (0.4, None, "full"),  # 0.4 m beyond: past the skirting's band and the noise
+        (-0.6, (5.0, 6.0), "full"),  # before the wall ahead, its inliers 2 m beyond the side wall
+        (-0.6, (-0.5, 6.0), "none"),  # ... its inliers from inside the room: a vertical edge
+    ],
+)
+def test_a_line_beyond_the_walls_speaks_against_the_mapped_room(
+    beyond_m: float, ends: tuple[float, float] | None, against: str
+) -> None:
+    """The beam model's part of the line likelihood (nav2 AMCL): clutter stands inside the
+    walls, so a line beyond them (and beyond a skirting board's band, ``line_ghost_share``
+    of its range) is only a detector's error (``line_beyond_share``); a wall's foot or a
+    line inside the room says nothing against the room, nor does a line whose stretch
+    begins inside it."""
+    frame = Pose2D(1.0, -0.5, 0.3)
+    here = frame * Pose2D(2.0, 1.5, math.pi / 2)  # in W: 1.5 m from the +y wall, facing it
+    pose = np.array([here.x, here.y, here.theta])
+    line = WallLine(1.5 + beyond_m, 0.0, 200, 0.9, 0.01, 1.0, ends)
+    fit = fit_line(WALLS, line, pose, TUN, None)
+    full = math.log(TUN.line_beyond_share)
+    if against == "none":
+        assert fit.log_beyond == pytest.approx(0.0, abs=0.01)
+    else:
+        assert fit.log_beyond == pytest.approx(full, abs=0.01) and fit.wall == -1
+        assert fit.log_ratio == pytest.approx(full, abs=0.01)
+    # The pose's own uncertainty makes a line beyond the walls less telling.
+    if against != "none":
+        vague = fit_line(WALLS, line, pose, TUN, np.diag([0.3**2, 0.3**2, 0.1**2]))
+        assert vague.log_beyond > fit.log_beyond
+
+
+def test_a_scan_says_at_most_identity_floor_nats_against_the_room() -> None:
+    """However many lines a scan shows beyond the walls, it says at most
+    ``identity_floor_nats`` against the room (its lines share one view) and no more than
+    ``line_evidence_cap_nats`` against the place."""
+    frame = Pose2D(1.0, -0.5, 0.3)
+    here = frame * Pose2D(2.0, 1.5, math.pi / 2)
+    pose = np.array([here.x, here.y, here.theta])
+    far = tuple(WallLine(2.5 + 0.1 * k, 0.0, 200, 0.9, 0.01, 1.0) for k in range(4))
+    h = Hypothesis(pose, np.diag([0.01**2, 0.01**2, 0.005**2]), TUN)
+    ev, against = h.update_lines(WALLS, far, TUN)
+    assert against == pytest.approx(-TUN.identity_floor_nats)
+    assert ev == pytest.approx(-TUN.line_evidence_cap_nats)
+    assert h.line_support == 0 and np.allclose(h.pose, pose)
+
+
 def test_a_furniture_front_the_survey_saw_explains_its_line_where_it_stands() -> None:
     """A front 0.35 m before the +y wall, seen over x 1-3 m of W: a line on it, from a pose
     that sees it, is the front's (no residual), not the wall's seen from a pose 0.35 m off;
@@ -166,8 +220,8 @@ def test_a_hypothesis_walks_to_the_pose_a_picture_and_lines_show() -> None:
     assert fit.updated and fit.inliers > 30
     assert math.hypot(*(h.pose[:2] - truth[:2])) < 0.03
     lines = (_line(WALLS, truth, 0), _line(WALLS, truth, 1))
-    ev = h.update_lines(WALLS, lines, TUN)
-    assert ev > 0 and h.line_support == 2
+    ev, against = h.update_lines(WALLS, lines, TUN)
+    assert ev > 0 and h.line_support == 2 and against == pytest.approx(0.0, abs=0.01)
     assert math.hypot(*(h.pose[:2] - truth[:2])) < 0.03 and abs(h.pose[2] - truth[2]) < 0.01
     # The walls make it better than the landmarks' own error; the covariance says so.
     assert math.sqrt(h.cov[0, 0]) < TUN.landmark_sigma_m
@@ -237,6 +291,28 @@ def test_the_filter_starts_from_the_lines_and_a_picture_decides() -> None:
     b = f.belief()
     assert b.pose is not None and math.hypot(*(b.pose[:2] - truth[:2])) < 0.02
     assert decide(b, TUN)[0] is Status.TRACKING
+
+
+@pytest.mark.parametrize(("grow_m", "status"), [(0.0, Status.TRACKING), (0.6, Status.LOST)])
+def test_the_same_pictures_in_a_larger_room_do_not_make_a_place(
+    grow_m: float, status: Status
+) -> None:
+    """Pictures that match the map (a room whose posters are the mapped room's) with floor
+    lines 0.6 m beyond the map's walls (a larger room): each scan speaks against the room
+    (``identity_floor_nats``), so two pictures that make a place in the mapped room leave
+    the other-room alternative ahead there."""
+    truth = np.array([2.0, 0.5, 0.7])
+    f = MultiHypothesisFilter(WALLS, TUN)
+    odo = Pose2D(10.0, -3.0, 1.0)
+    seen = (_line(WALLS, truth, k) for k in (0, 1, 2))
+    lines = tuple(dataclasses.replace(line, distance=line.distance + grow_m) for line in seen)
+    f.observe(lines, odo)
+    for seed in (1, 2):
+        f.observe(_picture(truth, seed=seed, wrong=0.3), odo)
+        f.observe(lines, odo)
+    b = f.belief()
+    assert decide(b, TUN)[0] is status
+    assert (b.other_room > 0.9) is (grow_m > 0)
 
 
 def test_a_merged_hypothesis_keeps_what_the_pictures_showed_of_the_room() -> None:
