@@ -1010,6 +1010,14 @@ class FilterTuning(_Model):
         description="Lowe's ratio over the whole map for a feature's match to weigh whether "
         "this is the mapped room",
     )
+    identity_object_m: float = Field(
+        1.0,
+        gt=0,
+        description="distinctive matches within this of landmarks that already spoke for the "
+        "room at a place are one object's (m; a picture on the wall): one object gives a "
+        "place at most identity_cap_nats that this is the mapped room, however often it is "
+        "seen (its twin may hang in another room: rooms share prints)",
+    )
     identity_forget_per_picture: float = Field(
         0.01,
         ge=0,

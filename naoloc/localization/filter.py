@@ -38,7 +38,8 @@ from naoloc.localization.hypothesis import (
 from naoloc.localization.line_poses import line_poses
 from naoloc.localization.pictures import (
     PictureMatches,
-    distinct_only,
+    RoomObjects,
+    identity_evidence,
     landmarks_in_view,
     picture_log_ratio,
 )
@@ -179,6 +180,7 @@ class MultiHypothesisFilter:
             gains[id(h)], against = self._update(h, evidence)
             h.score = keep * h.score + gains[id(h)]
             if isinstance(evidence, PictureMatches):
+                h.objects.forget(kept)
                 h.seen_score = kept * h.seen_score + self._identity(h, evidence)
             else:  # lines fit some corner of any room; beyond the walls, they speak against it
                 h.seen_score += against
@@ -397,16 +399,19 @@ class MultiHypothesisFilter:
         """The tuning a scan's lines are weighed with: walking or at rest."""
         return self._walk_tun if isinstance(lines, WalkingLines) else self.tun
 
-    def _identity(self, h: Hypothesis, evidence: Evidence) -> float:
+    def _identity(
+        self, h: Hypothesis, evidence: Evidence, objects: RoomObjects | None = None
+    ) -> float:
         """What a picture says of the map's room being the robot's at ``h``: its
-        distinctive matches at its pose (:func:`distinct_only`), at most
-        ``identity_cap_nats`` for it and ``identity_floor_nats`` against it (one picture's
-        matches share its view: one picture alone is not another room's proof). A scan's
-        lines speak only against it (:meth:`Hypothesis.update_lines`)."""
+        distinctive matches at its pose (:func:`distinct_only`), each object's at most
+        ``identity_cap_nats`` (:func:`identity_evidence`; ``objects``: whose, default
+        ``h``'s), as the picture's. A scan's lines speak only against it
+        (:meth:`Hypothesis.update_lines`)."""
         if not isinstance(evidence, PictureMatches) or evidence.distinct.shape[0] == 0:
             return 0.0
-        gain = picture_log_ratio(distinct_only(evidence), h.pose, self.tun)
-        return min(self.tun.identity_cap_nats, max(-self.tun.identity_floor_nats, gain))
+        return identity_evidence(
+            evidence, h.pose, self.tun, h.objects if objects is None else objects
+        )
 
     def _propose(self, m: PictureMatches) -> None:
         """New hypotheses where the pictures put the robot, unless one explains them.
@@ -504,7 +509,7 @@ class MultiHypothesisFilter:
         shown = 0  # pictures scored so far (the identity ages by pictures only)
         if anchor is not None:
             score = h.update_picture(anchor, self.tun).evidence
-            seen = self._identity(h, anchor)
+            seen = self._identity(h, anchor, h.objects)
             shown = 1
             events = events[:-1]
         for age, (evidence, odo) in enumerate(reversed(events), start=1 if anchor else 0):
@@ -516,7 +521,7 @@ class MultiHypothesisFilter:
             gain, against = self._update(probe, evidence)
             score += keep**age * gain
             if isinstance(evidence, PictureMatches):
-                seen += kept**shown * self._identity(probe, evidence)
+                seen += kept**shown * self._identity(probe, evidence, h.objects)
                 shown += 1
             else:
                 seen += kept**shown * against
@@ -535,7 +540,8 @@ class MultiHypothesisFilter:
             if same:
                 # The same place as a better hypothesis: what the pictures showed of the
                 # room there stays with it (a hypothesis spawned from the window knows less).
-                same[0].seen_score = max(same[0].seen_score, h.seen_score)
+                if h.seen_score > same[0].seen_score:
+                    same[0].seen_score, same[0].objects = h.seen_score, h.objects
                 continue
             kept.append(h)
             if len(kept) >= self.tun.max_hypotheses:

@@ -33,6 +33,7 @@ import numpy as np
 from naoloc.config import FilterTuning
 from naoloc.localization.pictures import (
     PictureMatches,
+    RoomObjects,
     mixture,
     reprojection,
 )
@@ -147,6 +148,7 @@ class Hypothesis:
         self.line_support = 0  # floor lines that corrected it
         self.last_inliers = 0
         self.seen_score = 0.0  # the pictures' part of the score (nats)
+        self.objects = RoomObjects()  # the objects that gave it (one at most cap each)
         self.usual = 0.0  # slow average of its evidence per informative picture (nats)
         self.recent = 0.0  # fast average of the same (nats)
 

@@ -330,6 +330,74 @@ def distinct_only(m: PictureMatches) -> PictureMatches:
     )  # fmt: skip
 
 
+@dataclass
+class RoomObjects:
+    """The objects whose distinctive matches spoke for the mapped room at one place.
+
+    An object is a cluster of landmarks (``identity_object_m``: a picture on the wall); each
+    holds at most ``identity_cap_nats`` of the place's room evidence at a time, and forgets
+    as that evidence does. Seeing it again tells nothing new of which room this is: its
+    twin may hang in another room (rooms share prints).
+
+    Attributes:
+        centres: ``(k, 3)`` each object's first landmark, map frame, m.
+        credit: ``(k,)`` the evidence each holds now, nats.
+    """
+
+    centres: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    credit: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    def copy(self) -> RoomObjects:
+        """An independent copy."""
+        return RoomObjects(self.centres.copy(), self.credit.copy())
+
+    def forget(self, kept: float) -> None:
+        """Keep a share ``kept`` of every object's credit."""
+        self.credit = self.credit * kept
+
+
+def identity_evidence(
+    m: PictureMatches, pose: np.ndarray, tun: FilterTuning, objects: RoomObjects
+) -> float:
+    """What a picture's distinctive matches at ``pose`` say for the mapped room (nats), each
+    object's part topped up to ``identity_cap_nats`` at most, and the picture's too
+    (``objects`` is updated).
+
+    Each feature's log ratio (times ``match_weight``) goes to the object of its landmark:
+    the nearest object within ``identity_object_m``, else a new one there.
+    """
+    d = distinct_only(m)
+    if d.points.shape[0] == 0:
+        return 0.0
+    res, front, _ = reprojection(d, pose)
+    _, ratios = mixture(d, res, front, tun.pixel_sigma_px**2 * np.eye(2), tun)
+    ratios = tun.match_weight * ratios
+    cap = tun.identity_cap_nats
+    total = 0.0
+    added: list[tuple[int, float]] = []
+    for k in np.argsort(-ratios):  # the strongest matches found the objects
+        r = float(ratios[k])
+        if r <= 1e-6:
+            break
+        p = d.points[k]
+        if objects.centres.shape[0]:
+            dist = np.linalg.norm(objects.centres - p, axis=1)
+            j = int(np.argmin(dist))
+        if not objects.centres.shape[0] or dist[j] > tun.identity_object_m:
+            objects.centres = np.vstack([objects.centres, p[None, :]])
+            objects.credit = np.append(objects.credit, 0.0)
+            j = objects.centres.shape[0] - 1
+        add = min(r, max(0.0, cap - float(objects.credit[j])))
+        objects.credit[j] += add
+        added.append((j, add))
+        total += add
+    if total > cap:  # one picture's matches share its view: at most identity_cap_nats
+        for j, add in added:
+            objects.credit[j] -= add * (1.0 - cap / total)
+        total = cap
+    return total
+
+
 def picture_log_ratio(m: PictureMatches, pose: np.ndarray, tun: FilterTuning) -> float:
     """Evidence the picture gives for ``pose`` over 'its features are all wrong' (nats),
     each feature's log ratio times ``match_weight``, at most ``picture_evidence_cap_nats``."""

@@ -23,6 +23,8 @@ from naoloc.localization.localizer import (
 )
 from naoloc.localization.pictures import (
     PictureMatches,
+    RoomObjects,
+    identity_evidence,
     landmarks_in_view,
     mixture,
     picture_log_ratio,
@@ -186,6 +188,44 @@ def _picture(pose: np.ndarray, n: int = 60, seed: int = 0, wrong: float = 0.0) -
     pixels[bad] = rng.uniform([0, 0], [320, 240], (int(bad.sum()), 2))
     return PictureMatches(points, pixels, np.arange(n), 1, points, pixels, projection,
                           320 * 240.0, n, (), None, 0, points, pixels)  # fmt: skip
+
+
+def _object_picture(pose: np.ndarray, centre: tuple[float, float], seed: int) -> PictureMatches:
+    """A picture from ``pose`` whose 40 distinctive matches all lie on one print 0.4 m wide
+    centred at ``centre`` (x, y in the map frame, 0.6-1.0 m up), exact pixels."""
+    rng = np.random.default_rng(seed)
+    m = _picture(pose, n=40, seed=seed)
+    points = np.column_stack(
+        [centre[0] + rng.uniform(-0.02, 0.02, 40), centre[1] + rng.uniform(-0.2, 0.2, 40),
+         rng.uniform(0.6, 1.0, 40)]
+    )  # fmt: skip
+    zero = np.zeros((40, 2))
+    probe = dataclasses.replace(m, points=points, pixels=zero, matched=points, distinct=points)
+    pixels, _front, _ = reprojection(probe, pose)  # the residual from no pixel: the pixel
+    return dataclasses.replace(
+        probe, pixels=pixels, matched_pixels=pixels, distinct_pixels=pixels.copy()
+    )
+
+
+def test_one_object_seen_again_speaks_for_the_room_once() -> None:
+    """A print seen in five pictures gives a place at most ``identity_cap_nats`` that this
+    is the mapped room (its twin may hang in another room); a second print 2 m away gives
+    as much again; an object's credit forgets with the room evidence, and tops up."""
+    pose = np.array([1.0, 1.0, 0.0])
+    objects = RoomObjects()
+    first = identity_evidence(_object_picture(pose, (3.0, 1.0), 0), pose, TUN, objects)
+    assert first == pytest.approx(TUN.identity_cap_nats)
+    again = [identity_evidence(_object_picture(pose, (3.0, 1.0), k), pose, TUN, objects)
+             for k in range(1, 5)]  # fmt: skip
+    assert sum(again) == pytest.approx(0.0, abs=1e-9) and len(objects.credit) == 1
+    other = identity_evidence(_object_picture(pose, (3.0, 3.0), 9), pose, TUN, objects)
+    assert other == pytest.approx(TUN.identity_cap_nats) and len(objects.credit) == 2
+    objects.forget(0.5)
+    topped = identity_evidence(_object_picture(pose, (3.0, 1.0), 11), pose, TUN, objects)
+    assert topped == pytest.approx(TUN.identity_cap_nats / 2)
+    # Matches that do not fit the pose speak for no object.
+    elsewhere = np.array([1.0, 1.5, 0.3])
+    assert identity_evidence(_object_picture(pose, (3.0, 5.0), 12), elsewhere, TUN, objects) < 0.5
 
 
 def test_reprojection_jacobian_is_the_numerical_one() -> None:
