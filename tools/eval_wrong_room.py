@@ -109,9 +109,13 @@ def main() -> int:
         return _replay(args.replay, args.tuning_now)
     if args.folder is None:
         parser.error("give an eval_unseen_rooms output folder, or --replay REC")
-    rooms = sorted(p for p in args.folder.glob("room_*") if (p / "config.yaml").is_file())
+    rooms = sorted(
+        p
+        for p in args.folder.glob("room_*")
+        if (p / "config.yaml").is_file() and any((p / "maps").glob("*.npz"))
+    )
     if len(rooms) < 2:
-        raise SystemExit(f"{args.folder}: needs two rooms or more (room_*/config.yaml)")
+        raise SystemExit(f"{args.folder}: needs two rooms or more with a map (room_*/maps/*.npz)")
     counts: Counts = {"not the mapped room": 0, "lost": 0, "tracking": 0}
     posed: list[dict[str, object]] = []
     if args.cyclic:
