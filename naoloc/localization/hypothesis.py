@@ -199,8 +199,8 @@ class Hypothesis:
         Returns:
             The evidence (nats over clutter) the lines give the hypothesis *before* they
             correct it: each line's predictive density, widened by the pose's own
-            uncertainty, so a vague hypothesis that could slide to fit gains less; within
-            +-``line_evidence_cap_nats`` (one scan's lines share the walls' errors). And
+            uncertainty, so a vague hypothesis that could slide to fit gains less; at most
+            ``line_evidence_cap_nats`` (one scan's lines share the walls' errors). And
             what they say against the mapped room at this pose (nats, <= 0: lines beyond
             its walls, :attr:`LineFit.log_beyond`), at most ``identity_floor_nats``.
         """
@@ -227,7 +227,7 @@ class Hypothesis:
             self.full = ikh @ self.full @ ikh.T + k @ r @ k.T  # Joseph form
             self.line_support += 1
         cap = tun.line_evidence_cap_nats
-        return max(-cap, min(cap, evidence)), max(-tun.identity_floor_nats, against)
+        return min(cap, evidence), max(-tun.identity_floor_nats, against)
 
     def update_picture(self, m: PictureMatches, tun: FilterTuning) -> PictureFit:
         """Correct the pose (and the landmarks' error) with a picture's landmark candidates.

@@ -157,8 +157,7 @@ class LineFit:
         residual: ``(2,)`` observed minus expected: distance (m), direction (rad).
         jacobian: ``(2, 3)`` d residual / d pose (x, y, theta).
         sigma: ``(2,)`` the line's noise: distance (m), direction (rad).
-        log_ratio: log of (walls-and-clutter mixture / clutter alone), nats; negative for
-            a line beyond the map's walls.
+        log_ratio: log of (walls-and-clutter mixture / clutter alone), nats.
         log_beyond: What the map's walls say against the line (nats, <= 0): log of the
             mixture whose clutter stands inside the walls over the one whose clutter may
             stand anywhere. About 0 for a wall's foot and for a line inside the room;
@@ -242,9 +241,12 @@ def fit_line(
     )
     # Clutter stands inside the walls: a line beyond them is a detector's error, or not this
     # room (nav2 AMCL's beam model: nothing is seen past the wall but at random).
+    # It speaks against the room, not among the places: a place that loses nats to one
+    # scan's lines beyond its walls (a door's edge, a window's sill read as the floor's
+    # boundary while walking) hands the lead to another at full confidence.
     inside = inside_probability(walls, line, pose, tun, cov)
     kept = tun.line_beyond_share + (1.0 - tun.line_beyond_share) * inside
-    log_ratio = math.log((hit + kept * clutter) / clutter)
+    log_ratio = math.log((hit + clutter) / clutter)
     log_beyond = math.log((hit + kept * clutter) / (hit + clutter))
     jac = np.array([[n[best, 0], n[best, 1], 0.0], [0.0, 0.0, 1.0]])
     residual = np.array([r_d[best], r_a[best]])
