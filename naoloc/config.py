@@ -1035,9 +1035,10 @@ class FilterTuning(_Model):
     identity_floor_nats: float = Field(
         3.0,
         gt=0,
-        description="most evidence one picture gives against the mapped room (nats): its "
-        "matches share one view (a repeated texture, a poster matched to its twin), so one "
-        "picture alone cannot undo what many showed",
+        description="most evidence one picture or one scan's floor lines give against the "
+        "mapped room (nats): they share one view (a repeated texture, a poster matched to its "
+        "twin, a skirting read as the floor's edge), so one view alone cannot undo what many "
+        "showed",
     )
     min_pnp_inliers: int = Field(
         12, ge=6, description="PnP inliers of one picture that propose a new hypothesis"

@@ -509,7 +509,7 @@ class MultiHypothesisFilter:
         shown = 0  # pictures scored so far (the identity ages by pictures only)
         if anchor is not None:
             score = h.update_picture(anchor, self.tun).evidence
-            seen = self._identity(h, anchor, h.objects)
+            seen = self._identity(h, anchor)
             shown = 1
             events = events[:-1]
         for age, (evidence, odo) in enumerate(reversed(events), start=1 if anchor else 0):

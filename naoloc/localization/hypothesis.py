@@ -226,8 +226,7 @@ class Hypothesis:
             ikh = np.eye(6) - k @ jac
             self.full = ikh @ self.full @ ikh.T + k @ r @ k.T  # Joseph form
             self.line_support += 1
-        cap = tun.line_evidence_cap_nats
-        return min(cap, evidence), max(-tun.identity_floor_nats, against)
+        return min(tun.line_evidence_cap_nats, evidence), max(-tun.identity_floor_nats, against)
 
     def update_picture(self, m: PictureMatches, tun: FilterTuning) -> PictureFit:
         """Correct the pose (and the landmarks' error) with a picture's landmark candidates.

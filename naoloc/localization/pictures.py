@@ -347,10 +347,6 @@ class RoomObjects:
     centres: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     credit: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
-    def copy(self) -> RoomObjects:
-        """An independent copy."""
-        return RoomObjects(self.centres.copy(), self.credit.copy())
-
     def forget(self, kept: float) -> None:
         """Keep a share ``kept`` of every object's credit."""
         self.credit = self.credit * kept
@@ -367,11 +363,7 @@ def identity_evidence(
     the nearest object within ``identity_object_m``, else a new one there.
     """
     d = distinct_only(m)
-    if d.points.shape[0] == 0:
-        return 0.0
-    res, front, _ = reprojection(d, pose)
-    _, ratios = mixture(d, res, front, tun.pixel_sigma_px**2 * np.eye(2), tun)
-    ratios = tun.match_weight * ratios
+    ratios = feature_log_ratios(d, pose, tun)
     cap = tun.identity_cap_nats
     total = 0.0
     added: list[tuple[int, float]] = []
@@ -380,10 +372,9 @@ def identity_evidence(
         if r <= 1e-6:
             break
         p = d.points[k]
-        if objects.centres.shape[0]:
-            dist = np.linalg.norm(objects.centres - p, axis=1)
-            j = int(np.argmin(dist))
-        if not objects.centres.shape[0] or dist[j] > tun.identity_object_m:
+        dist = np.linalg.norm(objects.centres - p, axis=1)
+        j = int(np.argmin(dist)) if dist.size else -1
+        if j < 0 or dist[j] > tun.identity_object_m:
             objects.centres = np.vstack([objects.centres, p[None, :]])
             objects.credit = np.append(objects.credit, 0.0)
             j = objects.centres.shape[0] - 1
@@ -398,14 +389,20 @@ def identity_evidence(
     return total
 
 
+def feature_log_ratios(m: PictureMatches, pose: np.ndarray, tun: FilterTuning) -> np.ndarray:
+    """Each feature's log ratio over 'wrong' at ``pose`` (:func:`mixture`) times
+    ``match_weight``, nats; ``(features,)``, empty without candidates."""
+    if m.points.shape[0] == 0:
+        return np.zeros(0)
+    res, front, _ = reprojection(m, pose)
+    _, ratios = mixture(m, res, front, tun.pixel_sigma_px**2 * np.eye(2), tun)
+    return tun.match_weight * ratios
+
+
 def picture_log_ratio(m: PictureMatches, pose: np.ndarray, tun: FilterTuning) -> float:
     """Evidence the picture gives for ``pose`` over 'its features are all wrong' (nats),
     each feature's log ratio times ``match_weight``, at most ``picture_evidence_cap_nats``."""
-    if m.points.shape[0] == 0:
-        return 0.0
-    res, front, _ = reprojection(m, pose)
-    _, ratios = mixture(m, res, front, tun.pixel_sigma_px**2 * np.eye(2), tun)
-    return min(tun.picture_evidence_cap_nats, float(tun.match_weight * ratios.sum()))
+    return min(tun.picture_evidence_cap_nats, float(feature_log_ratios(m, pose, tun).sum()))
 
 
 def landmarks_in_view(

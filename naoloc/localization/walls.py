@@ -213,8 +213,7 @@ def fit_line(
     """
     normals, coords = walls.normals, walls.coords
     if len(walls.faces):  # a front explains a line whose foot lies on the stretch seen
-        heading = pose[2] + line.normal
-        foot = pose[:2] + line.distance * np.array([math.cos(heading), math.sin(heading)])
+        foot = line_point(line, pose)
         tangent = np.column_stack([-np.sin(walls.faces[:, 0]), np.cos(walls.faces[:, 0])])
         along = tangent @ foot
         reach = tun.face_reach_m
@@ -253,6 +252,18 @@ def fit_line(
     return LineFit(best if hit > clutter else -1, residual, jac, sigma, log_ratio, log_beyond)
 
 
+def line_point(line: WallLine, pose: np.ndarray, along: float = 0.0) -> np.ndarray:
+    """The map-frame point ``(x, y)`` (m) of ``line`` seen from ``pose``: its foot (the
+    nearest point to FRAME_ROBOT's origin) moved ``along`` metres along it (the normal turned
+    a quarter turn counter-clockwise, as :attr:`WallLine.ends_m`)."""
+    heading = float(pose[2]) + line.normal
+    c, s = math.cos(heading), math.sin(heading)
+    return np.array(
+        [float(pose[0]) + line.distance * c - along * s,
+         float(pose[1]) + line.distance * s + along * c]
+    )  # fmt: skip
+
+
 def inside_probability(
     walls: WallMap, line: WallLine, pose: np.ndarray, tun: FilterTuning, cov: np.ndarray | None
 ) -> float:
@@ -279,10 +290,7 @@ def inside_probability(
         Between 0 (well beyond a wall) and 1 (well inside).
     """
     along = 0.0 if line.ends_m is None else min(max(0.0, line.ends_m[0]), line.ends_m[1])
-    heading = float(pose[2]) + line.normal
-    c, s = math.cos(heading), math.sin(heading)
-    x = float(pose[0]) + line.distance * c - along * s
-    y = float(pose[1]) + line.distance * s + along * c
+    x, y = line_point(line, pose, along)
     reach = math.hypot(line.distance, along)
     depth = float(walls.depth(np.asarray(x), np.asarray(y))) + tun.line_ghost_share * reach
     var = float(line_sigma(line, tun)[0]) ** 2 + tun.wall_sigma_m**2
