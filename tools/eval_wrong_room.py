@@ -17,8 +17,8 @@ targets: "not the mapped room" in >= 95 % of the tries and a pose in none.
 ``--record REC`` writes each try's observations to ``REC/MAP_in_ROOM_K.mcap`` (the filter's
 every picture and floor line, as ``naoloc localize --record`` does); ``--replay REC`` re-scores
 those recordings with the code and tuning at hand (each recording's own filter tuning, as
-recorded, unless ``--tuning-now``), so two versions of the filter are compared on the very same
-observations rather than on two live runs.
+recorded, keys older code does not know dropped, unless ``--tuning-now``), so two versions of
+the filter are compared on the very same observations rather than on two live runs.
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ from itertools import permutations
 from pathlib import Path
 
 import numpy as np
+from replay_eval import recorded_tuning
 
 from naoloc.behaviours.localize import localize
 from naoloc.config import FilterTuning, load_config
@@ -75,7 +76,7 @@ def _replay(folder: Path, tuning_now: bool) -> int:
         map_path = str(rec.meta["map"])
         if map_path not in maps:
             maps[map_path] = load_map(map_path)
-        tuning = FilterTuning() if tuning_now else load_config(rec.config).localize.filter
+        tuning = FilterTuning() if tuning_now else recorded_tuning(rec.config)
         est = replay(maps[map_path], rec.observations, tuning, seed=rec.seed).pose()  # type: ignore[arg-type]
         counts[str(est.status)] += 1
         name, room = path.stem.split("_in_")

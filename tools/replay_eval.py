@@ -14,12 +14,12 @@ reported 99 % ellipse (position), the confident wrong ones (more than 0.3 m off 
 0.5 or more), and the error's median, p90 and p99.
 
 Each recording's own filter tuning is used, as recorded, with ``--set KEY=VALUE`` overriding
-``localize.filter`` keys (a JSON value: recordings made before a default changed hold the old
-value). Keys that the filter at hand does not know (a newer recording replayed by older code)
-are dropped, so two versions of the filter can be compared on the same observations. A
-replay cannot take the pictures a live look would have added while unsure: where a new
-filter wants more evidence than the old one did, the replay says "no estimate" and a live
-run looks longer.
+``localize.filter`` keys (a YAML value, as the other tools' ``--set``: recordings made before
+a default changed hold the old value). Keys that the filter at hand does not know (a newer
+recording replayed by older code) are dropped, so two versions of the filter can be compared
+on the same observations. A replay cannot take the pictures a live look would have added
+while unsure: where a new filter wants more evidence than the old one did, the replay says
+"no estimate" and a live run looks longer.
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from eval_unseen_rooms import add_set_option, parse_sets
 
 CHI2_2DOF_99 = -2.0 * math.log(0.01)  # 9.21: a position outside its 99 % ellipse
 WRONG_M = 0.3  # the issue's "confident wrong": this far off ...
@@ -58,27 +59,33 @@ def jobs(outs: list[Path]) -> list[tuple[str, int, list[float]]]:
     return out
 
 
+def recorded_tuning(config: dict[str, Any], overrides: dict[str, Any] | None = None) -> Any:
+    """The filter tuning (``FilterTuning``) a recording's config holds, ``overrides`` set
+    and the keys the filter at hand does not know dropped (a newer recording replayed by
+    older code). ``config`` is changed in place."""
+    from naoloc.config import FilterTuning, load_config
+
+    tuning = config.setdefault("localize", {}).setdefault("filter", {})
+    for key in [k for k in tuning if k not in FilterTuning.model_fields]:
+        del tuning[key]
+    tuning.update(overrides or {})
+    return load_config(config).localize.filter
+
+
 def replay_one(
     job: tuple[str, int, list[float]], overrides: dict[str, Any] | None = None
 ) -> dict[str, Any]:
     """Replay one recorded localization (``overrides``: ``localize.filter`` keys set); its
     status, error (m), squared Mahalanobis distance and confidence (none without a pose)."""
-    from naoloc.config import FilterTuning, load_config
     from naoloc.data.recording import read_recording
     from naoloc.localization.localizer import replay
     from naoloc.mapping.map import load_map
 
     room, index, truth = job
     rec = read_recording(Path(room, "recordings", f"main_{index:03d}.mcap"))
-    config = rec.config
-    known = set(FilterTuning.model_fields)
-    tuning = config.get("localize", {}).get("filter", {})
-    for key in [k for k in tuning if k not in known]:
-        del tuning[key]
-    tuning.update(overrides or {})
-    cfg = load_config(config)
+    tuning = recorded_tuning(rec.config, overrides)
     vmap = load_map(next(Path(room, "maps").glob("*.npz")))
-    pose = replay(vmap, rec.observations, cfg.localize.filter, seed=rec.seed).pose()
+    pose = replay(vmap, rec.observations, tuning, seed=rec.seed).pose()
     row: dict[str, Any] = {"room": Path(room).name, "index": index, "status": str(pose.status)}
     if pose.found and pose.covariance is not None:
         err = np.array([pose.x - truth[0], pose.y - truth[1]])
@@ -116,20 +123,9 @@ def main() -> int:
     parser.add_argument("outs", type=Path, nargs="+", help="eval_unseen_rooms --record outputs")
     parser.add_argument("--workers", type=int, default=2, help="processes (one core each)")
     parser.add_argument("--json", type=Path, help="write every replay's row here")
-    parser.add_argument(
-        "--set", action="append", default=[], metavar="KEY=VALUE",
-        help="override a localize.filter key of every recording (VALUE is JSON)",
-    )  # fmt: skip
+    add_set_option(parser, "override a localize.filter key of every recording (VALUE: YAML)")
     args = parser.parse_args()
-    overrides: dict[str, Any] = {}
-    for item in args.set:
-        key, sep, value = item.partition("=")
-        if not sep:
-            raise SystemExit(f"--set {item}: expected KEY=VALUE")
-        try:
-            overrides[key] = json.loads(value)
-        except json.JSONDecodeError as err:
-            raise SystemExit(f"--set {item}: VALUE is not JSON ({err.msg})") from None
+    overrides = parse_sets(args.set)
     for folder in args.outs:
         if not (folder / "unseen_rooms.json").is_file():
             raise SystemExit(f"{folder}: not an eval_unseen_rooms output (no unseen_rooms.json)")
