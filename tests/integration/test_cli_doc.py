@@ -3,7 +3,6 @@ the verbs print: both are checked here, the second by running the verbs on the f
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import subprocess
 import sys
@@ -12,6 +11,8 @@ from types import ModuleType
 
 import pytest
 import yaml
+
+from tests.tools import load_tool
 
 REPO = Path(__file__).resolve().parents[2]
 TOOL = REPO / "tools" / "gen_cli_doc.py"
@@ -31,11 +32,7 @@ FAKE = {
 
 
 def _tool() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("gen_cli_doc", TOOL)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_tool("gen_cli_doc")
 
 
 def test_docs_cli_md_is_up_to_date() -> None:

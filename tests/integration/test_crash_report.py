@@ -6,7 +6,6 @@ would; ``tools/show_test_crash.py`` then names the test and shows the thread's f
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import shutil
 import signal
@@ -16,17 +15,15 @@ from pathlib import Path
 
 import pytest
 
+from tests.tools import load_tool
+
 TOOL = Path(__file__).resolve().parents[2] / "tools" / "show_test_crash.py"
 pytestmark = pytest.mark.skipif(not TOOL.is_file(), reason="needs the checkout's tools/")
 
 
 def summary(text: str) -> list[str]:
     """tools/show_test_crash.py's report of a crash log."""
-    spec = importlib.util.spec_from_file_location("show_test_crash", TOOL)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    lines: list[str] = module.summary(text)
+    lines: list[str] = load_tool("show_test_crash").summary(text)
     return lines
 
 

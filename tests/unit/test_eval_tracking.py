@@ -3,13 +3,13 @@ carried robot counts as recovered (a table of synthetic tracks)."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 from types import ModuleType
 from typing import Any
 
 import pytest
+
+from tests.tools import load_tool
 
 REPO = Path(__file__).resolve().parents[2]
 TOOL = REPO / "tools" / "eval_tracking.py"
@@ -17,15 +17,7 @@ pytestmark = pytest.mark.skipif(not TOOL.is_file(), reason="needs the checkout's
 
 
 def _tool() -> ModuleType:
-    sys.path.insert(0, str(TOOL.parent))
-    try:
-        spec = importlib.util.spec_from_file_location("eval_tracking", TOOL)
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-    finally:
-        sys.path.remove(str(TOOL.parent))
-    return module
+    return load_tool("eval_tracking")
 
 
 def _track(t0: float, n: int, dt: float, error: float | None, conf: float = 1.0) -> list:

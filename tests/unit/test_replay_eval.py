@@ -3,13 +3,13 @@ of synthetic replays)."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 from types import ModuleType
 
 import pytest
+
+from tests.tools import load_tool
 
 REPO = Path(__file__).resolve().parents[2]
 TOOL = REPO / "tools" / "replay_eval.py"
@@ -17,15 +17,7 @@ pytestmark = pytest.mark.skipif(not TOOL.is_file(), reason="needs the checkout's
 
 
 def _tool() -> ModuleType:
-    sys.path.insert(0, str(TOOL.parent))
-    try:
-        spec = importlib.util.spec_from_file_location("replay_eval", TOOL)
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-    finally:
-        sys.path.remove(str(TOOL.parent))
-    return module
+    return load_tool("replay_eval")
 
 
 def test_only_recorded_localizations_in_checked_maps_are_replayed(tmp_path: Path) -> None:
