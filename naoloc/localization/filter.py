@@ -202,11 +202,22 @@ class MultiHypothesisFilter:
             if b.pose is not None and b.probability >= self.tun.confident:
                 self.room_seen = max(self.room_seen, b.seen_score)
 
-    def _add(self, z: np.ndarray, anchor: PictureMatches | None, cov: np.ndarray | None) -> bool:
-        """Spawn a hypothesis at ``z`` unless one explains it already; whether it was."""
+    def _add(
+        self,
+        z: np.ndarray,
+        anchor: PictureMatches | None,
+        cov: np.ndarray | None,
+        beside: Hypothesis | None = None,
+    ) -> bool:
+        """Spawn a hypothesis at ``z`` unless one explains it already; whether it was.
+
+        ``beside``: the hypothesis ``z`` was explored from, which does not count as
+        explaining it (its own pictures favour ``z``; pruning keeps the better of the two).
+        """
         if any(
             h.mahalanobis(z, self._proposal_cov * 0.1) < self.tun.gate_mahalanobis
             for h in self.hypotheses
+            if h is not beside
         ):
             return False
         if anchor is None and self.hypotheses:
@@ -440,7 +451,9 @@ class MultiHypothesisFilter:
 
         Each leader's pose is shifted by :data:`self.tun.explore_steps_m` along the wall frame's x
         and y; a shift whose pictures' evidence beats the leader's own by
-        ``explore_margin_nats`` becomes a hypothesis.
+        ``explore_margin_nats`` becomes a hypothesis, even where the leader's spread covers
+        it: the leader cannot walk there itself, as its pictures' matches are the robust
+        model's outliers where it stands (pruning keeps the better of the two).
         """
         if self.walls is None:
             return
@@ -457,7 +470,7 @@ class MultiHypothesisFilter:
                     if score > best:
                         best, best_z = score, z
             if best_z is not None:
-                self._add(best_z, None, self._line_cov)
+                self._add(best_z, None, self._line_cov, beside=h)
 
     def _probable(self) -> bool:
         """Whether the best hypothesis outweighs the others and the other room."""

@@ -639,3 +639,23 @@ def test_the_map_frames_heading_error_grows_across_with_the_distance_from_the_or
     est = PoseEstimate(5.0, 0.0, 0.3, base + far, 1.0, Status.TRACKING, map_frame=far)
     assert est.sigmas()[0] == pytest.approx(math.hypot(0.02, 5.0 * sigma))
     assert est.sigmas(frame=False)[0] == pytest.approx(0.02)
+
+
+def test_a_neighbour_the_pictures_favour_is_tried_though_the_leader_covers_it() -> None:
+    """A hypothesis 0.3 m off along the walls, within the proposal gate of the truth, where
+    the pictures' matches pull it only part of the way (their residuals there are the
+    robust model's outliers): exploring its neighbours along the walls' axes finds the
+    place the pictures favour though the leader's gate covers it, and it takes the lead."""
+    truth = np.array([2.0, 0.5, 0.3])
+    f = MultiHypothesisFilter(WALLS, TUN)
+    odo = Pose2D(0.0, 0.0, 0.0)
+    f.observe(None, odo)
+    off = truth.copy()
+    off[:2] += 0.3 * np.array([math.cos(0.3), math.sin(0.3)])  # along the wall frame's x
+    f.set_pose(off, np.diag([0.02**2, 0.02**2, 0.01**2]), 0.0)
+    for seed in (1, 2, 3):
+        f.observe(_picture(truth, seed=seed), odo)
+    # Lines of the walls across the offset's axis (the +-y walls): they place only y.
+    f.observe(tuple(_line(WALLS, truth, k) for k in (1, 3)), odo)
+    b = f.belief()
+    assert b.pose is not None and math.hypot(*(b.pose[:2] - truth[:2])) < 0.05
