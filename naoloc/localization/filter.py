@@ -194,7 +194,7 @@ class MultiHypothesisFilter:
             self._shift_to_lines(evidence)
             for z in self._line_poses():
                 self._add(z, None, self._line_cov)
-            self._explore()
+            self._explore(at_rest=not isinstance(evidence, WalkingLines))
         self._prune()
         if distinctive:
             b = self.belief()
@@ -444,16 +444,19 @@ class MultiHypothesisFilter:
             for w in self._line_poses(near=z):
                 self._add(w, None, self._line_cov)
 
-    def _explore(self) -> None:
+    def _explore(self, at_rest: bool = True) -> None:
         """Neighbours of the leading hypotheses along the walls' axes, where the pictures
         agree better (a line of furniture in front of a wall, taken for the wall, puts a
         hypothesis a bench's depth off; its landmarks then fit better a step away).
 
         Each leader's pose is shifted by :data:`self.tun.explore_steps_m` along the wall frame's x
         and y; a shift whose pictures' evidence beats the leader's own by
-        ``explore_margin_nats`` becomes a hypothesis, even where the leader's spread covers
-        it: the leader cannot walk there itself, as its pictures' matches are the robust
-        model's outliers where it stands (pruning keeps the better of the two).
+        ``explore_margin_nats`` becomes a hypothesis. At rest (``at_rest``), even where the
+        leader's spread covers it: the leader cannot walk there itself, as its pictures'
+        matches are the robust model's outliers where it stands (pruning keeps the better
+        of the two). While walking, only outside it: the window's pictures were taken
+        along the walk, their quick score carries its odometry error, and a neighbour the
+        leader covers handed a carried robot's lead to a wrong place (RESULTS, stop 54).
         """
         if self.walls is None:
             return
@@ -470,7 +473,7 @@ class MultiHypothesisFilter:
                     if score > best:
                         best, best_z = score, z
             if best_z is not None:
-                self._add(best_z, None, self._line_cov, beside=h)
+                self._add(best_z, None, self._line_cov, beside=h if at_rest else None)
 
     def _probable(self) -> bool:
         """Whether the best hypothesis outweighs the others and the other room."""
