@@ -137,7 +137,6 @@ class MultiHypothesisFilter:
         self.pictures = 0
         self.contradicted = False
         self._behind = 0  # pictures in a row the leader explained far worse than another
-        self._at_rest = True  # the odometry did not move since the last observation
         self.room_seen = 0.0  # see Belief.room_seen
         m, r = tun.proposal_sigma
         self._proposal_cov = np.diag([m**2, m**2, r**2])
@@ -164,7 +163,6 @@ class MultiHypothesisFilter:
             for h in self.hypotheses:
                 h.predict(step, self.tun)
             walked = math.hypot(step[0], step[1]) > self.tun.walking_step_m
-            self._at_rest = not walked
             if walked and isinstance(evidence, tuple) and evidence:
                 evidence = WalkingLines(evidence)
         self.odometry = odometry
@@ -196,7 +194,7 @@ class MultiHypothesisFilter:
             self._shift_to_lines(evidence)
             for z in self._line_poses():
                 self._add(z, None, self._line_cov)
-            self._explore()
+            self._explore(at_rest=not isinstance(evidence, WalkingLines))
         self._prune()
         if distinctive:
             b = self.belief()
@@ -204,26 +202,24 @@ class MultiHypothesisFilter:
             if b.pose is not None and b.probability >= self.tun.confident:
                 self.room_seen = max(self.room_seen, b.seen_score)
 
-    def _add(self, z: np.ndarray, anchor: PictureMatches | None, cov: np.ndarray | None) -> bool:
+    def _add(
+        self,
+        z: np.ndarray,
+        anchor: PictureMatches | None,
+        cov: np.ndarray | None,
+        beside: Hypothesis | None = None,
+    ) -> bool:
         """Spawn a hypothesis at ``z`` unless one explains it already; whether it was.
 
-        A hypothesis whose spread covers ``z`` explains it, unless, at rest, the latest
-        pictures favour ``z`` over it by ``explore_margin_nats``: its pictures' matches are
-        the robust model's outliers where it stands, so it cannot walk there itself
-        (pruning keeps the better of the two). While walking the window's pictures were
-        taken along the walk, and their quick score carries its odometry error.
+        ``beside``: the hypothesis ``z`` was explored from, which does not count as
+        explaining it (its own pictures favour ``z``; pruning keeps the better of the two).
         """
-        near = [
-            h
+        if any(
+            h.mahalanobis(z, self._proposal_cov * 0.1) < self.tun.gate_mahalanobis
             for h in self.hypotheses
-            if h.mahalanobis(z, self._proposal_cov * 0.1) < self.tun.gate_mahalanobis
-        ]
-        if near:
-            if not self._at_rest:
-                return False
-            favoured = self._quick_score(z) - self.tun.explore_margin_nats
-            if any(self._quick_score(h.pose) >= favoured for h in near):
-                return False
+            if h is not beside
+        ):
+            return False
         if anchor is None and self.hypotheses:
             # Not worth a replay when the pictures say far less for it than for the best.
             best = max(self.hypotheses, key=lambda g: g.score)
@@ -448,15 +444,19 @@ class MultiHypothesisFilter:
             for w in self._line_poses(near=z):
                 self._add(w, None, self._line_cov)
 
-    def _explore(self) -> None:
+    def _explore(self, at_rest: bool = True) -> None:
         """Neighbours of the leading hypotheses along the walls' axes, where the pictures
         agree better (a line of furniture in front of a wall, taken for the wall, puts a
         hypothesis a bench's depth off; its landmarks then fit better a step away).
 
         Each leader's pose is shifted by :data:`self.tun.explore_steps_m` along the wall frame's x
         and y; a shift whose pictures' evidence beats the leader's own by
-        ``explore_margin_nats`` becomes a hypothesis (at rest even where the leader's
-        spread covers it, :meth:`_add`).
+        ``explore_margin_nats`` becomes a hypothesis. At rest (``at_rest``), even where the
+        leader's spread covers it: the leader cannot walk there itself, as its pictures'
+        matches are the robust model's outliers where it stands (pruning keeps the better
+        of the two). While walking, only outside it: the window's pictures were taken
+        along the walk, their quick score carries its odometry error, and a neighbour the
+        leader covers handed a carried robot's lead to a wrong place (RESULTS, stop 54).
         """
         if self.walls is None:
             return
@@ -473,7 +473,7 @@ class MultiHypothesisFilter:
                     if score > best:
                         best, best_z = score, z
             if best_z is not None:
-                self._add(best_z, None, self._line_cov)
+                self._add(best_z, None, self._line_cov, beside=h if at_rest else None)
 
     def _probable(self) -> bool:
         """Whether the best hypothesis outweighs the others and the other room."""
